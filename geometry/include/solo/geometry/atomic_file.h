@@ -1,0 +1,19 @@
+#pragma once
+// Writing outputs without ever leaving a half-written file behind.
+
+#include <filesystem>
+#include <functional>
+
+namespace solo {
+
+/// Calls write(temporary_path) with a temporary path in the folder of `target` that
+/// keeps the target's extension (so format-by-extension writers still work), then
+/// renames it onto `target`. If write throws, the temporary file is removed and the
+/// exception propagates; `target` is then untouched. Creates missing parent folders.
+void writeAtomically(const std::filesystem::path& target,
+                     const std::function<void(const std::filesystem::path& temporary)>& write);
+
+/// Writes `text` to `target` atomically.
+void writeTextAtomically(const std::filesystem::path& target, const std::string& text);
+
+}  // namespace solo

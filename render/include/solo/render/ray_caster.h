@@ -1,0 +1,50 @@
+#pragma once
+// Ray casting against a triangle mesh with Embree. The mesh buffers are shared with
+// Embree, not copied: the caster owns them for its lifetime.
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace solo {
+
+struct RayHit {
+  bool hit = false;
+  float distance = 0;                  ///< ray parameter t; metres for a unit direction
+  std::uint32_t triangle = 0;          ///< index of the triangle hit
+  Eigen::Vector3f geometric_normal{};  ///< unnormalised, (v1 - v0) x (v2 - v0)
+  float u = 0, v = 0;                  ///< barycentrics of v1 and v2
+};
+
+class RayCaster {
+ public:
+  /// vertices: x0 y0 z0 x1 y1 z1 ... (metres); triangles: i0 j0 k0 i1 j1 k1 ...
+  /// Preconditions: sizes are multiples of 3, every index < vertex count.
+  /// quality_high trades a slower build (about 4x) for faster traversal.
+  RayCaster(std::vector<float> vertices, std::vector<std::uint32_t> triangles, bool quality_high = false);
+  ~RayCaster();
+  RayCaster(const RayCaster&) = delete;
+  RayCaster& operator=(const RayCaster&) = delete;
+
+  /// Closest hit along origin + t * direction for t in [t_near, t_far].
+  RayHit intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near = 0.f,
+                   float t_far = std::numeric_limits<float>::infinity()) const;
+  /// Whether anything lies on the segment t in [t_near, t_far].
+  bool occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near, float t_far) const;
+
+  std::size_t triangleCount() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Versions the render module was built against: Embree, TBB.
+std::vector<std::pair<std::string, std::string>> renderDependencyVersions();
+
+}  // namespace solo

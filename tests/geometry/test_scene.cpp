@@ -1,0 +1,174 @@
+// The scene contract: manifests, map loading, camera resolution and every malformed case.
+
+#include <solo/geometry/error.h>
+#include <solo/geometry/image_io.h>
+#include <solo/geometry/scene.h>
+
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+using solo::test::TempDir;
+using solo::test::writeText;
+
+namespace {
+
+// A 40x20 scene: depth at half resolution in millimetres with 3 invalid pixels,
+// 8-bit normals, instances with one car.
+void writeSceneMaps(const TempDir& dir) {
+  cv::Mat day(20, 40, CV_8UC3, cv::Scalar(10, 20, 30));
+  solo::writeImage(dir / "day.png", day);
+  cv::Mat depth_mm(10, 20, CV_16U, cv::Scalar(4000));
+  depth_mm.at<uint16_t>(0, 0) = 0;
+  depth_mm.at<uint16_t>(0, 1) = 0;
+  depth_mm.at<uint16_t>(9, 19) = 0;
+  depth_mm.at<uint16_t>(5, 5) = 60000;
+  solo::writeImage(dir / "depth.png", depth_mm);
+  cv::Mat normals(20, 40, CV_8UC3, cv::Scalar(128, 128, 0));
+  solo::writeImage(dir / "normals.png", normals);
+  cv::Mat instances(20, 40, CV_16U, cv::Scalar(7));
+  instances(cv::Rect(10, 10, 5, 5)).setTo(26001);
+  instances(cv::Rect(0, 0, 40, 3)).setTo(23);
+  solo::writeImage(dir / "instances.png", instances);
+  cv::Mat lights(20, 40, CV_16U, cv::Scalar(0));
+  lights(cv::Rect(10, 12, 1, 1)).setTo(10001);
+  lights(cv::Rect(14, 12, 1, 1)).setTo(10002);
+  solo::writeImage(dir / "lights.png", lights);
+}
+
+std::string loadError(const fs::path& manifest) {
+  try {
+    solo::loadScene(manifest);
+  } catch (const solo::InputError& e) {
+    return e.what();
+  }
+  return "loaded";
+}
+
+}  // namespace
+
+TEST(Scene, LoadsEveryMapAndRecordsSizesAndCounts) {
+  TempDir dir;
+  writeSceneMaps(dir);
+  writeText(dir / "scene.json", R"({
+    "image": "day.png",
+    "depth": {"file": "depth.png", "scale": 0.001},
+    "normals": "normals.png",
+    "instances": "instances.png",
+    "lights": "lights.png",
+    "camera": {"fx": 1780, "fy": 1780, "cx": 959.5, "cy": 539.5, "width": 1920, "height": 1080},
+    "favourite_colour": "blue"
+  })");
+  const solo::Scene s = solo::loadScene(dir / "scene.json");
+  EXPECT_EQ(s.width(), 40);
+  EXPECT_EQ(s.height(), 20);
+  EXPECT_EQ(s.depth_m.size(), cv::Size(20, 10)) << "maps keep their own resolution";
+  EXPECT_EQ(s.depth_stats.valid, 197);
+  EXPECT_EQ(s.depth_stats.zero, 3);
+  EXPECT_FLOAT_EQ(s.depth_m.at<float>(1, 1), 4.f);
+  EXPECT_DOUBLE_EQ(s.depth_stats.max_m, 60.0);
+  ASSERT_TRUE(s.normal_stats.has_value());
+  EXPECT_EQ(s.normal_stats->valid, 800);
+  // Intrinsics for 1920x1080 scaled to 40x20: fx * 40 / 1920, cx = (959.5 + 0.5) * 40 / 1920 - 0.5.
+  EXPECT_NEAR(s.camera.fx, 1780.0 * 40 / 1920, 1e-9);
+  EXPECT_NEAR(s.camera.fy, 1780.0 * 20 / 1080, 1e-9);
+  EXPECT_NEAR(s.camera.cx, 19.5, 1e-9);
+  EXPECT_NEAR(s.camera.cy, 9.5, 1e-9);
+  EXPECT_FALSE(s.camera_is_default);
+  // labelIds derived from instanceIds.
+  EXPECT_EQ(s.labels.at<int>(11, 11), 26);
+  EXPECT_EQ(s.labels.at<int>(0, 0), 23);
+  EXPECT_EQ(s.labels.at<int>(19, 39), 7);
+
+  bool warned_unknown = false, warned_aspect = false;
+  for (const auto& w : s.warnings) {
+    warned_unknown |= w.find("favourite_colour") != std::string::npos;
+    warned_aspect |= w.find("aspect") != std::string::npos;
+  }
+  EXPECT_TRUE(warned_unknown);
+  EXPECT_TRUE(warned_aspect) << "1920x1080 intrinsics for a 2:1 image must be flagged";
+
+  const solo::StageReport r = solo::describeScene(s);
+  ASSERT_NE(r.find("depth_file"), nullptr);
+  EXPECT_EQ(std::get<std::string>(*r.find("depth_file")), "png 20x10 1ch uint16");
+  EXPECT_EQ(std::get<std::int64_t>(*r.find("depth_invalid")), 3);
+}
+
+TEST(Scene, DefaultCameraIsAcdcScaledWithAWarning) {
+  TempDir dir;
+  solo::writeImage(dir / "day.png", cv::Mat(540, 960, CV_8UC3, cv::Scalar(1, 2, 3)));
+  solo::writeImage(dir / "d.exr", cv::Mat(540, 960, CV_32F, cv::Scalar(12.5)));
+  writeText(dir / "scene.json", R"({"image": "day.png", "depth": "d.exr"})");
+  const solo::Scene s = solo::loadScene(dir / "scene.json");
+  EXPECT_TRUE(s.camera_is_default);
+  EXPECT_DOUBLE_EQ(s.camera.fx, 890.0);
+  EXPECT_DOUBLE_EQ(s.camera.cx, 479.5);
+  ASSERT_FALSE(s.warnings.empty());
+  EXPECT_NE(s.warnings.front().find("ACDC"), std::string::npos);
+}
+
+TEST(Scene, CityscapesCameraFileWithItsResolution) {
+  TempDir dir;
+  solo::writeImage(dir / "day.png", cv::Mat(512, 1024, CV_8UC3));
+  solo::writeImage(dir / "d.npy", cv::Mat(512, 1024, CV_32F, cv::Scalar(3)));
+  writeText(dir / "cam.json", R"({"intrinsic": {"fx": 2262.52, "fy": 2265.30, "u0": 1096.98, "v0": 513.137}})");
+  writeText(dir / "scene.json",
+            R"({"image": "day.png", "depth": "d.npy", "camera": {"file": "cam.json", "width": 2048, "height": 1024}})");
+  const solo::Scene s = solo::loadScene(dir / "scene.json");
+  EXPECT_NEAR(s.camera.fx, 1131.26, 1e-9);
+  EXPECT_NEAR(s.camera.cx, (1096.98 + 0.5) / 2 - 0.5, 1e-9);
+}
+
+TEST(SceneBadInput, EachMalformedManifestGetsAClearMessage) {
+  TempDir dir;
+  writeSceneMaps(dir);
+  struct Case {
+    const char* manifest;
+    const char* expected;
+  };
+  const Case cases[] = {
+      {R"({"image": "day.png", )", "not valid JSON"},
+      {R"(["day.png"])", "must be a JSON object"},
+      {R"({"depth": "depth.png"})", "required key \"image\" is missing"},
+      {R"({"image": "day.png"})", "required key \"depth\" is missing"},
+      {R"({"image": 5, "depth": "depth.png"})", "\"image\" must be a path string, found number"},
+      {R"({"image": "day.png", "depth": 3})", "\"depth\" must be a path or"},
+      {R"({"image": "day.png", "depth": {"scale": 0.001}})", "lacks \"file\""},
+      {R"({"image": "day.png", "depth": {"file": "depth.png", "scale": -1}})", "positive number of metres"},
+      {R"({"image": "day.png", "depth": {"file": "depth.png", "scale": "mm"}})", "must be a number, found string"},
+      {R"({"image": "day.png", "depth": {"file": "depth.png", "scale": 0.001}, "normals": ["n.png"]})",
+       "\"normals\" must be a path string, found array"},
+      {R"({"image": "day.png", "depth": {"file": "depth.png", "scale": 0.001}, "camera": {"fx": "1780"}})",
+       "\"camera\".\"fx\" must be a number"},
+      {R"({"image": "day.png", "depth": {"file": "depth.png", "scale": 0.001}, "camera": {"fx": 1780, "fy": 1780, "cx": 20}})",
+       "lacks \"cy\""},
+      {R"({"image": "day.png", "depth": {"file": "depth.png", "scale": 0.001}, "camera": {"fx": 0, "fy": 1780, "cx": 20, "cy": 10}})",
+       "focal lengths must be positive"},
+      {R"({"image": "day.png", "depth": {"file": "depth.png", "scale": 0.001}, "camera": {"fx": 50, "fy": 50, "cx": 900, "cy": 10}})",
+       "principal point"},
+      {R"({"image": "day.png", "depth": {"file": "depth.png", "scale": 0.001}, "camera": 1780})",
+       "\"camera\" must be an object of intrinsics or a path"},
+      {R"({"image": "day.png", "depth": "depth.png"})", "needs a scale"},
+      {R"({"image": "missing.png", "depth": {"file": "depth.png", "scale": 0.001}})", "missing.png: file not found"},
+      {R"({"image": "day.png", "depth": {"file": "depth.png", "scale": 0.001}, "lights": "instances.png"})",
+       "light id 23 at pixel (0, 0) has category 0"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.manifest);
+    writeText(dir / "bad.json", c.manifest);
+    const std::string message = loadError(dir / "bad.json");
+    EXPECT_NE(message.find(c.expected), std::string::npos) << message;
+    const bool names_a_file = message.find("bad.json") != std::string::npos ||
+                              message.find(".png") != std::string::npos;
+    EXPECT_TRUE(names_a_file) << message;
+  }
+}
+
+TEST(SceneBadInput, MissingManifestAndDepthWithoutAnyValidPixel) {
+  TempDir dir;
+  EXPECT_NE(loadError(dir / "nothing.json").find("nothing.json: file not found"), std::string::npos);
+  solo::writeImage(dir / "day.png", cv::Mat(4, 4, CV_8UC3));
+  cv::Mat sky(4, 4, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
+  solo::writeImage(dir / "sky.exr", sky);
+  writeText(dir / "scene.json", R"({"image": "day.png", "depth": "sky.exr"})");
+  EXPECT_NE(loadError(dir / "scene.json").find("depth has no valid pixel"), std::string::npos);
+}

@@ -1,0 +1,71 @@
+// The solo binary end to end: exit codes, messages that name the file, no partial output.
+
+#include <solo/geometry/image_io.h>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.h"
+
+using solo::test::runSolo;
+using solo::test::TempDir;
+
+TEST(Cli, VersionListsTheLibrariesItWasBuiltAgainst) {
+  const auto r = runSolo("--version");
+  EXPECT_EQ(r.exit_code, 0);
+  for (const char* library : {"solo 0.", "CGAL 5.", "OpenMesh 9.", "Eigen 3.", "Ceres 2.", "Embree 3.", "OpenCV 4.",
+                              "OpenImageIO 2.", "TBB ", "CLI11 2.", "nlohmann_json 3."})
+    EXPECT_NE(r.output.find(library), std::string::npos) << library << " missing in:\n" << r.output;
+}
+
+TEST(Cli, InfoPrintsWhatWasRead) {
+  TempDir dir;
+  solo::writeImage(dir / "day.png", cv::Mat(6, 8, CV_8UC3));
+  cv::Mat d(6, 8, CV_32F, cv::Scalar(2));
+  d.at<float>(0, 0) = -1;
+  solo::writeImage(dir / "d.pfm", d);
+  solo::test::writeText(dir / "s.json", R"({"image": "day.png", "depth": "d.pfm"})");
+  const auto r = runSolo("info --json \"" + (dir / "s.json").string() + "\"");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["stages"][0]["metrics"]["depth_valid"], 47);
+  EXPECT_EQ(j["stages"][0]["metrics"]["depth_negative"], 1);
+}
+
+TEST(Cli, BadSceneExitsNonZeroNamingTheFileAndWritesNothing) {
+  TempDir dir;
+  solo::test::writeText(dir / "s.json", R"({"image": "day.png", "depth": "d.pfm"})");
+  const auto r = runSolo("night \"" + (dir / "s.json").string() + "\" -o \"" + (dir / "out/night.png").string() + "\"");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("day.png: file not found"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out")) << "no partial output";
+}
+
+TEST(Cli, NightOnTheEmbeddedDefaultWritesAReport) {
+  TempDir dir;
+  const auto r = runSolo("night -o \"" + (dir / "night.png").string() + "\" --seed 7");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(solo::test::readText(dir / "night.report.json"));
+  EXPECT_EQ(j["seed"], 7);
+  EXPECT_EQ(j["stages"][0]["name"], "input");
+  EXPECT_GT(j["stages"][0]["metrics"]["depth_valid"].get<long>(), 0);
+  EXPECT_TRUE(j["versions"].contains("Embree"));
+  EXPECT_EQ(solo::test::listFolder(dir.path()), std::vector<std::string>{"night.report.json"})
+      << "no stray temporary files";
+}
+
+TEST(Cli, ConvertDepthBetweenFormats) {
+  TempDir dir;
+  cv::Mat codes(3, 3, CV_16U, cv::Scalar(512));
+  codes.at<uint16_t>(1, 1) = 0;
+  solo::writeImage(dir / "kitti.png", codes);
+  auto r = runSolo("convert depth \"" + (dir / "kitti.png").string() + "\" \"" + (dir / "d.npy").string() +
+                   "\" --input-scale 0.00390625");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const cv::Mat d = solo::readDepth(dir / "d.npy", 0);
+  EXPECT_FLOAT_EQ(d.at<float>(0, 0), 2.f);
+  EXPECT_FLOAT_EQ(d.at<float>(1, 1), 0.f);
+  r = runSolo("convert depth \"" + (dir / "kitti.png").string() + "\" \"" + (dir / "d.exr").string() + "\"");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("kitti.png: uint16 depth needs a scale"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "d.exr"));
+}
