@@ -44,4 +44,47 @@ struct ConvertOptions {
 };
 int runConvert(const ConvertOptions& options);
 
+/// `solo eval ...`: where the results go besides (or instead of) the terminal table.
+struct EvalOutputOptions {
+  bool json = false;                       ///< print JSON on stdout instead of the table
+  std::optional<std::filesystem::path> csv;  ///< append one row (header when the file is new)
+};
+
+struct EvalDepthOptions {
+  std::filesystem::path prediction, ground_truth;
+  std::optional<std::filesystem::path> mask;  ///< 8/16-bit or integer map, non-zero = evaluate
+  std::optional<double> min_depth_m, max_depth_m;  ///< evaluate only min < gt < max
+  bool median_scaling = false;
+  bool clamp_prediction = false;  ///< clamp the prediction into the depth range after scaling
+  double prediction_scale_m_per_unit = 0;    ///< for integer prediction files
+  double ground_truth_scale_m_per_unit = 0;  ///< for integer ground-truth files
+  EvalOutputOptions output;
+};
+int runEvalDepth(const EvalDepthOptions& options);
+
+struct EvalNormalsOptions {
+  std::filesystem::path prediction, ground_truth;
+  std::optional<std::filesystem::path> mask;  ///< 8/16-bit or integer map, non-zero = evaluate
+  EvalOutputOptions output;
+};
+int runEvalNormals(const EvalNormalsOptions& options);
+
+struct EvalMeshOptions {
+  std::filesystem::path mesh;
+  std::optional<std::filesystem::path> reference;  ///< for the Hausdorff and Chamfer distances
+  std::int64_t samples = 100000;  ///< random surface points per direction
+  std::uint64_t seed = 0;         ///< seeds the surface sampling
+  EvalOutputOptions output;
+};
+int runEvalMesh(const EvalMeshOptions& options);
+
+struct SynthOptions {
+  std::filesystem::path output;  ///< folder to create
+  std::uint64_t seed = 1;
+  int width = 960, height = 540;  ///< pixels
+  std::string variant = "default";  ///< see streetVariantName
+  bool force = false;               ///< replace an existing folder
+};
+int runSynth(const SynthOptions& options);
+
 }  // namespace solo::tools

@@ -231,6 +231,9 @@ void writeOiio(const fs::path& file, const cv::Mat& image) {
   auto out = OIIO::ImageOutput::create(file.string());
   if (!out) throw InputError(file, "no image writer for this extension (" + OIIO::geterror() + ")");
   OIIO::ImageSpec spec(image.cols, image.rows, image.channels(), type);
+  // OpenImageIO stamps the write time unless DateTime is set: an empty one keeps outputs
+  // byte-identical across runs, which seeded generation promises.
+  spec.attribute("DateTime", "");
   if (!out->open(file.string(), spec)) throw InputError(file, "cannot open for writing: " + out->geterror());
   if (!out->write_image(type, contiguous.data)) throw InputError(file, "write failed: " + out->geterror());
   if (!out->close()) throw InputError(file, "write failed on close: " + out->geterror());
@@ -455,7 +458,6 @@ cv::Mat readNormals(const fs::path& file, NormalReadStats* stats, ImageFileInfo*
       }
       if (std::abs(length - 1.0) > tolerance) ++s.renormalised;
       v /= length;
-      if (v[2] > 0) ++s.back_facing;
       ++s.valid;
       dst[x] = cv::Vec3f(static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]));
     }

@@ -236,6 +236,19 @@ Scene loadScene(const fs::path& manifest_file) {
   }
   s.camera = camera;
 
+  if (!s.normals.empty()) {
+    // Visible surfaces face the camera: n . (K^-1 (u, v, 1)) < 0 at the normal map's own resolution.
+    const PinholeCamera at_map = camera.scaledTo(s.normals.cols, s.normals.rows);
+    std::int64_t back_facing = 0;
+    for (int y = 0; y < s.normals.rows; ++y)
+      for (int x = 0; x < s.normals.cols; ++x) {
+        const cv::Vec3f n = s.normals.at<cv::Vec3f>(y, x);
+        const double along_ray = n[0] * (x - at_map.cx) / at_map.fx + n[1] * (y - at_map.cy) / at_map.fy + n[2];
+        if ((n[0] != 0 || n[1] != 0 || n[2] != 0) && along_ray > 0) ++back_facing;
+      }
+    s.normal_stats->back_facing = back_facing;
+  }
+
   for (const auto& [name, map] : {std::pair<const char*, const cv::Mat*>{"depth", &s.depth_m},
                                   {"normals", &s.normals}, {"albedo", &s.albedo}, {"roughness", &s.roughness},
                                   {"instances", &s.instances}, {"labels", &s.labels}, {"lights", &s.lights},
@@ -250,9 +263,6 @@ StageReport describeScene(const Scene& s) {
   StageReport r;
   r.name = "input";
   r.add("image_size", sizeText(s.width(), s.height()), "px");
-  for (const MapRecord& map : s.maps)
-    r.add(map.name + "_file", map.info.format + " " + sizeText(map.info.width, map.info.height) + " " +
-                                  std::to_string(map.info.channels) + "ch " + map.info.pixel_type);
   const DepthReadStats& d = s.depth_stats;
   r.add("depth_valid", d.valid).add("depth_invalid", d.invalid());
   r.add("depth_zero", d.zero).add("depth_nan", d.nan).add("depth_inf", d.inf).add("depth_negative", d.negative);
@@ -264,6 +274,9 @@ StageReport describeScene(const Scene& s) {
   r.add("camera_fx", s.camera.fx, "px").add("camera_fy", s.camera.fy, "px");
   r.add("camera_cx", s.camera.cx, "px").add("camera_cy", s.camera.cy, "px");
   r.add("camera_default", s.camera_is_default);
+  for (const MapRecord& map : s.maps)
+    r.add(map.name + "_file", map.info.format + " " + sizeText(map.info.width, map.info.height) + " " +
+                                  std::to_string(map.info.channels) + "ch " + map.info.pixel_type);
   for (const char* optional_map : {"normals", "albedo", "roughness", "instances", "labels", "lights", "light_groups"}) {
     bool present = false;
     for (const MapRecord& map : s.maps) present |= map.name == optional_map;

@@ -172,3 +172,17 @@ TEST(SceneBadInput, MissingManifestAndDepthWithoutAnyValidPixel) {
   writeText(dir / "scene.json", R"({"image": "day.png", "depth": "sky.exr"})");
   EXPECT_NE(loadError(dir / "scene.json").find("depth has no valid pixel"), std::string::npos);
 }
+
+TEST(Scene, RealSampleWithSparseLidarDepth) {
+  // data/samples/dgp-real: a real 1936x1216 frame with one LiDAR sweep projected into it
+  // (4818 returns between 5.06 and 226.09 m as read here; the shared-data README says 167 m,
+  // which the file does not bear out; the rest is 0 = no return).
+  const solo::Scene s = solo::loadScene(std::filesystem::path(SOLO_PROJECT_DATA_DIR) / "samples/dgp-real/scene.json");
+  EXPECT_EQ(s.width(), 1936);
+  EXPECT_EQ(s.height(), 1216);
+  EXPECT_EQ(s.depth_stats.valid, 4818);
+  EXPECT_EQ(s.depth_stats.valid + s.depth_stats.zero, 1936LL * 1216);
+  EXPECT_NEAR(s.depth_stats.min_m, 1295.0 / 256, 1e-9) << "KITTI-style codes: metres = value / 256";
+  EXPECT_NEAR(s.depth_stats.max_m, 226.086, 1e-3);
+  EXPECT_DOUBLE_EQ(s.camera.fx, 2167.6926048451924);
+}

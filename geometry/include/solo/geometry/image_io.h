@@ -45,7 +45,7 @@ struct NormalReadStats {
   std::int64_t valid = 0;
   std::int64_t invalid = 0;       ///< zero vectors (or 0,0,0 stored in a PNG), or non-finite
   std::int64_t renormalised = 0;  ///< length off 1 by more than the format's precision
-  std::int64_t back_facing = 0;   ///< n.z > 0: pointing away from the camera
+  std::int64_t back_facing = 0;   ///< n . viewing ray > 0; counted by loadScene, which knows the camera
 };
 
 /// Unit normals, CV_32FC3, camera frame (x right, y down, z forward), invalid = (0,0,0).

@@ -1,0 +1,237 @@
+// `solo eval` end to end: JSON values, CSV rows appended under one header, the table, errors.
+
+#include <solo/geometry/image_io.h>
+#include <solo/geometry/triangle_mesh.h>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+using solo::test::readText;
+using solo::test::runSolo;
+using solo::test::TempDir;
+
+namespace {
+
+std::string quoted(const std::filesystem::path& p) { return "\"" + p.string() + "\""; }
+
+/// The hand-computed case of test_depth_metrics: gt 2, 4, 5, 10 and pred 1, 4, 4, 12 give
+/// AbsRel 0.225, SqRel 0.275, RMSE sqrt 1.5, delta1 0.5; a 5th pixel without ground truth.
+void writeDepthPair(const TempDir& dir) {
+  solo::writeImage(dir / "gt.pfm", cv::Mat(std::vector<float>{2, 4, 5, 10, 0}, true).reshape(1, 1));
+  solo::writeImage(dir / "pred.pfm", cv::Mat(std::vector<float>{1, 4, 4, 12, 3}, true).reshape(1, 1));
+}
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) out.push_back(line);
+  return out;
+}
+
+/// A CSV file without quoted cells as rows of column -> cell, checking every row has as many
+/// cells as the header.
+std::vector<std::map<std::string, std::string>> readCsv(const std::filesystem::path& file) {
+  const std::vector<std::string> text = lines(readText(file));
+  const auto split = [](const std::string& line) {
+    std::vector<std::string> cells;
+    std::string cell;
+    std::istringstream in(line);
+    while (std::getline(in, cell, ',')) cells.push_back(cell);
+    if (!line.empty() && line.back() == ',') cells.emplace_back();
+    return cells;
+  };
+  std::vector<std::map<std::string, std::string>> rows;
+  if (text.empty()) return rows;
+  const std::vector<std::string> header = split(text[0]);
+  for (std::size_t i = 1; i < text.size(); ++i) {
+    const std::vector<std::string> cells = split(text[i]);
+    EXPECT_EQ(cells.size(), header.size()) << text[i];
+    std::map<std::string, std::string> row;
+    for (std::size_t c = 0; c < std::min(cells.size(), header.size()); ++c) row[header[c]] = cells[c];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+}  // namespace
+
+TEST(CliEval, DepthJsonHasTheHandComputedValues) {
+  TempDir dir;
+  writeDepthPair(dir);
+  const auto r =
+      runSolo("eval depth --pred " + quoted(dir / "pred.pfm") + " --gt " + quoted(dir / "gt.pfm") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["command"], "eval depth");
+  EXPECT_EQ(j["metrics"]["valid_pixels"], 4);
+  EXPECT_EQ(j["metrics"]["ground_truth_invalid"], 1);
+  EXPECT_DOUBLE_EQ(j["metrics"]["abs_rel"].get<double>(), 0.225);
+  EXPECT_DOUBLE_EQ(j["metrics"]["sq_rel_m"].get<double>(), 0.275);
+  EXPECT_DOUBLE_EQ(j["metrics"]["rmse_m"].get<double>(), std::sqrt(1.5));
+  EXPECT_DOUBLE_EQ(j["metrics"]["delta1"].get<double>(), 0.5);
+  EXPECT_TRUE(j["inputs"]["mask"].is_null());
+  EXPECT_TRUE(j["options"]["max_depth_m"].is_null());
+  EXPECT_EQ(j["options"]["median_scaling"], false);
+}
+
+TEST(CliEval, CsvAppendsOneRowPerRunUnderOneHeader) {
+  TempDir dir;
+  writeDepthPair(dir);
+  const std::string base = "eval depth --pred " + quoted(dir / "pred.pfm") + " --gt " + quoted(dir / "gt.pfm") +
+                           " --csv " + quoted(dir / "sweep.csv");
+  ASSERT_EQ(runSolo(base).exit_code, 0);
+  const auto second = runSolo(base + " --median-scale --max-depth 8");
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  EXPECT_NE(second.output.find("AbsRel"), std::string::npos) << "the table still goes to the terminal";
+  const std::vector<std::string> text = lines(readText(dir / "sweep.csv"));
+  ASSERT_EQ(text.size(), 3u) << "one header, two rows";
+  EXPECT_EQ(text[0].rfind("prediction,ground_truth,mask,min_depth_m,max_depth_m,median_scaling,", 0), 0u) << text[0];
+  const auto rows = readCsv(dir / "sweep.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  // First row: no mask, no range, no scaling: empty cells for what was not given.
+  EXPECT_EQ(rows[0].at("mask"), "");
+  EXPECT_EQ(rows[0].at("max_depth_m"), "");
+  EXPECT_EQ(rows[0].at("median_scaling"), "false");
+  EXPECT_EQ(rows[0].at("valid_pixels"), "4");
+  EXPECT_DOUBLE_EQ(std::stod(rows[0].at("abs_rel")), 0.225);
+  EXPECT_DOUBLE_EQ(std::stod(rows[0].at("sq_rel_m")), 0.275);
+  // Second row: gt < 8 leaves gt 2, 4, 5 against pred 1, 4, 4; median scale = 4 / 4 = 1;
+  // AbsRel = (0.5 + 0 + 0.2) / 3.
+  EXPECT_EQ(rows[1].at("max_depth_m"), "8");
+  EXPECT_EQ(rows[1].at("median_scaling"), "true");
+  EXPECT_EQ(rows[1].at("outside_range"), "1");
+  EXPECT_EQ(rows[1].at("valid_pixels"), "3");
+  EXPECT_EQ(rows[1].at("scale"), "1");
+  EXPECT_DOUBLE_EQ(std::stod(rows[1].at("abs_rel")), 0.7 / 3);
+}
+
+TEST(CliEval, CsvWithOtherColumnsIsRefused) {
+  TempDir dir;
+  writeDepthPair(dir);
+  solo::test::writeText(dir / "other.csv", "a,b\n1,2\n");
+  const auto r = runSolo("eval depth --pred " + quoted(dir / "pred.pfm") + " --gt " + quoted(dir / "gt.pfm") +
+                         " --csv " + quoted(dir / "other.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("other.csv: its columns are not those of `solo eval depth`"), std::string::npos) << r.output;
+  EXPECT_EQ(readText(dir / "other.csv"), "a,b\n1,2\n");
+}
+
+TEST(CliEval, DepthErrorsNameTheFilesAndNeverPrintNaN) {
+  TempDir dir;
+  writeDepthPair(dir);
+  solo::writeImage(dir / "small.pfm", cv::Mat(1, 3, CV_32F, cv::Scalar(1)));
+  auto r = runSolo("eval depth --pred " + quoted(dir / "small.pfm") + " --gt " + quoted(dir / "gt.pfm"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("solo: error: " + (dir / "small.pfm").string() + ": prediction is 3x1 but ground truth " +
+                          (dir / "gt.pfm").string() + " is 5x1"),
+            std::string::npos)
+      << r.output;
+
+  r = runSolo("eval depth --pred " + quoted(dir / "pred.pfm") + " --gt " + quoted(dir / "gt.pfm") + " --min-depth 20");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("gt.pfm: no valid pixel to evaluate"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("nan"), std::string::npos) << r.output;
+
+  solo::writeImage(dir / "codes.png", cv::Mat(1, 5, CV_16U, cv::Scalar(512)));
+  r = runSolo("eval depth --pred " + quoted(dir / "pred.pfm") + " --gt " + quoted(dir / "codes.png"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("codes.png: uint16 depth needs a scale"), std::string::npos) << r.output;
+  // With --gt-scale 1/256 the codes are 2 m everywhere: pred 1, 4, 4, 12, 3 against 2.
+  r = runSolo("eval depth --pred " + quoted(dir / "pred.pfm") + " --gt " + quoted(dir / "codes.png") +
+              " --gt-scale 0.00390625 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // |2-1|/2 + 1 + 1 + 5 + 0.5 = 8, over 5 pixels.
+  EXPECT_DOUBLE_EQ(nlohmann::json::parse(r.output)["metrics"]["abs_rel"].get<double>(), 8.0 / 5.0);
+}
+
+TEST(CliEval, DepthMaskFromAPng) {
+  TempDir dir;
+  writeDepthPair(dir);
+  // Mask out the first pixel (the only one with |g-p|/g = 0.5): AbsRel = 0.4 / 3.
+  cv::Mat mask(1, 5, CV_8U, cv::Scalar(255));
+  mask.at<unsigned char>(0, 0) = 0;
+  solo::writeImage(dir / "mask.png", mask);
+  const auto r = runSolo("eval depth --pred " + quoted(dir / "pred.pfm") + " --gt " + quoted(dir / "gt.pfm") +
+                         " --mask " + quoted(dir / "mask.png") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["metrics"]["masked_out"], 1);
+  EXPECT_EQ(j["metrics"]["valid_pixels"], 3);
+  EXPECT_DOUBLE_EQ(j["metrics"]["abs_rel"].get<double>(), 0.4 / 3);
+}
+
+TEST(CliEval, NormalsJsonAndTable) {
+  TempDir dir;
+  // gt (0,0,-1) twice; pred equal, then (1,0,0): angles 0 and 90 degrees.
+  cv::Mat gt(1, 2, CV_32FC3, cv::Scalar(0, 0, -1)), pred = gt.clone();
+  pred.at<cv::Vec3f>(0, 1) = cv::Vec3f(1, 0, 0);
+  solo::writeNormals(dir / "gt.exr", gt);
+  solo::writeNormals(dir / "pred.exr", pred);
+  const std::string args = "eval normals --pred " + quoted(dir / "pred.exr") + " --gt " + quoted(dir / "gt.exr");
+  auto r = runSolo(args + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_NEAR(j["metrics"]["mean_deg"].get<double>(), 45.0, 1e-9);
+  EXPECT_NEAR(j["metrics"]["median_deg"].get<double>(), 45.0, 1e-9);
+  EXPECT_NEAR(j["metrics"]["rmse_deg"].get<double>(), std::sqrt(8100.0 / 2), 1e-9);
+  EXPECT_DOUBLE_EQ(j["metrics"]["under_11_25_deg"].get<double>(), 0.5);
+  r = runSolo(args);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("mean angle"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("45 deg"), std::string::npos) << r.output;
+}
+
+TEST(CliEval, MeshJsonWithReferenceAndCsv) {
+  TempDir dir;
+  solo::TriangleMesh square;
+  square.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  square.faces = {{0, 1, 2}, {0, 2, 3}};
+  solo::writeMesh(dir / "square.off", square);
+  for (auto& v : square.vertices) v.z() = 0.25;
+  solo::writeMesh(dir / "lifted.ply", square);
+  const std::string csv = " --csv " + quoted(dir / "mesh.csv");
+  auto r = runSolo("eval mesh " + quoted(dir / "square.off") + " --ref " + quoted(dir / "lifted.ply") +
+                   " --samples 500 --seed 9 --json" + csv);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["metrics"]["boundary_loops"], 1);
+  EXPECT_EQ(j["metrics"]["boundary_edges"], 4);
+  EXPECT_EQ(j["metrics"]["closed"], false);
+  EXPECT_EQ(j["options"]["samples"], 500);
+  // Parallel squares 0.25 apart: every distance is 0.25.
+  EXPECT_NEAR(j["metrics"]["hausdorff"].get<double>(), 0.25, 1e-12);
+  EXPECT_NEAR(j["metrics"]["chamfer"].get<double>(), 0.25, 1e-12);
+  // Without a reference the distance columns stay (empty) so rows line up.
+  r = runSolo("eval mesh " + quoted(dir / "square.off") + csv);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("boundary loops"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("Hausdorff"), std::string::npos) << "no distance rows without --ref:\n" << r.output;
+  const auto rows = readCsv(dir / "mesh.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].at("boundary_loops"), "1");
+  EXPECT_NEAR(std::stod(rows[0].at("hausdorff")), 0.25, 1e-12);
+  EXPECT_EQ(rows[1].at("reference"), "");
+  EXPECT_EQ(rows[1].at("hausdorff"), "");
+  EXPECT_EQ(rows[1].at("chamfer"), "");
+  EXPECT_EQ(rows[1].at("boundary_edges"), "4");
+}
+
+TEST(CliEval, MeshErrors) {
+  TempDir dir;
+  auto r = runSolo("eval mesh " + quoted(dir / "none.off"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("none.off: file not found"), std::string::npos) << r.output;
+  solo::test::writeText(dir / "line.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1 2\n");
+  solo::test::writeText(dir / "tri.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  r = runSolo("eval mesh " + quoted(dir / "tri.off") + " --ref " + quoted(dir / "line.off"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("line.off: mesh has no face with non-zero area"), std::string::npos) << r.output;
+  r = runSolo("eval mesh " + quoted(dir / "tri.off") + " --ref " + quoted(dir / "tri.off") + " --samples 0");
+  EXPECT_NE(r.exit_code, 0);
+}
