@@ -2,6 +2,8 @@
 // The solo subcommands. Each takes an options struct that maps one to one onto its
 // command-line flags (main.cpp is the only file that knows CLI11) and returns an exit code.
 
+#include <opencv2/core.hpp>
+
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -30,9 +32,26 @@ int runInfo(const InfoOptions& options);
 
 struct NightOptions {
   std::optional<std::filesystem::path> scene;  ///< none: the embedded default scene
-  std::filesystem::path output = "night.png";
+  std::filesystem::path output = "night.png";   ///< .png (8-bit, or 16 with sixteen_bit), .tif, .jpg, .exr (linear)
   std::optional<std::filesystem::path> report;  ///< none: <output stem>.report.json
+  std::optional<std::filesystem::path> render_exr;  ///< also write the linear XYZ render and its AOVs
   std::uint64_t seed = 0;
+  bool sixteen_bit = false;
+  bool refine = true;      ///< depth refinement (filter, uncertainty, optimisation)
+  bool optimize = true;    ///< the normal-guided optimisation inside it
+  bool solids = true;      ///< close foreground objects into solids
+  bool evaluate_mesh = false;  ///< quality counts of the cleaned mesh (self-intersections: slow)
+  bool ablation = false;   ///< every light on, white, one strength
+  std::optional<std::filesystem::path> lights_record;  ///< an edited light record instead of a new draw
+  bool headlights = true;
+  double headlight_flux_lm = 1200;
+  std::string light_sampler = "power";
+  int min_samples = 4, max_samples = 16;  ///< per pixel
+  double relative_error = 0.1;            ///< adaptive sampling target on each pixel's luminance
+  bool glare = true, noise = true;
+  double glare_threshold = -1;  ///< Y before exposure; < 0: what will clip (the reference uses 0)
+  /// Luminance exposed to sensor white, cd/m^2; <= 0: auto exposure (metering the street).
+  double sensor_white_cd_m2 = 0;
 };
 int runNight(const NightOptions& options);
 
@@ -86,5 +105,104 @@ struct SynthOptions {
   bool force = false;               ///< replace an existing folder
 };
 int runSynth(const SynthOptions& options);
+
+/// `solo depth`: the depth refinement stage alone (docs/depth-refinement.md). Writes the
+/// refined depth, its normals (<output stem>.normals.<ext>) and the uncertain mask
+/// (<output stem>.uncertain.png) next to it.
+struct DepthOptions {
+  std::filesystem::path scene;
+  std::filesystem::path output = "refined.exr";
+  std::optional<std::filesystem::path> report;  ///< none: <output stem>.report.json
+  std::string optimizer = "ceres";              ///< "ceres" or "adam" (the paper's)
+  std::string tangent_model = "perspective";    ///< "perspective" or "paper"
+  bool upsample = true, filter = true, uncertain = true, optimize = true;
+};
+int runDepth(const DepthOptions& options);
+
+struct MeshFromDepthOptions {
+  std::filesystem::path scene;   ///< scene manifest
+  std::filesystem::path output;  ///< mesh file: PLY, OBJ, OFF or STL by extension
+  std::optional<std::filesystem::path> report;     ///< report JSON
+  std::optional<std::filesystem::path> uncertain;  ///< uncertain mask (8/16-bit, non-zero = uncertain)
+  std::optional<std::filesystem::path> truth;      ///< ground-truth scene: score the spurious-face removal
+  bool no_solids = false;      ///< leave foreground things as open sheets
+  bool no_evaluation = false;  ///< skip the final evaluateMesh (self-intersections are costly at 1080p)
+};
+int runMeshFromDepth(const MeshFromDepthOptions& options);
+
+struct MeshCleanOptions {
+  std::filesystem::path input, output;          ///< PLY, OBJ, OFF or STL
+  std::optional<std::filesystem::path> report;  ///< report JSON
+};
+int runMeshClean(const MeshCleanOptions& options);
+
+struct LightsOptions {
+  std::optional<std::filesystem::path> scene;  ///< none: the embedded default scene
+  std::filesystem::path output = "lights.json";  ///< the light record
+  std::optional<std::filesystem::path> overlay;  ///< PNG of the lights on the day image
+  std::optional<std::filesystem::path> report;   ///< run report JSON
+  std::optional<std::filesystem::path> table;    ///< illuminant table (default: bundled)
+  std::optional<std::filesystem::path> from_record;  ///< an edited record to validate and redraw
+  std::uint64_t seed = 0;
+  bool ablation = false;                    ///< every light on, white E, one strength
+  double ablation_luminance_cd_m2 = 1000;   ///< the ablation's one strength, cd/m^2
+};
+int runLights(const LightsOptions& options);
+/// The bundled night-illuminant table.
+std::filesystem::path defaultIlluminantTable();
+
+struct IlluminantAddOptions {
+  std::filesystem::path table;  ///< CSV to append to (created when absent)
+  std::string category;         ///< light category name
+  std::optional<std::filesystem::path> spectrum;  ///< wavelength_nm,relative_power CSV
+  std::optional<double> cct_K;                    ///< Planckian colour temperature, kelvin
+  std::optional<std::filesystem::path> raw;       ///< raw photo (DNG) of a gray card
+  std::optional<std::string> roi;                 ///< X,Y,WIDTH,HEIGHT of the card in the raw photo
+  std::string source;                             ///< free provenance text
+};
+int runIlluminantAdd(const IlluminantAddOptions& options);
+
+struct IlluminantRegenerateOptions {
+  std::optional<std::filesystem::path> recipe;   ///< default: data/illuminants/recipe.csv
+  std::optional<std::filesystem::path> regions;  ///< default: beside the recipe
+  std::filesystem::path output;
+};
+int runIlluminantRegenerate(const IlluminantRegenerateOptions& options);
+
+/// `solo post`: the post-process on a linear XYZ image (white point E), docs/post-processing.md.
+struct PostOptions {
+  std::filesystem::path input;                  ///< EXR/TIFF/PFM/NPY, 3 channels X, Y, Z (or R, G, B holding them)
+  std::filesystem::path output = "night.png";   ///< .png/.tif (8-bit, 16 with sixteen_bit), .jpg, .exr (linear)
+  std::optional<std::filesystem::path> report;  ///< run report JSON
+  bool sixteen_bit = false;
+  double stops = 3.25;                    ///< exposure, unless a camera is given
+  std::optional<double> shutter_s;        ///< physical camera (with iso and f_number)
+  std::optional<double> f_number;         ///< physical camera (with iso and shutter_s)
+  double iso = 3200;                      ///< sensor ISO: noise calibration, and the camera's ISO
+  bool no_glare = false;
+  double glare_threshold = 0;             ///< luminance in render units
+  int glare_size = 9;                     ///< kernel 2^size px
+  std::string glare_method = "auto";      ///< auto, direct, fft, tiled
+  bool no_noise = false;
+  double noise_scale = 3;                 ///< standard deviation multiplier
+  std::uint64_t seed = 0;
+  bool no_adaptation = false;
+  std::string curve = "gamma2.2";         ///< gamma2.2, srgb, linear
+  std::string negatives = "desaturate";   ///< desaturate, clip
+};
+int runPost(const PostOptions& options);
+/// Writes a post-processed image by extension: .png/.tif 8-bit (16-bit on request) of the
+/// encoded image, .jpg 8-bit, .exr float linear sRGB. Atomic.
+void writePostOutput(const std::filesystem::path& file, const cv::Mat& encoded, const cv::Mat& linear_rgb,
+                     bool sixteen_bit);
+
+/// `solo fda`: Fourier domain adaptation of a day photo toward a night photo.
+struct FdaCommandOptions {
+  std::filesystem::path source, target, output;
+  double beta = 0.01;
+  bool sixteen_bit = false;
+  std::optional<std::filesystem::path> report;
+};
+int runFda(const FdaCommandOptions& options);
 
 }  // namespace solo::tools

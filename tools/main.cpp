@@ -26,7 +26,31 @@ int main(int argc, char** argv) {
   night_cmd->add_option("scene", night.scene, "Scene manifest (JSON); omit for the embedded default scene");
   night_cmd->add_option("-o,--output", night.output, "Night image to write")->capture_default_str();
   night_cmd->add_option("--report", night.report, "Report JSON to write (default: <output>.report.json)");
-  night_cmd->add_option("--seed", night.seed, "Random seed")->capture_default_str();
+  night_cmd->add_option("--seed", night.seed, "Random seed (lights, render, sensor noise)")->capture_default_str();
+  night_cmd->add_option("--render-exr", night.render_exr, "Also write the linear XYZ render (and AOVs beside it)");
+  night_cmd->add_flag("--16bit", night.sixteen_bit, "16-bit PNG/TIFF output");
+  night_cmd->add_flag("!--no-refine", night.refine, "Skip the depth filter, uncertainty and optimisation");
+  night_cmd->add_flag("!--no-optimize", night.optimize, "Skip the normal-guided depth optimisation");
+  night_cmd->add_flag("!--no-solids", night.solids, "Leave foreground objects as open sheets");
+  night_cmd->add_flag("--evaluate-mesh", night.evaluate_mesh, "Count self-intersections and non-manifold parts (slow)");
+  night_cmd->add_flag("--ablation", night.ablation, "The paper's ablation: every light on, white, one strength");
+  night_cmd->add_option("--lights", night.lights_record, "Use this (edited) light record instead of a new draw");
+  night_cmd->add_flag("!--no-headlights", night.headlights, "No ego-vehicle headlights");
+  night_cmd->add_option("--headlight-flux", night.headlight_flux_lm, "Flux of each headlight, lm")->capture_default_str();
+  night_cmd->add_option("--light-sampler", night.light_sampler, "uniform, power or hierarchy")->capture_default_str();
+  night_cmd->add_option("--min-spp", night.min_samples, "Samples per pixel before adaptive stopping")->capture_default_str();
+  night_cmd->add_option("--max-spp", night.max_samples, "Samples per pixel at most")->capture_default_str();
+  night_cmd->add_option("--relative-error", night.relative_error, "Adaptive sampling target (relative standard error)")
+      ->capture_default_str();
+  night_cmd->add_flag("!--no-glare", night.glare, "Skip fog glare");
+  night_cmd->add_flag("!--no-noise", night.noise, "Skip sensor noise");
+  night_cmd->add_option("--sensor-white", night.sensor_white_cd_m2,
+                         "Luminance exposed to sensor white, cd/m2; 0 = auto exposure")
+      ->capture_default_str();
+  night_cmd->add_option("--glare-threshold", night.glare_threshold,
+                        "Luminance above which pixels glow (render units before exposure); -1 = what clips; "
+                        "the reference uses 0")
+      ->capture_default_str();
 
   ConvertOptions convert;
   CLI::App* convert_cmd = app.add_subcommand("convert", "Convert a depth or normal map between formats");
@@ -90,6 +114,108 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   synth_cmd->add_flag("--force", synth.force, "Replace the output folder if it exists");
 
+  LightsOptions lights;
+  CLI::App* lights_cmd = app.add_subcommand("lights", "Group and instantiate the scene's light sources (docs/lighting.md)");
+  lights_cmd->add_option("scene", lights.scene, "Scene manifest (JSON); omit for the embedded default scene");
+  lights_cmd->add_option("-o,--output", lights.output, "Light record to write (JSON)")->capture_default_str();
+  lights_cmd->add_option("--overlay", lights.overlay, "PNG of the lights drawn on the day image");
+  lights_cmd->add_option("--seed", lights.seed, "Random seed")->capture_default_str();
+  lights_cmd->add_flag("--ablation", lights.ablation, "Every light on, white, one strength (the paper's ablation)");
+  lights_cmd->add_option("--ablation-luminance", lights.ablation_luminance_cd_m2, "The ablation's strength, cd/m^2")
+      ->capture_default_str();
+  lights_cmd->add_option("--table", lights.table, "Illuminant table CSV (default: the bundled one)");
+  lights_cmd->add_option("--from", lights.from_record, "Read an (edited) light record instead of sampling");
+  lights_cmd->add_option("--report", lights.report, "Report JSON to write");
+
+  CLI::App* illuminant_cmd = app.add_subcommand("illuminant", "Build or extend a night-illuminant table");
+  illuminant_cmd->require_subcommand(1);
+  IlluminantAddOptions illuminant_add;
+  CLI::App* illuminant_add_cmd =
+      illuminant_cmd->add_subcommand("add", "Add a chromaticity sample from a spectrum, a CCT or a gray-card raw photo");
+  illuminant_add_cmd->add_option("table", illuminant_add.table, "Table CSV (created when absent)")->required();
+  illuminant_add_cmd->add_option("--category", illuminant_add.category, "Light category, e.g. street_light_LT")->required();
+  illuminant_add_cmd->add_option("--spectrum", illuminant_add.spectrum, "Spectrum CSV: wavelength_nm,relative_power");
+  illuminant_add_cmd->add_option("--cct", illuminant_add.cct_K, "Planckian colour temperature in kelvin");
+  illuminant_add_cmd->add_option("--raw", illuminant_add.raw, "Raw photo (DNG) of a gray card lit by the light");
+  illuminant_add_cmd->add_option("--roi", illuminant_add.roi, "Gray card region X,Y,WIDTH,HEIGHT in the raw photo");
+  illuminant_add_cmd->add_option("--source", illuminant_add.source, "Provenance text (lamp, place, date)");
+  IlluminantRegenerateOptions illuminant_regenerate;
+  CLI::App* illuminant_regenerate_cmd =
+      illuminant_cmd->add_subcommand("regenerate", "Rebuild the bundled table from its recipe (reproducibility)");
+  illuminant_regenerate_cmd->add_option("-o,--output", illuminant_regenerate.output, "Table CSV to write")->required();
+  illuminant_regenerate_cmd->add_option("--recipe", illuminant_regenerate.recipe, "Recipe CSV (default: bundled)");
+  illuminant_regenerate_cmd->add_option("--regions", illuminant_regenerate.regions, "Chromaticity regions CSV");
+
+  CLI::App* mesh_cmd = app.add_subcommand("mesh", "Mesh from depth, mesh repair and hole filling (docs/mesh.md)");
+  mesh_cmd->require_subcommand(1);
+  MeshFromDepthOptions mesh_from_depth;
+  CLI::App* mesh_from_depth_cmd = mesh_cmd->add_subcommand(
+      "from-depth", "Backproject a scene's depth, remove spurious faces, fill holes, close foreground solids");
+  mesh_from_depth_cmd->add_option("scene", mesh_from_depth.scene, "Scene manifest (JSON)")->required();
+  mesh_from_depth_cmd->add_option("-o,--output", mesh_from_depth.output, "Mesh to write (PLY, OBJ, OFF, STL)")->required();
+  mesh_from_depth_cmd->add_option("--report", mesh_from_depth.report, "Report JSON to write");
+  mesh_from_depth_cmd->add_option("--uncertain", mesh_from_depth.uncertain, "Uncertain mask (non-zero = uncertain)");
+  mesh_from_depth_cmd->add_option("--truth", mesh_from_depth.truth,
+                                  "Ground-truth scene (depth and normals): score the spurious-face removal");
+  mesh_from_depth_cmd->add_flag("--no-solids", mesh_from_depth.no_solids, "Leave foreground things as open sheets");
+  mesh_from_depth_cmd->add_flag("--no-evaluation", mesh_from_depth.no_evaluation,
+                                "Skip the final topology and self-intersection counts");
+  MeshCleanOptions mesh_clean;
+  CLI::App* mesh_clean_cmd =
+      mesh_cmd->add_subcommand("clean", "Repair a triangle mesh and fill its holes; report self-intersections");
+  mesh_clean_cmd->add_option("input", mesh_clean.input, "Mesh to read (PLY, OBJ, OFF, STL)")->required();
+  mesh_clean_cmd->add_option("-o,--output", mesh_clean.output, "Mesh to write")->required();
+  mesh_clean_cmd->add_option("--report", mesh_clean.report, "Report JSON to write");
+
+  PostOptions post;
+  CLI::App* post_cmd =
+      app.add_subcommand("post", "Post-process a linear XYZ render: glare, exposure, noise, colour (docs/post-processing.md)");
+  post_cmd->add_option("input", post.input, "Linear XYZ image relative to white E (EXR, TIFF, PFM, NPY)")->required();
+  post_cmd->add_option("-o,--output", post.output, "Image to write: .png/.tif (8-bit), .jpg, .exr (linear sRGB)")
+      ->capture_default_str();
+  post_cmd->add_option("--report", post.report, "Report JSON to write");
+  post_cmd->add_flag("--16bit", post.sixteen_bit, "16-bit PNG or TIFF");
+  CLI::Option* post_stops = post_cmd->add_option("--stops", post.stops, "Exposure in stops")->capture_default_str();
+  post_cmd->add_option("--shutter", post.shutter_s, "Camera shutter time, s (camera: ISO 3200, 1/30 s, f/2 = +3.25 stops)")
+      ->excludes(post_stops);
+  post_cmd->add_option("--f-number", post.f_number, "Camera f-number (with --shutter and --iso)")->excludes(post_stops);
+  post_cmd->add_option("--iso", post.iso, "Sensor ISO (noise calibration 100 to 3200; the camera's ISO)")
+      ->capture_default_str();
+  post_cmd->add_flag("--no-glare", post.no_glare, "Skip the fog glare");
+  post_cmd->add_option("--glare-threshold", post.glare_threshold, "Luminance above which pixels glow (render units)")
+      ->capture_default_str();
+  post_cmd->add_option("--glare-size", post.glare_size, "Glare kernel size 2^N px")->capture_default_str();
+  post_cmd->add_option("--glare-method", post.glare_method, "auto, direct, fft or tiled")->capture_default_str();
+  post_cmd->add_flag("--no-noise", post.no_noise, "Skip the sensor noise");
+  post_cmd->add_option("--noise-scale", post.noise_scale, "Noise standard deviation multiplier")->capture_default_str();
+  post_cmd->add_option("--seed", post.seed, "Noise seed")->capture_default_str();
+  post_cmd->add_flag("--no-adaptation", post.no_adaptation, "Skip the Bradford E to D65 adaptation");
+  post_cmd->add_option("--curve", post.curve, "gamma2.2, srgb or linear")->capture_default_str();
+  post_cmd->add_option("--negatives", post.negatives, "Out-of-gamut colours: desaturate or clip")->capture_default_str();
+
+  FdaCommandOptions fda;
+  CLI::App* fda_cmd = app.add_subcommand("fda", "Fourier domain adaptation of a day photo toward a night photo (baseline)");
+  fda_cmd->add_option("--source", fda.source, "Day image (its content and phase are kept)")->required();
+  fda_cmd->add_option("--target", fda.target, "Night image (its low-frequency amplitudes are taken)")->required();
+  fda_cmd->add_option("-o,--output", fda.output, "Image to write (.png, .tif, .jpg; .exr unclamped)")->required();
+  fda_cmd->add_option("--beta", fda.beta, "Band half-size as a fraction of min(H, W)")->capture_default_str();
+  fda_cmd->add_flag("--16bit", fda.sixteen_bit, "16-bit PNG or TIFF");
+  fda_cmd->add_option("--report", fda.report, "Report JSON to write");
+
+  DepthOptions depth;
+  CLI::App* depth_cmd = app.add_subcommand("depth", "Refine a scene's depth: upsample, filter, uncertain regions, optimise");
+  depth_cmd->add_option("scene", depth.scene, "Scene manifest (JSON)")->required();
+  depth_cmd->add_option("-o,--output", depth.output, "Refined depth to write (EXR, TIFF, PFM, NPY, PNG)")->capture_default_str();
+  depth_cmd->add_option("--report", depth.report, "Report JSON to write (default: <output>.report.json)");
+  depth_cmd->add_option("--optimizer", depth.optimizer, "ceres, or adam (the paper's optimiser)")
+      ->capture_default_str()->check(CLI::IsMember({"ceres", "adam"}));
+  depth_cmd->add_option("--tangent-model", depth.tangent_model, "perspective (exact pinhole tangents) or paper")
+      ->capture_default_str()->check(CLI::IsMember({"perspective", "paper"}));
+  depth_cmd->add_flag("!--no-upsample", depth.upsample, "Resize maps by nearest neighbour instead of upsampling");
+  depth_cmd->add_flag("!--no-filter", depth.filter, "Skip the instance-reference cross-bilateral filter");
+  depth_cmd->add_flag("!--no-uncertain", depth.uncertain, "Skip the uncertain regions");
+  depth_cmd->add_flag("!--no-optimize", depth.optimize, "Skip the normal-guided optimisation");
+
   CLI11_PARSE(app, argc, argv);
   if (synth_cmd->parsed() && std::sscanf(synth_size.c_str(), "%dx%d", &synth.width, &synth.height) != 2) {
     std::cerr << "solo: error: --size: expected WIDTHxHEIGHT, got \"" << synth_size << "\"\n";
@@ -103,6 +229,14 @@ int main(int argc, char** argv) {
     if (eval_normals_cmd->parsed()) return runEvalNormals(eval_normals);
     if (eval_mesh_cmd->parsed()) return runEvalMesh(eval_mesh);
     if (synth_cmd->parsed()) return runSynth(synth);
+    if (depth_cmd->parsed()) return runDepth(depth);
+    if (mesh_from_depth_cmd->parsed()) return runMeshFromDepth(mesh_from_depth);
+    if (mesh_clean_cmd->parsed()) return runMeshClean(mesh_clean);
+    if (lights_cmd->parsed()) return runLights(lights);
+    if (illuminant_add_cmd->parsed()) return runIlluminantAdd(illuminant_add);
+    if (illuminant_regenerate_cmd->parsed()) return runIlluminantRegenerate(illuminant_regenerate);
+    if (post_cmd->parsed()) return runPost(post);
+    if (fda_cmd->parsed()) return runFda(fda);
   } catch (const solo::InputError& e) {
     std::cerr << "solo: error: " << e.what() << "\n";
     return 2;

@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+
 #include "test_support.h"
 
 using solo::test::runSolo;
@@ -40,16 +42,35 @@ TEST(Cli, BadSceneExitsNonZeroNamingTheFileAndWritesNothing) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out")) << "no partial output";
 }
 
-TEST(Cli, NightOnTheEmbeddedDefaultWritesAReport) {
+TEST(Cli, NightOnTheEmbeddedDefaultWritesTheImageAndAReport) {
   TempDir dir;
-  const auto r = runSolo("night -o \"" + (dir / "night.png").string() + "\" --seed 7");
+  // A small budget: this checks the plumbing and the report, not the image quality.
+  const auto r = runSolo("night -o \"" + (dir / "night.png").string() +
+                         "\" --seed 7 --min-spp 2 --max-spp 2 --no-optimize --no-solids");
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  const solo::ImageFileInfo info = solo::probeImage(dir / "night.png");
+  EXPECT_EQ(info.width, 960);
+  EXPECT_EQ(info.height, 540);
+  EXPECT_EQ(info.channels, 3);
+  EXPECT_EQ(info.pixel_type, "uint8");
   const auto j = nlohmann::json::parse(solo::test::readText(dir / "night.report.json"));
   EXPECT_EQ(j["seed"], 7);
-  EXPECT_EQ(j["stages"][0]["name"], "input");
-  EXPECT_GT(j["stages"][0]["metrics"]["depth_valid"].get<long>(), 0);
+  std::vector<std::string> stages;
+  for (const auto& s : j["stages"]) stages.push_back(s["name"]);
+  for (const char* expected : {"input", "upsample", "filter", "uncertain", "optimize", "mesh", "lights", "scene",
+                               "render", "post"})
+    EXPECT_NE(std::find(stages.begin(), stages.end(), expected), stages.end()) << expected;
+  for (const auto& s : j["stages"]) {
+    EXPECT_GE(s["seconds"].get<double>(), 0.0) << s["name"];
+    if (s["name"] == "optimize") {
+      EXPECT_TRUE(s["skipped"].get<bool>()) << "--no-optimize";
+    }
+    if (s["name"] == "render") {
+      EXPECT_EQ(s["metrics"]["samples_per_pixel_max"], 2);
+    }
+  }
   EXPECT_TRUE(j["versions"].contains("Embree"));
-  EXPECT_EQ(solo::test::listFolder(dir.path()), std::vector<std::string>{"night.report.json"})
+  EXPECT_EQ(solo::test::listFolder(dir.path()), (std::vector<std::string>{"night.png", "night.report.json"}))
       << "no stray temporary files";
 }
 

@@ -1,0 +1,47 @@
+#pragma once
+// Boundary loops of a SurfaceMesh, and for a mesh made from a depth map, which of them are holes.
+//
+// A depth mesh is open along what the camera sees last: the image frame and the sky line (and
+// invalid pixels). Those border loops are expected and stay open. What must be closed: holes
+// behind removed occluders. In pixel space a loop that encloses its sheet (positive signed area
+// in (u, v)) is an outer loop, one enclosed by it an inner loop. Edges whose two ends lie on the
+// same side of the frame, or both next to a pixel without depth (sky, invalid), are border edges.
+//  - inner loop without border edge: a hole behind an occluder -> filled;
+//  - inner loop with border edges: sky seen through a gap -> stays open (sky_opening);
+//  - outer loop with border edges: the border; each run of non-border edges lying behind a
+//    nearer surface (an occluder touching the frame or the sky line) is closed with a chord
+//    between its two ends and filled (frame_hole);
+//  - outer loop without border edge: the outline of a floating sheet (silhouette); foreground
+//    things are closed into solids, other sheets stay open and are reported.
+
+#include "solo/geometry/depth_mesh.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace solo {
+
+using VertexLoop = std::vector<OpenMesh::VertexHandle>;
+
+/// Every boundary loop, each listed in the direction of its border half-edges (a face lies to
+/// the right when walking the loop on the camera-facing side). A loop through a pinched vertex
+/// is split there, so no vertex appears twice in one loop.
+std::vector<VertexLoop> findBoundaryLoops(const SurfaceMesh& mesh);
+
+enum class LoopKind { hole, sky_opening, border, silhouette };
+const char* loopKindName(LoopKind kind);
+
+struct DepthLoops {
+  std::vector<VertexLoop> loops;
+  std::vector<LoopKind> kinds;
+  std::vector<VertexLoop> holes;        ///< closed polylines to fill: inner holes, then frame holes
+  std::int64_t inner_holes = 0, frame_holes = 0;
+  std::int64_t border_loops = 0, sky_openings = 0, silhouettes = 0;
+};
+
+/// Classifies the loops of a depth mesh. `had_depth` (CV_8U, the depth map's size) marks the
+/// pixels that had a vertex before any face was removed: its complement is sky and invalid depth.
+/// `depth_m` is the map the mesh was made from.
+DepthLoops classifyDepthLoops(const DepthMesh& mesh, const cv::Mat& had_depth, const cv::Mat& depth_m);
+
+}  // namespace solo

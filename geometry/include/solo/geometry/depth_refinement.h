@@ -1,0 +1,54 @@
+#pragma once
+// The depth refinement stage ("refine", SOLO reference.md sections 1.1-1.4): upsample the
+// estimated maps to the image resolution, filter the depth with the instance-reference
+// cross-bilateral filter, find the uncertain regions, and optimise the depth against the
+// predicted normals. Each step can be switched off and is skipped, with the reason in its
+// report, when its input is missing. docs/depth-refinement.md has the measurements.
+
+#include "solo/geometry/adam_depth_optimizer.h"
+#include "solo/geometry/instance_bilateral_filter.h"
+#include "solo/geometry/normal_guided_optimization.h"
+#include "solo/geometry/report.h"
+#include "solo/geometry/scene.h"
+#include "solo/geometry/uncertain_regions.h"
+#include "solo/geometry/upsample_maps.h"
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+namespace solo {
+
+enum class DepthOptimizer { kCeres, kAdam };
+
+struct DepthRefinementOptions {
+  UpsampleOptions upsampling;  ///< .enabled = false: nearest-neighbour resizing only
+  bool filter = true;
+  InstanceBilateralFilterOptions filtering;
+  bool uncertain_regions = true;
+  UncertainRegionOptions uncertainty;
+  bool optimize = true;
+  DepthOptimizer optimizer = DepthOptimizer::kCeres;
+  NormalGuidedOptimizationOptions optimization;  ///< Ceres
+  AdamOptions adam;                              ///< the paper's optimiser
+};
+
+/// Everything at the image resolution.
+struct DepthRefinementResult {
+  cv::Mat depth_m;           ///< CV_32F metres, refined; 0 = invalid (sky, no estimate)
+  cv::Mat uncertain;         ///< CV_8U, 255 = uncertain (all 0 when the step is off or skipped)
+  cv::Mat normals;           ///< CV_32FC3 upsampled predicted normals (empty when the scene has none)
+  cv::Mat depth_normals;     ///< CV_32FC3 normals of the refined depth (normalsFromDepth)
+  cv::Mat upsampled_depth_m; ///< the estimated depth after step 1
+  cv::Mat filtered_depth_m;  ///< d~ after step 2 (= upsampled when the filter is off)
+  UpsampledMaps maps;        ///< albedo, roughness, instances, labels at the image resolution
+  /// One report per step ("upsample", "filter", "uncertain", "optimize"), skipped steps with
+  /// their reason, then the whole stage ("refine": total time and the key figures).
+  std::vector<StageReport> steps;
+  StageReport report;
+};
+
+/// Runs the stage on a loaded scene (its camera is already at the image resolution).
+DepthRefinementResult refineDepth(const Scene& scene, const DepthRefinementOptions& options = {});
+
+}  // namespace solo

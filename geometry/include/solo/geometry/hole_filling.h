@@ -1,0 +1,58 @@
+#pragma once
+// Filling one hole given as a closed polyline, with CGAL Polygon Mesh Processing: triangulation
+// (2D constrained Delaunay when the boundary is near planar, else Liepa's minimum-weight
+// triangulation over the 3D Delaunay search space, the exhaustive O(n^3) search only for small
+// holes), then refinement to the boundary's edge density and bi-Laplacian fairing of the new
+// vertices (boundary fixed). Every call is guarded: a deadline checked by a CGAL visitor, CGAL
+// exceptions caught, the result checked for completeness. The caller verifies the patch against
+// the mesh (findIntersectingFaces) and falls back to a simpler method. Units: those of the points.
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace solo {
+
+enum class HoleFillMethod {
+  triangulate_refine_fair,  ///< the full CGAL pipeline
+  triangulate,              ///< the triangulation only (no new vertex): the first fallback
+  centroid_fan,             ///< one new vertex at the boundary's centroid: the last fallback
+};
+const char* holeFillMethodName(HoleFillMethod method);
+
+struct HoleFillOptions {
+  double density_control_factor = 1.41421356237309504880;  ///< CGAL refine's default (sqrt 2)
+  int fairing_continuity = 1;                 ///< 0: C0, 1: tangent (CGAL's default), 2: curvature
+  double time_limit_s = 10.0;                 ///< per hole and method, checked between CGAL steps
+  int max_cubic_boundary_vertices = 300;      ///< exhaustive search only for holes this small
+  int max_fair_vertices = 10000;              ///< larger refined patches are not faired (sparse LU cost)
+};
+
+/// A patch: triangles over the boundary points (indices 0..n-1) and new points (index n + k is
+/// new_points[k]). Oriented so that the boundary edge (i -> i+1) appears as (i -> i+1): the
+/// polyline must run in the direction of the mesh's border half-edges, which the patch takes over.
+struct HolePatch {
+  std::vector<Eigen::Vector3d> new_points;
+  std::vector<std::array<int, 3>> faces;
+  bool filled = false;
+  std::string failure;  ///< why nothing was produced
+  bool faired = false;  ///< fairing ran and succeeded
+};
+
+/// Fills the closed polyline `boundary` (first point not repeated) with `method`. Never throws
+/// for geometric reasons: a failure leaves `filled` false with the reason.
+HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFillMethod method,
+                           const HoleFillOptions& options = {});
+
+/// For each face of `candidates`, whether it intersects a face of `candidates` or of `others`
+/// other than in what they share by index (the rules of evaluateMesh: no shared vertex, any
+/// contact; a shared vertex, the opposite edge of one meets the other; a shared edge, coplanar
+/// and folded onto the same side). Faces index into `points`; degenerate faces are skipped.
+std::vector<std::uint8_t> findIntersectingFaces(const std::vector<Eigen::Vector3d>& points,
+                                                const std::vector<std::array<int, 3>>& candidates,
+                                                const std::vector<std::array<int, 3>>& others);
+
+}  // namespace solo

@@ -1,0 +1,61 @@
+#pragma once
+// The mesh stage. From a depth map: backprojection, spurious-face removal, fragment and pinch
+// removal, hole filling (inner holes and holes against the frame or sky line), foreground solids,
+// and the quality counts of the result. From any triangle mesh: soup repair and hole filling.
+// Each returns a StageReport with counts before and after, removals per criterion, holes found
+// and filled, and the time of every step (docs/mesh.md lists every metric).
+
+#include "solo/geometry/depth_mesh.h"
+#include "solo/geometry/foreground_solids.h"
+#include "solo/geometry/hole_filling.h"
+#include "solo/geometry/mesh_metrics.h"
+#include "solo/geometry/report.h"
+#include "solo/geometry/spurious_faces.h"
+
+#include <opencv2/core.hpp>
+
+namespace solo {
+
+struct DepthMeshCleanupOptions {
+  SpuriousFaceOptions spurious;
+  std::int64_t min_fragment_faces = 64;  ///< smaller connected pieces are removed
+  bool fill_holes = true;
+  HoleFillOptions hole_filling;
+  bool close_solids = true;
+  ForegroundSolidOptions solids;
+  bool evaluate = true;  ///< run evaluateMesh on the result (self-intersections included)
+};
+
+/// Cleans a mesh made by meshFromDepth from `depth_m` in place and collects its garbage
+/// (vertex_of_pixel is rebuilt). instances (CV_32S) and uncertain (CV_8U) are of the depth map's
+/// size or empty. The report's name is "mesh". With `spurious_truth` (per face, from
+/// spuriousFacesFromGroundTruth) the report adds the removal's precision and recall.
+StageReport cleanDepthMesh(DepthMesh& mesh, const cv::Mat& depth_m, const cv::Mat& instances,
+                           const cv::Mat& uncertain, const DepthMeshCleanupOptions& options = {},
+                           const std::vector<std::uint8_t>* spurious_truth = nullptr);
+
+/// The whole stage from a scene's maps: the instance map (when present) is resampled to the
+/// depth map's size (nearest), the mesh is built at the depth map's resolution and cleaned.
+/// `uncertain` (CV_8U, any size, or empty) is resampled likewise. With exact maps of the depth
+/// map's size (true_depth_m CV_32F, true_normals CV_32FC3), the spurious-face removal is scored
+/// against them (spuriousFacesFromGroundTruth); otherwise a note says why it is not.
+DepthMesh meshFromScene(const cv::Mat& depth_m, const PinholeCamera& camera, const cv::Mat& instances,
+                        const cv::Mat& uncertain, const DepthMeshCleanupOptions& options, StageReport& report,
+                        const cv::Mat& true_depth_m = {}, const cv::Mat& true_normals = {});
+
+struct MeshCleanupOptions {
+  bool fill_holes = true;
+  HoleFillOptions hole_filling;
+};
+
+/// Repairs and closes an arbitrary triangle mesh: the soup repair of repairSoup, then every
+/// boundary loop filled (verified, with fallbacks). Self-intersections are reported, not
+/// removed. Throws InputError naming `source` for a mesh with a non-finite coordinate or a
+/// face index out of range.
+TriangleMesh cleanMesh(const TriangleMesh& input, const MeshCleanupOptions& options, StageReport& report,
+                       const std::filesystem::path& source = "mesh");
+
+/// Adds the counts of evaluateMesh to a report, each name prefixed ("before_", "after_").
+void addMeshCounts(StageReport& report, const std::string& prefix, const MeshMetrics& metrics);
+
+}  // namespace solo

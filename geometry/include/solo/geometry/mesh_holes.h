@@ -1,0 +1,41 @@
+#pragma once
+// Closing holes of a SurfaceMesh: each hole (a closed loop of existing vertices) is filled by
+// fillHolePolyline with the full CGAL pipeline; every patch is then checked for intersections
+// with the other patches and with the mesh (findIntersectingFaces). A patch that intersects, or
+// that OpenMesh cannot attach, is replaced by the next simpler method (triangulation only, then
+// a centroid fan); a hole no method can close safely is left open with a warning.
+
+#include "solo/geometry/boundary_loops.h"
+#include "solo/geometry/hole_filling.h"
+#include "solo/geometry/surface_mesh.h"
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace solo {
+
+struct HoleClosing {
+  std::int64_t holes = 0, filled = 0, left_open = 0;
+  std::int64_t by_refine_fair = 0, by_triangulation = 0, by_centroid_fan = 0;
+  std::int64_t patches_rejected_for_intersection = 0;  ///< attempts that intersected and were replaced
+  std::int64_t faces_added = 0, vertices_added = 0;
+  std::int64_t largest_hole_vertices = 0;
+  std::vector<std::string> warnings;                    ///< one per hole left open, with the reason
+  std::vector<OpenMesh::FaceHandle> patch_faces;        ///< faces added
+};
+
+struct PixelMapping {
+  ImageVertexProperties properties;
+  PinholeCamera camera;  ///< of the depth map; new vertices get the pixel they project to
+  int width = 0, height = 0;
+};
+
+/// Fills the holes (loops in border half-edge direction, see findBoundaryLoops). When `pixels`
+/// is given, new vertices get their projected pixel (clamped to the map), origin hole_fill and
+/// the instance most boundary vertices carry.
+HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, const HoleFillOptions& options,
+                       const std::optional<PixelMapping>& pixels = std::nullopt);
+
+}  // namespace solo

@@ -1,0 +1,112 @@
+#pragma once
+// The objective of SOLO's normal-guided depth optimisation (reference.md section 1.4),
+// evaluated with its exact gradient over the whole image. Shared by the Ceres solver
+// (normal_guided_optimization.h) and the paper's Adam baseline (adam_depth_optimizer.h), so
+// both minimise the same function and their values compare directly.
+//
+//   L(z) = lambda1 / m * sum_p (1 - U(p)) (r_u(p)^2 + r_v(p)^2) + lambda2 / m * sum_p (d~(p) - z(p))^2
+//
+// over the m pixels with a filtered depth d~ > 0 (the unknowns). r_u = n . t_u and
+// r_v = n . t_v are the predicted unit normal n against the surface tangents along the image
+// axes, each divided by the pixel footprint z / f so that they are (1, 0, dz/dx) and
+// (0, 1, dz/dy) at the principal point, with dz/dx = (dz/du) f_x / z:
+//   perspective (default): t_u = (1, 0, 0) + g_u (x', y', 1), exact tangents of the pinhole
+//     backprojection z (x', y', 1), x' = (u - cx) / fx, y' = (v - cy) / fy;
+//   paper graph: t_u = (1, 0, g_u), the paper's tangents of the graph (x, y, z(x, y)), exact
+//     only near the principal point;
+// g_u = fx D_u z / z, D_u z the central difference (z(u+1) - z(u-1)) / 2, one-sided where a
+// neighbour is invalid, no u residual where both are (likewise along v with fy). Pixels
+// without a valid normal have no tangent term. Units: z and d~ metres, L in square metres
+// for the data term and unitless for the tangent term (as in the paper).
+
+#include "solo/geometry/camera.h"
+
+#include <opencv2/core.hpp>
+
+#include <array>
+#include <vector>
+
+namespace solo {
+
+enum class TangentModel { kPerspective, kPaperGraph };
+
+struct NormalGuidedObjectiveOptions {
+  double tangent_weight = 50;  ///< lambda1 (reference: 50)
+  double data_weight = 1;      ///< lambda2 (reference: 1)
+  TangentModel tangent_model = TangentModel::kPerspective;
+};
+
+/// The objective's parts: total = tangent + data, each already weighted and divided by m.
+struct ObjectiveValue {
+  double total = 0;
+  double tangent = 0;  ///< lambda1 * L1
+  double data = 0;     ///< lambda2 * L2, square metres
+};
+
+class NormalGuidedObjective {
+ public:
+  /// filtered_depth_m: CV_32F metres (0 = invalid: not an unknown); normals: CV_32FC3 camera
+  /// frame of the same size ((0,0,0) or non-finite = none; renormalised; orientation does not
+  /// matter, r is odd in n) or empty (no tangent term); uncertain: CV_8U (non-zero = U = 1) or
+  /// empty; camera at this resolution. segments: CV_32S instance labels or empty; when given,
+  /// differences never pair pixels of two labels (a depth edge has no tangent), which makes
+  /// the difference one-sided or absent there.
+  NormalGuidedObjective(const cv::Mat& filtered_depth_m, const cv::Mat& normals, const cv::Mat& uncertain,
+                        const PinholeCamera& camera, const NormalGuidedObjectiveOptions& options = {},
+                        const cv::Mat& segments = {});
+
+  int unknowns() const { return static_cast<int>(pixel_.size()); }
+  /// Unknowns with at least one tangent residual.
+  int tangentPixels() const { return tangent_pixels_; }
+  /// d~ at the unknowns, in row-major pixel order: the start of every solver.
+  const std::vector<double>& filteredDepths() const { return filtered_; }
+
+  /// Value (and, when `gradient` is not null, dL/dz) at depths z (metres, one per unknown).
+  /// Returns false, with an infinite value, when some z is not finite and positive.
+  /// Not thread-safe (it uses scratch buffers); it parallelises internally.
+  bool evaluate(const double* z, ObjectiveValue& value, double* gradient = nullptr) const;
+
+  /// Diagonal of the Gauss-Newton matrix 2 J^T J at z (the curvature of L per unknown).
+  std::vector<double> gaussNewtonDiagonal(const double* z) const;
+
+  /// Depth image (CV_32F, 0 at non-unknowns) of z.
+  cv::Mat toImage(const double* z) const;
+  /// Values of a depth image at the unknowns; pixels <= 0 there take d~.
+  std::vector<double> fromImage(const cv::Mat& depth_m) const;
+
+  /// One pixel's tangent residuals for residual-block layouts: the unknowns they depend on
+  /// (the pixel itself first, then its stencil neighbours), sqrt(weight) * (r_u, r_v) and
+  /// their derivatives by each of those unknowns. count = 0 when the pixel has no tangent term.
+  struct PixelStencil {
+    int count = 0;
+    std::array<int, 5> unknown{};
+  };
+  PixelStencil stencil(int i) const;
+  /// z_stencil: the depths of stencil(i).unknown[0..count). jacobian[k][j] = d residual_k / d z_j.
+  void tangentResiduals(int i, const double* z_stencil, double residuals[2], double jacobian[2][5]) const;
+  /// lambda2 / m: the data term is data_weight * sum (z - d~)^2.
+  double dataWeight() const { return data_weight_; }
+
+ private:
+  struct Axis {  // one image axis of one unknown's tangent residual
+    int before = -1, after = -1;  // unknowns at -1 and +1 along the axis, -1 = none
+    float offset = 0;             // n_x (or n_y): the residual at zero slope
+    float slope_factor = 0;       // c * f: r = offset + slope_factor * D z / z
+  };
+  // Central/one-sided difference coefficients of an axis: D = a_after z_after + a_self z + a_before z_before.
+  static void coefficients(const Axis& a, double& after, double& self, double& before);
+
+  cv::Size size_;
+  std::vector<int> pixel_;  // row-major pixel index of each unknown
+  std::vector<double> filtered_;
+  std::vector<Axis> u_, v_;
+  std::vector<float> tangent_weight_;  // lambda1 (1 - U) / m, 0 without a normal
+  double data_weight_ = 0;
+  int tangent_pixels_ = 0;
+  // Scratch of evaluate(): per unknown, the gradient its residuals send to its +1 and -1
+  // neighbours along u and v, and to itself.
+  mutable std::vector<float> to_after_u_, to_before_u_, to_after_v_, to_before_v_;
+  mutable std::vector<double> own_;
+};
+
+}  // namespace solo

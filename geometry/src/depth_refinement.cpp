@@ -1,0 +1,87 @@
+#include "solo/geometry/depth_refinement.h"
+
+#include "solo/geometry/normals_from_depth.h"
+
+#include <cmath>
+
+namespace solo {
+namespace {
+
+StageReport skippedStep(const std::string& name, const std::string& reason) {
+  StageReport r;
+  r.name = name;
+  r.skipped = true;
+  r.skip_reason = reason;
+  return r;
+}
+
+}  // namespace
+
+DepthRefinementResult refineDepth(const Scene& scene, const DepthRefinementOptions& options) {
+  Stopwatch clock;
+  DepthRefinementResult out;
+  StageReport& stage = out.report;
+  stage.name = "refine";
+
+  // 1. Upsampling (nearest-neighbour resizing when switched off).
+  out.maps = upsampleMaps(scene, options.upsampling);
+  out.steps.push_back(out.maps.report);
+  if (!options.upsampling.enabled) out.steps.back().notes.push_back("upsampling switched off");
+  out.upsampled_depth_m = out.maps.depth_m;
+  out.normals = out.maps.normals;
+  const cv::Mat& depth = out.upsampled_depth_m;
+
+  // 2. Instance-reference cross-bilateral filter.
+  if (!options.filter) {
+    out.filtered_depth_m = depth.clone();
+    out.steps.push_back(skippedStep("filter", "switched off"));
+  } else {
+    InstanceBilateralFilterResult filtered = instanceBilateralFilter(depth, out.maps.instances, options.filtering);
+    out.filtered_depth_m = filtered.depth_m;
+    out.steps.push_back(filtered.report);
+  }
+
+  // 3. Uncertain regions.
+  out.uncertain = cv::Mat(depth.size(), CV_8U, cv::Scalar(0));
+  if (!options.uncertain_regions) {
+    out.steps.push_back(skippedStep("uncertain", "switched off"));
+  } else if (out.maps.labels.empty()) {
+    out.steps.push_back(skippedStep("uncertain", "no semantic labels (labels or instances): no uncertain regions"));
+  } else {
+    UncertainRegionResult uncertain = findUncertainRegions(out.filtered_depth_m, out.maps.labels, options.uncertainty);
+    out.uncertain = uncertain.mask;
+    out.steps.push_back(uncertain.report);
+  }
+
+  // 4. Normal-guided optimisation.
+  if (!options.optimize) {
+    out.depth_m = out.filtered_depth_m.clone();
+    out.steps.push_back(skippedStep("optimize", "switched off"));
+  } else if (out.normals.empty()) {
+    out.depth_m = out.filtered_depth_m.clone();
+    out.steps.push_back(skippedStep("optimize", "no normals: no normal-guided optimisation"));
+  } else {
+    NormalGuidedOptimizationResult optimized =
+        options.optimizer == DepthOptimizer::kCeres
+            ? optimizeDepthWithNormals(out.filtered_depth_m, out.normals, out.uncertain, out.maps.instances,
+                                       scene.camera, options.optimization)
+            : optimizeDepthWithAdam(out.filtered_depth_m, out.normals, out.uncertain, out.maps.instances, scene.camera,
+                                    options.adam);
+    out.depth_m = optimized.depth_m;
+    out.steps.push_back(optimized.report);
+  }
+  out.depth_normals = normalsFromDepth(out.depth_m, scene.camera);
+
+  for (const StageReport& step : out.steps) {
+    stage.add(step.name + "_seconds", step.seconds, "s");
+    if (step.skipped) stage.notes.push_back(step.name + " skipped: " + step.skip_reason);
+    for (const std::string& note : step.notes) stage.notes.push_back(step.name + ": " + note);
+  }
+  stage.add("valid_pixels", static_cast<std::int64_t>(cv::countNonZero(out.depth_m > 0)));
+  stage.add("uncertain_pixels", static_cast<std::int64_t>(cv::countNonZero(out.uncertain)));
+  if (const MetricValue* v = out.steps.back().find("objective_final")) stage.add("objective_final", *v);
+  stage.seconds = clock.seconds();
+  return out;
+}
+
+}  // namespace solo

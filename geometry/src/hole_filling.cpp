@@ -1,0 +1,260 @@
+// Hole filling and patch verification: the CGAL translation unit of the mesh stage.
+
+#include "solo/geometry/hole_filling.h"
+
+#include "solo/geometry/report.h"
+
+#include <CGAL/Box_intersection_d/Box_with_info_d.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/fair.h>
+#include <CGAL/Polygon_mesh_processing/refine.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/box_intersection_d.h>
+
+#include <algorithm>
+#include <exception>
+#include <iterator>
+#include <set>
+#include <utility>
+
+namespace solo {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using Triangle = Kernel::Triangle_3;
+using Segment = Kernel::Segment_3;
+using PatchMesh = CGAL::Surface_mesh<Point>;
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+struct DeadlineExceeded {};
+
+/// CGAL hole-filling visitor that aborts a call running past its deadline (the quadratic and
+/// cubic phases report every step; an exception unwinds CGAL's containers cleanly).
+struct DeadlineVisitor : PMP::Hole_filling::Default_visitor {
+  const Stopwatch* clock = nullptr;
+  double limit_s = 0;
+  void check() const {
+    if (clock->seconds() > limit_s) throw DeadlineExceeded{};
+  }
+  void quadratic_step() const { check(); }
+  void cubic_step() const { check(); }
+  void start_cubic_phase(int) const { check(); }
+  void start_quadratic_phase(std::size_t) const { check(); }
+};
+
+Point toPoint(const Eigen::Vector3d& p) { return Point(p.x(), p.y(), p.z()); }
+
+/// Triangles over the polyline, oriented along it (edge i -> i+1 appears as i -> i+1).
+bool triangulatePolyline(const std::vector<Point>& polyline, const HoleFillOptions& options, const Stopwatch& clock,
+                         std::vector<std::array<int, 3>>& faces, std::string& failure) {
+  const int n = static_cast<int>(polyline.size());
+  DeadlineVisitor visitor;
+  visitor.clock = &clock;
+  visitor.limit_s = options.time_limit_s;
+  std::vector<CGAL::Triple<int, int, int>> triples;
+  try {
+    PMP::triangulate_hole_polyline(polyline, std::back_inserter(triples),
+                                   CGAL::parameters::use_2d_constrained_delaunay_triangulation(true)
+                                       .use_delaunay_triangulation(true)
+                                       .do_not_use_cubic_algorithm(n > options.max_cubic_boundary_vertices)
+                                       .visitor(visitor));
+  } catch (const DeadlineExceeded&) {
+    failure = "triangulation exceeded its time limit";
+    return false;
+  } catch (const std::exception& e) {
+    failure = std::string("triangulation failed: ") + e.what();
+    return false;
+  }
+  if (static_cast<int>(triples.size()) != n - 2) {
+    failure = "no valid triangulation (" + std::to_string(triples.size()) + " of " + std::to_string(n - 2) +
+              " triangles" + (n > options.max_cubic_boundary_vertices ? ", exhaustive search skipped for its size)" : ")");
+    return false;
+  }
+  faces.clear();
+  for (const auto& t : triples) {
+    std::array<int, 3> f{t.first, t.second, t.third};
+    std::sort(f.begin(), f.end());  // corners in increasing order run along the polyline
+    faces.push_back(f);
+  }
+  return true;
+}
+
+void refineAndFair(const std::vector<Point>& polyline, const HoleFillOptions& options, const Stopwatch& clock,
+                   HolePatch& patch) {
+  PatchMesh mesh;
+  std::vector<PatchMesh::Vertex_index> vertices;
+  for (const Point& p : polyline) vertices.push_back(mesh.add_vertex(p));
+  for (const auto& f : patch.faces)
+    if (mesh.add_face(vertices[f[0]], vertices[f[1]], vertices[f[2]]) == PatchMesh::null_face())
+      throw std::runtime_error("patch is not a valid surface");
+  std::vector<PatchMesh::Face_index> new_faces;
+  std::vector<PatchMesh::Vertex_index> new_vertices;
+  PMP::refine(mesh, faces(mesh), std::back_inserter(new_faces), std::back_inserter(new_vertices),
+              CGAL::parameters::density_control_factor(options.density_control_factor));
+  if (clock.seconds() > options.time_limit_s) throw DeadlineExceeded{};
+  if (!new_vertices.empty() && static_cast<int>(new_vertices.size()) <= options.max_fair_vertices)
+    patch.faired = PMP::fair(mesh, new_vertices, CGAL::parameters::fairing_continuity(options.fairing_continuity));
+  // Boundary vertices keep indices 0..n-1; the others are numbered in order of addition.
+  const int n = static_cast<int>(polyline.size());
+  std::vector<int> index(mesh.number_of_vertices(), -1);
+  for (int i = 0; i < n; ++i) index[vertices[i]] = i;
+  patch.new_points.clear();
+  for (const auto v : mesh.vertices()) {
+    if (index[v] >= 0) continue;
+    index[v] = n + static_cast<int>(patch.new_points.size());
+    const Point& p = mesh.point(v);
+    patch.new_points.emplace_back(p.x(), p.y(), p.z());
+  }
+  patch.faces.clear();
+  for (const auto f : mesh.faces()) {
+    std::array<int, 3> t{};
+    int k = 0;
+    for (const auto v : vertices_around_face(mesh.halfedge(f), mesh)) t[k++] = index[v];
+    patch.faces.push_back(t);
+  }
+}
+
+bool faceIsDegenerate(const std::vector<Point>& points, const std::array<int, 3>& f) {
+  return f[0] == f[1] || f[1] == f[2] || f[0] == f[2] || CGAL::collinear(points[f[0]], points[f[1]], points[f[2]]);
+}
+
+/// The evaluation rules for two non-degenerate faces (docs/evaluation.md).
+bool facesIntersect(const std::vector<Point>& points, const std::array<int, 3>& a, const std::array<int, 3>& b) {
+  int shared = 0, a_shared[3] = {0, 0, 0}, b_shared[3] = {0, 0, 0};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (a[i] == b[j]) {
+        ++shared;
+        a_shared[i] = 1;
+        b_shared[j] = 1;
+      }
+  const Triangle ta(points[a[0]], points[a[1]], points[a[2]]), tb(points[b[0]], points[b[1]], points[b[2]]);
+  if (shared == 0) return CGAL::do_intersect(ta, tb);
+  if (shared == 3) return true;
+  if (shared == 1) {
+    int ia = 0, ib = 0;
+    while (!a_shared[ia]) ++ia;
+    while (!b_shared[ib]) ++ib;
+    const Segment opposite_a(points[a[(ia + 1) % 3]], points[a[(ia + 2) % 3]]);
+    const Segment opposite_b(points[b[(ib + 1) % 3]], points[b[(ib + 2) % 3]]);
+    return CGAL::do_intersect(opposite_a, tb) || CGAL::do_intersect(opposite_b, ta);
+  }
+  int ia = 0, ib = 0;  // shared == 2: the corners not shared
+  while (a_shared[ia]) ++ia;
+  while (b_shared[ib]) ++ib;
+  int s0 = -1, s1 = -1;
+  for (int i = 0; i < 3; ++i)
+    if (a_shared[i]) (s0 < 0 ? s0 : s1) = a[i];
+  const Point &p = points[s0], &q = points[s1], &ra = points[a[ia]], &rb = points[b[ib]];
+  return CGAL::coplanar(p, q, ra, rb) && CGAL::coplanar_orientation(p, q, ra, rb) == CGAL::POSITIVE;
+}
+
+}  // namespace
+
+const char* holeFillMethodName(HoleFillMethod method) {
+  switch (method) {
+    case HoleFillMethod::triangulate_refine_fair: return "triangulate_refine_fair";
+    case HoleFillMethod::triangulate: return "triangulate";
+    case HoleFillMethod::centroid_fan: return "centroid_fan";
+  }
+  return "unknown";
+}
+
+HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFillMethod method,
+                           const HoleFillOptions& options) {
+  HolePatch patch;
+  const int n = static_cast<int>(boundary.size());
+  if (n < 3) {
+    patch.failure = "boundary has fewer than 3 vertices";
+    return patch;
+  }
+  std::vector<Point> polyline;
+  for (const auto& p : boundary) {
+    if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z())) {
+      patch.failure = "boundary has a non-finite coordinate";
+      return patch;
+    }
+    polyline.push_back(toPoint(p));
+  }
+  for (int i = 0; i < n; ++i)
+    if (polyline[i] == polyline[(i + 1) % n]) {
+      patch.failure = "boundary has an edge of zero length";
+      return patch;
+    }
+  bool all_collinear = true;
+  for (int i = 2; i < n && all_collinear; ++i) all_collinear = CGAL::collinear(polyline[0], polyline[1], polyline[i]);
+  if (all_collinear) {
+    patch.failure = "boundary is collinear: every triangle over it is degenerate";
+    return patch;
+  }
+
+  const Stopwatch clock;
+  try {
+    if (method == HoleFillMethod::centroid_fan) {
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (const auto& p : boundary) centroid += p;
+      centroid /= n;
+      patch.new_points.push_back(centroid);
+      std::vector<Point> points = polyline;
+      points.push_back(toPoint(centroid));
+      for (int i = 0; i < n; ++i) {
+        const std::array<int, 3> f{i, (i + 1) % n, n};
+        if (faceIsDegenerate(points, f)) {
+          patch.failure = "centroid fan has a degenerate triangle";
+          patch.new_points.clear();
+          patch.faces.clear();
+          return patch;
+        }
+        patch.faces.push_back(f);
+      }
+      patch.filled = true;
+      return patch;
+    }
+    if (!triangulatePolyline(polyline, options, clock, patch.faces, patch.failure)) return patch;
+    if (method == HoleFillMethod::triangulate_refine_fair) refineAndFair(polyline, options, clock, patch);
+    patch.filled = true;
+  } catch (const DeadlineExceeded&) {
+    patch = HolePatch{};
+    patch.failure = "exceeded its time limit of " + std::to_string(options.time_limit_s) + " s";
+  } catch (const std::exception& e) {
+    patch = HolePatch{};
+    patch.failure = std::string("CGAL failed: ") + e.what();
+  }
+  return patch;
+}
+
+std::vector<std::uint8_t> findIntersectingFaces(const std::vector<Eigen::Vector3d>& points_in,
+                                                const std::vector<std::array<int, 3>>& candidates,
+                                                const std::vector<std::array<int, 3>>& others) {
+  std::vector<Point> points;
+  points.reserve(points_in.size());
+  for (const auto& p : points_in) points.push_back(toPoint(p));
+  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::size_t>;
+  const auto boxesOf = [&](const std::vector<std::array<int, 3>>& faces) {
+    std::vector<Box> boxes;
+    boxes.reserve(faces.size());
+    for (std::size_t i = 0; i < faces.size(); ++i) {
+      if (faceIsDegenerate(points, faces[i])) continue;
+      const auto& f = faces[i];
+      boxes.emplace_back(points[f[0]].bbox() + points[f[1]].bbox() + points[f[2]].bbox(), i);
+    }
+    return boxes;
+  };
+  std::vector<Box> candidate_boxes = boxesOf(candidates), other_boxes = boxesOf(others);
+  std::vector<std::uint8_t> hit(candidates.size(), 0);
+  CGAL::box_self_intersection_d(candidate_boxes.begin(), candidate_boxes.end(), [&](const Box& a, const Box& b) {
+    if ((hit[a.info()] && hit[b.info()]) || !facesIntersect(points, candidates[a.info()], candidates[b.info()])) return;
+    hit[a.info()] = hit[b.info()] = 1;
+  });
+  if (!other_boxes.empty() && !candidate_boxes.empty())
+    CGAL::box_intersection_d(candidate_boxes.begin(), candidate_boxes.end(), other_boxes.begin(), other_boxes.end(),
+                             [&](const Box& a, const Box& b) {
+                               if (!hit[a.info()] && facesIntersect(points, candidates[a.info()], others[b.info()]))
+                                 hit[a.info()] = 1;
+                             });
+  return hit;
+}
+
+}  // namespace solo

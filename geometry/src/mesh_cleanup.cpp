@@ -1,0 +1,257 @@
+#include "solo/geometry/mesh_cleanup.h"
+
+#include "solo/geometry/boundary_loops.h"
+#include "solo/geometry/error.h"
+#include "solo/geometry/mesh_fragments.h"
+#include "solo/geometry/mesh_holes.h"
+#include "solo/geometry/mesh_repair.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+
+namespace solo {
+namespace {
+
+cv::Mat hadDepthMask(const DepthMesh& m) {
+  cv::Mat mask(m.height, m.width, CV_8U);
+  for (int v = 0; v < m.height; ++v)
+    for (int u = 0; u < m.width; ++u) mask.at<std::uint8_t>(v, u) = m.vertexAt(u, v) >= 0 ? 1 : 0;
+  return mask;
+}
+
+void rebuildPixelIndex(DepthMesh& m) {
+  std::fill(m.vertex_of_pixel.begin(), m.vertex_of_pixel.end(), -1);
+  for (const auto v : m.mesh.vertices()) {
+    if (m.mesh.property(m.properties.origin, v) != static_cast<std::uint8_t>(VertexOrigin::pixel)) continue;
+    const OpenMesh::Vec2i p = m.mesh.property(m.properties.pixel, v);
+    m.vertex_of_pixel[static_cast<std::size_t>(p[1]) * m.width + p[0]] = v.idx();
+  }
+}
+
+std::int64_t liveFaceCount(const SurfaceMesh& mesh) {
+  std::int64_t n = 0;
+  for (const auto f : mesh.faces()) n += !mesh.status(f).deleted();
+  return n;
+}
+
+void addLoopCounts(StageReport& report, const std::string& prefix, const DepthLoops& loops) {
+  report.add(prefix + "boundary_loops", static_cast<std::int64_t>(loops.loops.size()));
+  report.add(prefix + "border_loops", loops.border_loops);
+  report.add(prefix + "sky_openings", loops.sky_openings);
+  report.add(prefix + "silhouette_loops", loops.silhouettes);
+  report.add(prefix + "inner_holes", loops.inner_holes);
+  report.add(prefix + "frame_holes", loops.frame_holes);
+}
+
+void addHoleCounts(StageReport& report, const HoleClosing& holes) {
+  report.add("holes_filled", holes.filled);
+  report.add("holes_left_open", holes.left_open);
+  report.add("holes_filled_refine_fair", holes.by_refine_fair);
+  report.add("holes_filled_triangulation_only", holes.by_triangulation);
+  report.add("holes_filled_centroid_fan", holes.by_centroid_fan);
+  report.add("hole_patches_rejected_intersecting", holes.patches_rejected_for_intersection);
+  report.add("hole_faces_added", holes.faces_added);
+  report.add("hole_vertices_added", holes.vertices_added);
+  report.add("largest_hole_vertices", holes.largest_hole_vertices);
+  for (const auto& w : holes.warnings) report.notes.push_back(w);
+}
+
+}  // namespace
+
+void addMeshCounts(StageReport& report, const std::string& prefix, const MeshMetrics& m) {
+  report.add(prefix + "vertices", m.vertices);
+  report.add(prefix + "faces", m.faces);
+  report.add(prefix + "unreferenced_vertices", m.unreferenced_vertices);
+  report.add(prefix + "components", m.components);
+  report.add(prefix + "boundary_loops_total", m.boundary_loops);
+  report.add(prefix + "boundary_edges", m.boundary_edges);
+  report.add(prefix + "non_manifold_edges", m.non_manifold_edges);
+  report.add(prefix + "non_manifold_vertices", m.non_manifold_vertices);
+  report.add(prefix + "self_intersecting_pairs", m.self_intersecting_pairs);
+  report.add(prefix + "degenerate_faces", m.degenerate_faces);
+  report.add(prefix + "closed", m.closed);
+}
+
+StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& instances, const cv::Mat& uncertain,
+                           const DepthMeshCleanupOptions& options, const std::vector<std::uint8_t>* spurious_truth) {
+  StageReport report;
+  report.name = "mesh";
+  const Stopwatch total;
+  SurfaceMesh& mesh = m.mesh;
+  const cv::Mat had_depth = hadDepthMask(m);
+  report.add("depth_width", std::int64_t{m.width}, "px").add("depth_height", std::int64_t{m.height}, "px");
+  report.add("before_vertices", static_cast<std::int64_t>(mesh.n_vertices()));
+  report.add("before_faces", liveFaceCount(mesh));
+  if (instances.empty()) report.notes.push_back("no instance map: no instance-boundary cut and no foreground solids");
+  if (uncertain.empty()) report.notes.push_back("no uncertain mask: uncertain criterion not applied");
+
+  Stopwatch step;
+  const SpuriousFaceResult spurious = findSpuriousFaces(m, depth_m, instances, uncertain, options.spurious);
+  for (const auto f : mesh.faces())
+    if (spurious.spurious[f.idx()]) mesh.delete_face(f, true);
+  report.add("spurious_faces_removed", spurious.removed);
+  report.add("spurious_by_depth_jump", spurious.by_depth_jump);
+  report.add("spurious_by_grazing_angle", spurious.by_grazing);
+  report.add("spurious_by_uncertain_mask", spurious.by_uncertain);
+  report.add("spurious_by_instance_boundary", spurious.by_instance_boundary);
+  report.add("seconds_spurious_faces", step.seconds(), "s");
+  if (spurious_truth) {
+    std::vector<std::uint8_t> occlusion(spurious.criteria.size());
+    for (std::size_t i = 0; i < occlusion.size(); ++i) occlusion[i] = (spurious.criteria[i] & kOcclusionCriteria) != 0;
+    const DetectionScore score = scoreDetection(occlusion, *spurious_truth);
+    const DetectionScore all = scoreDetection(spurious.spurious, *spurious_truth);
+    report.add("spurious_truth_faces", score.true_positives + score.false_negatives);
+    report.add("spurious_true_positives", score.true_positives);
+    report.add("spurious_false_positives", score.false_positives);
+    report.add("spurious_false_negatives", score.false_negatives);
+    report.add("spurious_precision", score.precision);
+    report.add("spurious_recall", score.recall);
+    report.add("removal_precision_with_instance_cut", all.precision);
+    report.add("removal_recall_with_instance_cut", all.recall);
+  }
+
+  step = Stopwatch();
+  const FragmentRemoval fragments = removeSmallComponents(mesh, options.min_fragment_faces);
+  const PinchResolution pinches = resolvePinchedVertices(mesh);
+  const FragmentRemoval fragments_after_pinches = removeSmallComponents(mesh, options.min_fragment_faces);
+  report.add("fragments_removed", fragments.components_removed + fragments_after_pinches.components_removed);
+  report.add("fragment_faces_removed", fragments.faces_removed + fragments_after_pinches.faces_removed);
+  report.add("pinched_vertices", pinches.pinched_vertices);
+  report.add("pinch_faces_removed", pinches.faces_removed);
+  report.add("seconds_fragments", step.seconds(), "s");
+
+  step = Stopwatch();
+  const DepthLoops loops = classifyDepthLoops(m, had_depth, depth_m);
+  addLoopCounts(report, "found_", loops);
+  report.add("seconds_boundary_loops", step.seconds(), "s");
+
+  HoleClosing holes;
+  step = Stopwatch();
+  if (options.fill_holes) {
+    holes = closeHoles(mesh, loops.holes, options.hole_filling, PixelMapping{m.properties, m.camera, m.width, m.height});
+    addHoleCounts(report, holes);
+  } else {
+    report.notes.push_back("hole filling off: " + std::to_string(loops.holes.size()) + " holes left open");
+  }
+  report.add("seconds_hole_filling", step.seconds(), "s");
+
+  step = Stopwatch();
+  if (options.close_solids && !instances.empty()) {
+    const SolidClosing solids = closeForegroundSolids(m, holes.patch_faces, options.solids);
+    report.add("foreground_sheets_considered", solids.sheets);
+    report.add("foreground_solids", solids.solids);
+    report.add("solid_faces_added", solids.faces_added);
+    report.add("solid_back_vertices_clamped", solids.vertices_clamped);
+    std::string classes;
+    for (const auto& c : solids.classes) classes += (classes.empty() ? "" : " ") + c;
+    report.add("foreground_solids_per_class", classes);
+  }
+  report.add("seconds_solids", step.seconds(), "s");
+
+  step = Stopwatch();
+  const DepthLoops remaining = classifyDepthLoops(m, had_depth, depth_m);
+  addLoopCounts(report, "after_", remaining);
+  mesh.garbage_collection();
+  rebuildPixelIndex(m);
+  report.add("after_vertices_live", static_cast<std::int64_t>(mesh.n_vertices()));
+  report.add("after_faces_live", static_cast<std::int64_t>(mesh.n_faces()));
+  report.add("seconds_garbage_collection", step.seconds(), "s");
+
+  if (options.evaluate) {
+    step = Stopwatch();
+    addMeshCounts(report, "after_", evaluateMesh(toTriangleMesh(mesh)));
+    report.add("seconds_evaluation", step.seconds(), "s");
+  } else {
+    report.notes.push_back("evaluation off: no self-intersection or manifoldness counts");
+  }
+  report.seconds = total.seconds();
+  return report;
+}
+
+DepthMesh meshFromScene(const cv::Mat& depth_m, const PinholeCamera& camera, const cv::Mat& instances,
+                        const cv::Mat& uncertain, const DepthMeshCleanupOptions& options, StageReport& report,
+                        const cv::Mat& true_depth_m, const cv::Mat& true_normals) {
+  const Stopwatch clock;
+  cv::Mat ids, mask;
+  if (!instances.empty()) {
+    if (instances.size() == depth_m.size()) ids = instances;
+    else cv::resize(instances, ids, depth_m.size(), 0, 0, cv::INTER_NEAREST);
+  }
+  if (!uncertain.empty()) {
+    if (uncertain.size() == depth_m.size()) mask = uncertain;
+    else cv::resize(uncertain, mask, depth_m.size(), 0, 0, cv::INTER_NEAREST);
+  }
+  DepthMesh mesh = meshFromDepth(depth_m, camera, ids);
+  const double build_seconds = clock.seconds();
+  std::vector<std::uint8_t> truth;
+  const bool scored = !true_depth_m.empty() && true_depth_m.size() == depth_m.size() && !true_normals.empty() &&
+                      true_normals.size() == depth_m.size();
+  if (scored) truth = spuriousFacesFromGroundTruth(mesh, true_depth_m, true_normals);
+  report = cleanDepthMesh(mesh, depth_m, ids, mask, options, scored ? &truth : nullptr);
+  if (!true_depth_m.empty() && !scored)
+    report.notes.push_back("ground truth not of the depth map's size (or without normals): spurious faces not scored");
+  report.metrics.insert(report.metrics.begin(), Metric{"seconds_backprojection", build_seconds, "s"});
+  report.seconds += build_seconds;
+  return mesh;
+}
+
+TriangleMesh cleanMesh(const TriangleMesh& input, const MeshCleanupOptions& options, StageReport& report,
+                       const std::filesystem::path& source) {
+  report = StageReport{};
+  report.name = "mesh clean";
+  const Stopwatch total;
+  for (const auto& v : input.vertices)
+    if (!std::isfinite(v.x()) || !std::isfinite(v.y()) || !std::isfinite(v.z()))
+      throw InputError(source, "mesh has a non-finite vertex coordinate");
+  for (const auto& f : input.faces)
+    for (const auto i : f)
+      if (i >= input.vertices.size()) throw InputError(source, "a face refers to a vertex that does not exist");
+  if (input.faces.empty()) {
+    report.skipped = true;
+    report.skip_reason = "the mesh has no face: nothing to repair or close";
+    report.add("before_vertices", static_cast<std::int64_t>(input.vertices.size())).add("before_faces", std::int64_t{0});
+    report.seconds = total.seconds();
+    return input;
+  }
+
+  Stopwatch step;
+  addMeshCounts(report, "before_", evaluateMesh(input));
+  report.add("seconds_evaluation_before", step.seconds(), "s");
+
+  step = Stopwatch();
+  SoupRepair repair;
+  SurfaceMesh mesh = repairSoup(input, &repair);
+  report.add("duplicate_points_merged", repair.duplicate_points_merged);
+  report.add("faces_with_repeated_corner_removed", repair.faces_with_repeated_corner_removed);
+  report.add("duplicate_faces_removed", repair.duplicate_faces_removed);
+  report.add("unreferenced_vertices_removed", repair.unreferenced_vertices_removed);
+  report.add("non_manifold_faces_removed", repair.non_manifold_faces_removed);
+  report.add("degenerate_faces_flipped", repair.degenerate_faces_flipped);
+  report.add("degenerate_faces_removed", repair.degenerate_faces_removed);
+  report.add("seconds_repair", step.seconds(), "s");
+
+  step = Stopwatch();
+  const std::vector<VertexLoop> loops = findBoundaryLoops(mesh);
+  report.add("holes_found", static_cast<std::int64_t>(loops.size()));
+  if (options.fill_holes) {
+    addHoleCounts(report, closeHoles(mesh, loops, options.hole_filling));
+    mesh.garbage_collection();
+  } else {
+    report.notes.push_back("hole filling off: " + std::to_string(loops.size()) + " holes left open");
+  }
+  report.add("seconds_hole_filling", step.seconds(), "s");
+
+  step = Stopwatch();
+  TriangleMesh output = toTriangleMesh(mesh);
+  const MeshMetrics after = evaluateMesh(output);
+  addMeshCounts(report, "after_", after);
+  report.add("seconds_evaluation_after", step.seconds(), "s");
+  if (after.self_intersecting_pairs > 0)
+    report.notes.push_back(std::to_string(after.self_intersecting_pairs) +
+                           " self-intersecting face pairs remain (reported, not repaired)");
+  report.seconds = total.seconds();
+  return output;
+}
+
+}  // namespace solo

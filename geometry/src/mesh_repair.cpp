@@ -1,0 +1,92 @@
+#include "solo/geometry/mesh_repair.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+
+#include <algorithm>
+#include <vector>
+
+namespace solo {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+Point pointOf(const SurfaceMesh& mesh, OpenMesh::VertexHandle v) {
+  const auto& p = mesh.point(v);
+  return Point(p[0], p[1], p[2]);
+}
+
+bool isCollinear(const SurfaceMesh& mesh, OpenMesh::FaceHandle f) {
+  OpenMesh::VertexHandle v[3];
+  int k = 0;
+  for (const auto vh : mesh.fv_range(f)) v[k++] = vh;
+  return CGAL::collinear(pointOf(mesh, v[0]), pointOf(mesh, v[1]), pointOf(mesh, v[2]));
+}
+
+}  // namespace
+
+SurfaceMesh repairSoup(const TriangleMesh& soup, SoupRepair* stats) {
+  SoupRepair s;
+  std::vector<Point> points;
+  points.reserve(soup.vertices.size());
+  for (const auto& p : soup.vertices) points.emplace_back(p.x(), p.y(), p.z());
+  std::vector<std::vector<std::size_t>> polygons;
+  polygons.reserve(soup.faces.size());
+  for (const auto& f : soup.faces) polygons.push_back({f[0], f[1], f[2]});
+
+  // A soup that already is a valid polygon mesh keeps coincident vertices apart (seams made on
+  // purpose; merging them would pinch the surface). Other soups (STL-like) get them merged.
+  if (!PMP::is_polygon_soup_a_polygon_mesh(polygons))
+    s.duplicate_points_merged = static_cast<std::int64_t>(PMP::merge_duplicate_points_in_polygon_soup(points, polygons));
+  const std::size_t before = polygons.size();
+  polygons.erase(std::remove_if(polygons.begin(), polygons.end(),
+                                [](const std::vector<std::size_t>& f) { return f[0] == f[1] || f[1] == f[2] || f[0] == f[2]; }),
+                 polygons.end());
+  s.faces_with_repeated_corner_removed = static_cast<std::int64_t>(before - polygons.size());
+  s.duplicate_faces_removed = static_cast<std::int64_t>(PMP::merge_duplicate_polygons_in_polygon_soup(points, polygons));
+  s.unreferenced_vertices_removed = static_cast<std::int64_t>(PMP::remove_isolated_points_in_polygon_soup(points, polygons));
+
+  TriangleMesh cleaned;
+  for (const Point& p : points) cleaned.vertices.emplace_back(p.x(), p.y(), p.z());
+  for (const auto& f : polygons)
+    cleaned.faces.push_back({static_cast<std::uint32_t>(f[0]), static_cast<std::uint32_t>(f[1]), static_cast<std::uint32_t>(f[2])});
+  SurfaceMesh mesh = toSurfaceMesh(cleaned, &s.non_manifold_faces_removed);
+
+  std::vector<OpenMesh::FaceHandle> degenerate;
+  for (const auto f : mesh.faces())
+    if (isCollinear(mesh, f)) degenerate.push_back(f);
+  for (const auto f : degenerate) {
+    if (mesh.status(f).deleted() || !isCollinear(mesh, f)) continue;
+    // The longest edge of a collinear triangle is the one its middle corner lies on.
+    OpenMesh::HalfedgeHandle longest;
+    double length = -1;
+    for (const auto h : mesh.fh_range(f))
+      if (mesh.calc_edge_sqr_length(h) > length) {
+        length = mesh.calc_edge_sqr_length(h);
+        longest = h;
+      }
+    const auto edge = mesh.edge_handle(longest);
+    bool fixed = false;
+    if (!mesh.is_boundary(edge) && mesh.is_flip_ok(edge)) {
+      mesh.flip(edge);
+      const auto f0 = mesh.face_handle(mesh.halfedge_handle(edge, 0));
+      const auto f1 = mesh.face_handle(mesh.halfedge_handle(edge, 1));
+      if (!isCollinear(mesh, f0) && !isCollinear(mesh, f1)) fixed = true;
+      else mesh.flip(edge);
+    }
+    if (fixed) {
+      ++s.degenerate_faces_flipped;
+    } else {
+      mesh.delete_face(f, true);
+      ++s.degenerate_faces_removed;
+    }
+  }
+  if (s.degenerate_faces_removed > 0) mesh.garbage_collection();
+  if (stats) *stats = s;
+  return mesh;
+}
+
+}  // namespace solo

@@ -1,0 +1,251 @@
+#include "solo/geometry/spurious_faces.h"
+
+#include "solo/geometry/scene.h"
+
+#include <Eigen/Geometry>
+#include <opencv2/core/utility.hpp>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+
+namespace solo {
+namespace {
+
+constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+
+struct FacePixels {
+  std::array<OpenMesh::Vec2i, 3> pixel;
+  std::array<int, 3> vertex;
+};
+
+FacePixels facePixels(const DepthMesh& m, OpenMesh::FaceHandle f) {
+  FacePixels out{};
+  int k = 0;
+  for (const auto v : m.mesh.fv_range(f)) {
+    out.vertex[k] = v.idx();
+    out.pixel[k] = m.mesh.property(m.properties.pixel, v);
+    ++k;
+  }
+  return out;
+}
+
+class JumpTest {
+ public:
+  JumpTest(const DepthMesh& mesh, const cv::Mat& depth, const SpuriousFaceOptions& options)
+      : mesh_(mesh), depth_(depth), options_(options), focal_px_(0.5 * (mesh.camera.fx + mesh.camera.fy)) {}
+
+  bool isJump(const OpenMesh::Vec2i& a, const OpenMesh::Vec2i& b) const {
+    const double za = depth_.at<float>(a[1], a[0]), zb = depth_.at<float>(b[1], b[0]);
+    const int du = b[0] - a[0], dv = b[1] - a[1];
+    const double length_px = std::sqrt(double(du * du + dv * dv));
+    const double footprint_m = std::min(za, zb) / focal_px_ * length_px;
+    if (std::abs(za - zb) <= options_.depth_jump_factor * footprint_m) return false;
+    if (!options_.extrapolation_test) return true;
+    const double wa = 1.0 / za, wb = 1.0 / zb;
+    // A side without a pixel behind it (image frame, sky) cannot be extrapolated: only jumps
+    // larger than edge_of_data_factor times the criterion are cut there.
+    if (!hasVertex(a[0] - du, a[1] - dv) || !hasVertex(b[0] + du, b[1] + dv))
+      return std::abs(za - zb) > options_.edge_of_data_factor * options_.depth_jump_factor * footprint_m;
+    const double slope_a = wa - inverseDepth(a[0] - du, a[1] - dv);
+    const double slope_b = inverseDepth(b[0] + du, b[1] + dv) - wb;
+    // Side a: wa + t slope_a; side b: wb + (t - 1) slope_b; t = 0 at a, 1 at b.
+    // The gap between the two sides, g(t) = g0 + t (g1 - g0), over t in [-slack, 1 + slack]:
+    // continuous when it vanishes there or stays within the tolerance (in metres, about
+    // dw / (wa wb)); an occlusion otherwise.
+    const double g0 = wa - (wb - slope_b);
+    const double g1 = (wa + slope_a) - wb;
+    const double s = options_.crossing_slack_edges;
+    const double lo = g0 - s * (g1 - g0), hi = g1 + s * (g1 - g0);
+    if (lo == 0 || hi == 0 || (lo < 0) != (hi < 0)) return false;
+    const double smallest_gap_m = std::min(std::abs(lo), std::abs(hi)) / (wa * wb);
+    if (smallest_gap_m <= options_.continuity_tolerance_footprints * footprint_m) return false;
+    // A thin step seen at a grazing angle (a window proud of a side facade) makes a large depth
+    // jump between parallel surfaces only centimetres apart: measure how far each point lies
+    // from the other side's surface line (through the point and the one behind it).
+    const Eigen::Vector3d pa = point(a[0], a[1]), pb = point(b[0], b[1]);
+    double apart_m = (pa - pb).norm();
+    for (int step = 1; step <= 2; ++step) {  // two pixels back too: the first may be a one-pixel sliver
+      if (hasVertex(a[0] - step * du, a[1] - step * dv))
+        apart_m = std::min(apart_m, distanceToLine(pb, pa, point(a[0] - step * du, a[1] - step * dv)));
+      if (hasVertex(b[0] + step * du, b[1] + step * dv))
+        apart_m = std::min(apart_m, distanceToLine(pa, pb, point(b[0] + step * du, b[1] + step * dv)));
+    }
+    return apart_m >= options_.min_step_m;
+  }
+
+ private:
+  bool hasVertex(int u, int v) const { return mesh_.vertexAt(u, v) >= 0; }
+  double inverseDepth(int u, int v) const { return 1.0 / depth_.at<float>(v, u); }
+  Eigen::Vector3d point(int u, int v) const { return mesh_.camera.backproject(u, v, depth_.at<float>(v, u)); }
+  static double distanceToLine(const Eigen::Vector3d& p, const Eigen::Vector3d& on_line, const Eigen::Vector3d& other) {
+    const Eigen::Vector3d direction = on_line - other;
+    const double length = direction.norm();
+    return length > 0 ? direction.cross(p - on_line).norm() / length : (p - on_line).norm();
+  }
+
+  const DepthMesh& mesh_;
+  const cv::Mat& depth_;
+  const SpuriousFaceOptions& options_;
+  double focal_px_;
+};
+
+}  // namespace
+
+bool isForegroundThingClass(int class_id) {
+  switch (class_id) {
+    case 17: case 19: case 20: case 24: case 25: case 26: case 27: case 28: case 31: case 32: case 33:
+      return true;
+    default:
+      return false;
+  }
+}
+
+SpuriousFaceResult findSpuriousFaces(const DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& instances,
+                                     const cv::Mat& uncertain, const SpuriousFaceOptions& options) {
+  SpuriousFaceResult result;
+  const SurfaceMesh& mesh = m.mesh;
+  result.spurious.assign(mesh.n_faces(), 0);
+  result.criteria.assign(mesh.n_faces(), 0);
+  const bool use_instances = options.cut_instance_boundaries && !instances.empty();
+  const bool use_uncertain = options.use_uncertain_mask && !uncertain.empty();
+  const bool use_grazing = options.grazing_angle_deg < 90.0;
+  const double grazing_cos = std::cos(options.grazing_angle_deg * kRadPerDeg);
+  const JumpTest jumps(m, depth_m, options);
+  std::atomic<std::int64_t> checked{0}, removed{0}, jump{0}, grazing{0}, uncertain_count{0}, instance{0};
+
+  cv::parallel_for_(cv::Range(0, static_cast<int>(mesh.n_faces())), [&](const cv::Range& range) {
+    std::int64_t n_checked = 0, n_removed = 0, n_jump = 0, n_grazing = 0, n_uncertain = 0, n_instance = 0;
+    for (int fi = range.start; fi < range.end; ++fi) {
+      const OpenMesh::FaceHandle f(fi);
+      if (mesh.status(f).deleted()) continue;
+      ++n_checked;
+      const FacePixels fp = facePixels(m, f);
+      bool is_jump = false;
+      for (int k = 0; k < 3 && !is_jump; ++k) is_jump = jumps.isJump(fp.pixel[k], fp.pixel[(k + 1) % 3]);
+
+      bool is_grazing = false;
+      if (use_grazing) {
+        const auto& p0 = mesh.point(OpenMesh::VertexHandle(fp.vertex[0]));
+        const auto& p1 = mesh.point(OpenMesh::VertexHandle(fp.vertex[1]));
+        const auto& p2 = mesh.point(OpenMesh::VertexHandle(fp.vertex[2]));
+        const auto normal = (p1 - p0) % (p2 - p0);
+        const auto centroid = (p0 + p1 + p2) / 3.0;
+        const double denominator = normal.norm() * centroid.norm();
+        is_grazing = denominator > 0 && std::abs(normal | centroid) < grazing_cos * denominator;
+      }
+
+      std::array<int, 3> ids{0, 0, 0};
+      if (!instances.empty())
+        for (int k = 0; k < 3; ++k) ids[k] = instances.at<int>(fp.pixel[k][1], fp.pixel[k][0]);
+      const bool one_instance = ids[0] == ids[1] && ids[1] == ids[2];
+
+      bool is_uncertain = false;
+      if (use_uncertain) {
+        bool any = false;
+        for (int k = 0; k < 3; ++k) any = any || uncertain.at<std::uint8_t>(fp.pixel[k][1], fp.pixel[k][0]) != 0;
+        if (any) {
+          double zmin = 1e300, zmax = 0;
+          for (int k = 0; k < 3; ++k) {
+            const double z = depth_m.at<float>(fp.pixel[k][1], fp.pixel[k][0]);
+            zmin = std::min(zmin, z);
+            zmax = std::max(zmax, z);
+          }
+          const bool inside_one_thing = !instances.empty() && one_instance &&
+                                        isForegroundThingClass(cityscapesClassOfInstance(ids[0])) &&
+                                        zmax - zmin <= options.uncertain_same_object_span_m;
+          is_uncertain = !inside_one_thing;
+        }
+      }
+
+      bool is_instance_boundary = false;
+      if (use_instances && !one_instance)
+        for (int k = 0; k < 3; ++k)
+          is_instance_boundary = is_instance_boundary || isForegroundThingClass(cityscapesClassOfInstance(ids[k]));
+
+      n_jump += is_jump;
+      n_grazing += is_grazing;
+      n_uncertain += is_uncertain;
+      n_instance += is_instance_boundary;
+      result.criteria[fi] = static_cast<std::uint8_t>((is_jump ? kDepthJump : 0) | (is_grazing ? kGrazing : 0) |
+                                                      (is_uncertain ? kUncertain : 0) |
+                                                      (is_instance_boundary ? kInstanceBoundary : 0));
+      if (result.criteria[fi]) {
+        result.spurious[fi] = 1;
+        ++n_removed;
+      }
+    }
+    checked += n_checked;
+    removed += n_removed;
+    jump += n_jump;
+    grazing += n_grazing;
+    uncertain_count += n_uncertain;
+    instance += n_instance;
+  });
+  result.faces_checked = checked;
+  result.removed = removed;
+  result.by_depth_jump = jump;
+  result.by_grazing = grazing;
+  result.by_uncertain = uncertain_count;
+  result.by_instance_boundary = instance;
+  return result;
+}
+
+std::vector<std::uint8_t> spuriousFacesFromGroundTruth(const DepthMesh& m, const cv::Mat& true_depth_m,
+                                                       const cv::Mat& true_normals, double min_gap_m) {
+  const SurfaceMesh& mesh = m.mesh;
+  std::vector<std::uint8_t> truth(mesh.n_faces(), 0);
+  const PinholeCamera& cam = m.camera;
+  const auto ray = [&](const OpenMesh::Vec2i& p) {
+    return Eigen::Vector3d((p[0] - cam.cx) / cam.fx, (p[1] - cam.cy) / cam.fy, 1.0);
+  };
+  const auto normal = [&](const OpenMesh::Vec2i& p) {
+    const cv::Vec3f n = true_normals.at<cv::Vec3f>(p[1], p[0]);
+    return Eigen::Vector3d(n[0], n[1], n[2]);
+  };
+  cv::parallel_for_(cv::Range(0, static_cast<int>(mesh.n_faces())), [&](const cv::Range& range) {
+    for (int fi = range.start; fi < range.end; ++fi) {
+      const OpenMesh::FaceHandle f(fi);
+      if (mesh.status(f).deleted()) continue;
+      const FacePixels fp = facePixels(m, f);
+      for (int k = 0; k < 3 && !truth[fi]; ++k) {
+        const OpenMesh::Vec2i a = fp.pixel[k], b = fp.pixel[(k + 1) % 3];
+        const double za = true_depth_m.at<float>(a[1], a[0]), zb = true_depth_m.at<float>(b[1], b[0]);
+        if (!(za > 0) || !(zb > 0)) continue;
+        const Eigen::Vector3d na = normal(a), nb = normal(b), ra = ray(a), rb = ray(b);
+        const double ca = na.dot(za * ra), cb = nb.dot(zb * rb);
+        if (std::abs(ca) < 1e-12 || std::abs(cb) < 1e-12) continue;
+        // Inverse depth of plane A and of plane B at pixels a and b.
+        const double wa_at_a = 1.0 / za, wa_at_b = na.dot(rb) / ca;
+        const double wb_at_a = nb.dot(ra) / cb, wb_at_b = 1.0 / zb;
+        const double g0 = wa_at_a - wb_at_a, g1 = wa_at_b - wb_at_b;
+        const double tolerance = 1e-3 * std::max(wa_at_a, wb_at_b);
+        if (std::abs(g0) <= tolerance || std::abs(g1) <= tolerance) continue;
+        if ((g0 < 0) != (g1 < 0)) continue;
+        // How far apart the two surfaces are: each point's distance from the other's plane.
+        const Eigen::Vector3d pa = za * ra, pb = zb * rb;
+        const double apart_m = std::min(std::abs(na.dot(pb - pa)) / na.norm(), std::abs(nb.dot(pa - pb)) / nb.norm());
+        if (apart_m >= min_gap_m) truth[fi] = 1;
+      }
+    }
+  });
+  return truth;
+}
+
+DetectionScore scoreDetection(const std::vector<std::uint8_t>& flagged, const std::vector<std::uint8_t>& truth) {
+  DetectionScore s;
+  const std::size_t n = std::min(flagged.size(), truth.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    if (flagged[i] && truth[i]) ++s.true_positives;
+    else if (flagged[i]) ++s.false_positives;
+    else if (truth[i]) ++s.false_negatives;
+  }
+  if (s.true_positives + s.false_positives > 0)
+    s.precision = double(s.true_positives) / double(s.true_positives + s.false_positives);
+  if (s.true_positives + s.false_negatives > 0)
+    s.recall = double(s.true_positives) / double(s.true_positives + s.false_negatives);
+  return s;
+}
+
+}  // namespace solo

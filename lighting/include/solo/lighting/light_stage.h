@@ -1,0 +1,38 @@
+#pragma once
+// The pipeline's "lights" stage: from a loaded scene to a light record. Resamples the
+// light, instance and window-group maps to the image resolution (nearest neighbour), builds
+// the group tree, measures each light's geometry on a depth map at the image resolution,
+// instantiates the lights with the illuminant table, and reports what it did.
+
+#include "solo/lighting/light_geometry.h"
+#include "solo/lighting/light_instantiation.h"
+#include "solo/lighting/light_record.h"
+
+#include <solo/geometry/report.h>
+#include <solo/geometry/scene.h>
+
+#include <filesystem>
+
+namespace solo {
+
+struct LightStageOptions {
+  InstantiationOptions instantiation;
+  LightGeometryOptions geometry;
+  std::filesystem::path illuminant_table;  ///< CSV (data/illuminants/night_illuminants.csv)
+};
+
+struct LightStageResult {
+  LightRecord record;
+  StageReport report;  ///< name "lights": counts, areas, timings; skipped when the scene has no light map
+};
+
+/// `depth_m`: CV_32F metres at the image resolution (the refined depth); empty = the
+/// scene's depth resampled bilinearly ignoring invalid pixels. Throws InputError for a
+/// malformed light map or illuminant table.
+LightStageResult runLightStage(const Scene& scene, const cv::Mat& depth_m, const LightStageOptions& options);
+
+/// A label map (CV_32S) at `size` by nearest-neighbour resampling (pixel centres kept);
+/// empty stays empty.
+cv::Mat resampleLabels(const cv::Mat& labels, cv::Size size);
+
+}  // namespace solo

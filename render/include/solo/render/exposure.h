@@ -1,0 +1,37 @@
+#pragma once
+// Exposure: multiplies linear radiance by 2^stops. The stops come either directly (the
+// reference's +3.25) or from a physical camera (ISO, shutter, aperture) relative to a
+// reference camera that is defined to give exactly the reference's +3.25 stops.
+
+#include <solo/geometry/report.h>
+
+#include <opencv2/core.hpp>
+
+#include <optional>
+
+namespace solo {
+
+/// Camera settings. The reference camera {ISO 3200, 1/30 s, f/2} is +3.25 stops; every
+/// doubling of ISO or shutter time adds a stop, every doubling of the f-number removes two.
+struct CameraExposure {
+  double iso = 3200;
+  double shutter_s = 1.0 / 30.0;  ///< seconds
+  double f_number = 2.0;
+};
+
+struct ExposureOptions {
+  double stops = 3.25;                   ///< exposure compensation in stops (EV)
+  std::optional<CameraExposure> camera;  ///< when set, replaces `stops`
+};
+
+/// The stops the options stand for. Throws std::invalid_argument for a camera with a
+/// non-positive ISO, shutter or f-number, or non-finite stops.
+double exposureStops(const ExposureOptions& options);
+/// The linear factor 2^exposureStops(options).
+double exposureScale(const ExposureOptions& options);
+
+/// Multiplies every channel of a linear CV_32FC3 image by exposureScale(options) in place.
+/// Report "exposure": stops, scale; skipped (image untouched) when the stops are 0.
+StageReport applyExposure(cv::Mat& linear_image, const ExposureOptions& options);
+
+}  // namespace solo

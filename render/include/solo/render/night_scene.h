@@ -1,0 +1,38 @@
+#pragma once
+// Assembles what the path tracer renders from the pipeline's products: the cleaned depth
+// mesh (its vertices keep their pixels), the material maps at the mesh's resolution and the
+// instantiated light record. A face takes the material and the light of the pixel under its
+// vertices' mean pixel position.
+
+#include "solo/render/render_scene.h"
+
+#include <solo/geometry/depth_mesh.h>
+#include <solo/geometry/report.h>
+#include <solo/lighting/light_record.h>
+
+#include <opencv2/core.hpp>
+
+namespace solo {
+
+struct NightSceneOptions {
+  bool headlights = true;
+  /// Luminous flux of each ego headlight, lm (a halogen low beam emits about 1000-1500 lm);
+  /// turned into the luminance of its 0.3 x 0.15 m rectangle as flux / (pi * area).
+  double headlight_flux_lm = 1200;
+  double sky_luminance_cd_m2 = 0.0;  ///< a dim night sky for rays that leave the scene; 0 = black
+  float default_reflectance = 0.3f;  ///< faces with no pixel (mesh-file input) or no albedo map
+};
+
+struct NightScene {
+  RenderScene scene;
+  StageReport report;  ///< "scene": faces, emitting faces per category, lights on without faces
+};
+
+/// albedo: CV_32FC3 linear RGB reflectance at the mesh's depth-map resolution, or empty (then
+/// the linearised day image stands in for it, with a note). roughness: CV_32F or empty.
+/// record: lights at the same resolution (tree.width x tree.height); lights that are off emit
+/// nothing. Units: emitted luminance in cd/m^2 = render units (docs/lighting.md).
+NightScene buildNightScene(const DepthMesh& mesh, const cv::Mat& albedo, const cv::Mat& roughness,
+                           const cv::Mat& day_image, const LightRecord& record, const NightSceneOptions& options = {});
+
+}  // namespace solo

@@ -1,0 +1,53 @@
+#pragma once
+// A CPU path tracer for a RenderScene: next-event estimation with multiple importance
+// sampling (power heuristic) against BSDF sampling, Russian roulette, a bounce limit,
+// per-pixel adaptive sampling, TBB over tiles. Deterministic for a seed whatever the
+// thread count: every pixel draws from its own counter-based random stream.
+
+#include "solo/render/light_sampler.h"
+#include "solo/render/render_scene.h"
+
+#include <solo/geometry/report.h>
+
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+
+namespace solo {
+
+enum class DiffuseModel {
+  Disney,   ///< Burley's diffuse lobe (the paper's), roughness 0.5 where no map is given
+  Lambert,  ///< albedo / pi
+};
+
+struct PathTracerOptions {
+  int min_samples = 16;   ///< per pixel before the error estimate is trusted
+  int max_samples = 256;  ///< per pixel
+  /// Stop a pixel when the standard error of its mean luminance (Y) is below
+  /// max(relative_error * mean, absolute_error[pixel]).
+  double relative_error = 0.02;
+  cv::Mat absolute_error;  ///< CV_32F per pixel, render units; empty = none (e.g. the sensor noise's sigma)
+  int max_bounces = 12;
+  int russian_roulette_after = 3;  ///< bounces before roulette starts
+  LightSamplerKind light_sampler = LightSamplerKind::Hierarchy;
+  DiffuseModel diffuse = DiffuseModel::Disney;
+  std::uint64_t seed = 1;
+  bool progress = true;  ///< a progress bar on stderr when it is a terminal
+};
+
+struct RenderOutput {
+  cv::Mat radiance;  ///< CV_32FC3, XYZ relative to E, render units
+  cv::Mat albedo;    ///< CV_32FC3 first-hit reflectance; 0 for sky
+  cv::Mat normal;    ///< CV_32FC3 first-hit normal facing the camera; 0 for sky
+  cv::Mat depth_m;   ///< CV_32F first-hit z-depth; 0 for sky
+  cv::Mat light_id;  ///< CV_32S light id of an emitter seen directly; 0 otherwise
+  cv::Mat samples;   ///< CV_32S samples taken per pixel
+  cv::Mat std_error; ///< CV_32F estimated standard error of Y per pixel
+  StageReport report;
+};
+
+/// Renders the scene. Preconditions: per-face arrays sized like faces (or empty where
+/// optional), emitter indices valid, camera resolution > 0.
+RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions& options = {});
+
+}  // namespace solo

@@ -1,0 +1,59 @@
+#pragma once
+// What the path tracer renders: a triangle mesh with per-face reflectance, emitting faces
+// with their radiance, and the ego vehicle's headlights. Colour: every radiance and
+// reflectance is a CIE XYZ triple relative to white E (a reflectance of (1,1,1) reflects any
+// light unchanged), the space the reference renders in. Units: metres; radiance in the
+// renderer's unit (docs/rendering.md states its mapping to cd/m^2).
+
+#include <solo/geometry/camera.h>
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace solo {
+
+/// An emitting surface: every face whose emitter index points here emits this radiance.
+struct Emitter {
+  Eigen::Vector3f radiance{0.f, 0.f, 0.f};  ///< XYZ relative to E, along the face normal
+  /// Front lights and street lights: radiance times g(v, n) = cos(pi (|v.n| - 1) / 2), which is
+  /// 1 along the normal and 0 at grazing. Others emit uniformly (Lambertian). Both sides emit.
+  bool directional_profile = false;
+  int light_id = 0;  ///< the light-map id, for the light-id AOV
+};
+
+/// A rectangular area light that is not part of the visible geometry (the ego headlights).
+struct RectangleLight {
+  Eigen::Vector3f centre{0.f, 0.f, 0.f};  ///< metres, camera frame
+  Eigen::Vector3f normal{0.f, 0.f, 1.f};  ///< emitting direction (unit)
+  Eigen::Vector3f edge_u{0.3f, 0.f, 0.f}; ///< full edge vectors, metres, perpendicular to normal
+  Eigen::Vector3f edge_v{0.f, 0.15f, 0.f};
+  Eigen::Vector3f radiance{0.f, 0.f, 0.f};
+  float spread_rad = 3.14159265f;  ///< full cone angle of emission; pi = a Lambertian hemisphere
+};
+
+struct RenderScene {
+  std::vector<Eigen::Vector3f> vertices;            ///< metres, camera frame
+  std::vector<std::array<std::uint32_t, 3>> faces;
+  std::vector<Eigen::Vector3f> face_reflectance;    ///< per face, XYZ relative to E, each in [0, 1]
+  std::vector<float> face_roughness;                ///< per face in [0, 1]; empty = no roughness map
+  std::vector<std::int32_t> face_emitter;           ///< per face: index into emitters, or -1; empty = none
+  std::vector<Emitter> emitters;
+  std::vector<RectangleLight> rectangle_lights;
+  Eigen::Vector3f sky_radiance{0.f, 0.f, 0.f};      ///< seen by rays that leave the scene; 0 = black sky
+  PinholeCamera camera;                             ///< for the image resolution
+};
+
+/// Linear sRGB (D65) reflectance to XYZ relative to E: the sRGB matrix, then the white of
+/// (1,1,1) scaled to (1,1,1). Exact for greys, an approximation for colours (as every
+/// three-channel renderer).
+Eigen::Vector3f reflectanceFromLinearSrgb(const Eigen::Vector3f& rgb);
+
+/// The ego vehicle's two headlights as in the reference: 0.3 x 0.15 m, at (+-0.5, 0.3, 0.5) m
+/// from the camera (OpenCV frame), aimed forward and 45 degrees down, yawed 18 degrees
+/// outward, spread 125 degrees, the reference colour, with the given radiance luminance Y.
+std::vector<RectangleLight> egoHeadlights(float luminance_y);
+
+}  // namespace solo

@@ -1,0 +1,138 @@
+#include <solo/render/chromatic_adaptation.h>
+#include <solo/render/colour_encoding.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <stdexcept>
+
+namespace solo {
+
+namespace {
+
+cv::Matx33d linearSrgbToXyzMatrix() {
+  // Columns: XYZ of each primary from its chromaticity, scaled so they sum to the white.
+  const double primaries[3][2] = {{0.64, 0.33}, {0.30, 0.60}, {0.15, 0.06}};
+  cv::Matx33d unscaled;
+  for (int c = 0; c < 3; ++c) {
+    const double x = primaries[c][0], y = primaries[c][1];
+    unscaled(0, c) = x / y;
+    unscaled(1, c) = 1.0;
+    unscaled(2, c) = (1.0 - x - y) / y;
+  }
+  const cv::Vec3d scale = unscaled.inv() * kWhitePointD65;
+  cv::Matx33d m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m(r, c) = unscaled(r, c) * scale[c];
+  return m;
+}
+
+}  // namespace
+
+cv::Matx33d xyzToLinearSrgbMatrix() { return linearSrgbToXyzMatrix().inv(); }
+
+cv::Vec3d linearSrgbLuminanceWeights() {
+  const cv::Matx33d m = linearSrgbToXyzMatrix();
+  return {m(1, 0), m(1, 1), m(1, 2)};
+}
+
+float encodeTransfer(float linear, TransferCurve curve) {
+  const float v = std::clamp(linear, 0.f, 1.f);
+  if (v == 1.f) return 1.f;  // exact white, whatever the curve's rounding
+  switch (curve) {
+    case TransferCurve::Gamma22: return std::pow(v, 1.f / 2.2f);
+    case TransferCurve::Srgb:
+      return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.f / 2.4f) - 0.055f;
+    case TransferCurve::Linear: return v;
+  }
+  return v;
+}
+
+float decodeTransfer(float encoded, TransferCurve curve) {
+  const float v = std::clamp(encoded, 0.f, 1.f);
+  switch (curve) {
+    case TransferCurve::Gamma22: return std::pow(v, 2.2f);
+    case TransferCurve::Srgb: return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+    case TransferCurve::Linear: return v;
+  }
+  return v;
+}
+
+ColourEncodingResult encodeXyzToSrgb(const cv::Mat& xyz_d65, const ColourEncodingOptions& options) {
+  Stopwatch clock;
+  CV_Assert(xyz_d65.type() == CV_32FC3);
+  ColourEncodingResult result;
+  result.report.name = "colour";
+  cv::transform(xyz_d65, result.linear_rgb, cv::Matx33f(xyzToLinearSrgbMatrix()));
+
+  const cv::Vec3d w = linearSrgbLuminanceWeights();
+  const float wr = static_cast<float>(w[0]), wg = static_cast<float>(w[1]), wb = static_cast<float>(w[2]);
+  std::atomic<std::int64_t> out_of_gamut{0}, black_from_negative_luminance{0}, over_range{0};
+  const bool desaturate = options.negatives == NegativeHandling::Desaturate;
+  cv::parallel_for_(cv::Range(0, result.linear_rgb.rows), [&](const cv::Range& rows) {
+    std::int64_t local_gamut = 0, local_black = 0, local_over = 0;
+    for (int y = rows.start; y < rows.end; ++y) {
+      cv::Vec3f* p = result.linear_rgb.ptr<cv::Vec3f>(y);
+      for (int x = 0; x < result.linear_rgb.cols; ++x) {
+        cv::Vec3f& c = p[x];
+        const float lowest = std::min({c[0], c[1], c[2]});
+        if (lowest < 0) {
+          ++local_gamut;
+          if (desaturate) {
+            const float luminance = wr * c[0] + wg * c[1] + wb * c[2];
+            if (luminance <= 0) {
+              ++local_black;
+              c = {0, 0, 0};
+            } else {
+              // Mix with grey of the same luminance: grey + t (c - grey) has luminance Y for
+              // every t; t = Y / (Y - lowest) puts the lowest channel exactly at 0.
+              const float t = luminance / (luminance - lowest);
+              for (int k = 0; k < 3; ++k) c[k] = std::max(0.f, luminance + t * (c[k] - luminance));
+            }
+          } else {
+            for (int k = 0; k < 3; ++k) c[k] = std::max(0.f, c[k]);
+          }
+        }
+        if (std::max({c[0], c[1], c[2]}) > 1.f) ++local_over;
+      }
+    }
+    out_of_gamut += local_gamut;
+    black_from_negative_luminance += local_black;
+    over_range += local_over;
+  });
+
+  result.encoded.create(result.linear_rgb.size(), CV_32FC3);
+  cv::parallel_for_(cv::Range(0, result.linear_rgb.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      const float* src = result.linear_rgb.ptr<float>(y);
+      float* dst = result.encoded.ptr<float>(y);
+      for (int i = 0; i < result.linear_rgb.cols * 3; ++i) dst[i] = encodeTransfer(src[i], options.curve);
+    }
+  });
+
+  const double pixels = static_cast<double>(result.linear_rgb.total());
+  const char* curve_name = options.curve == TransferCurve::Gamma22 ? "gamma 2.2"
+                           : options.curve == TransferCurve::Srgb  ? "sRGB piecewise"
+                                                                   : "linear";
+  result.report.add("transfer_curve", std::string(curve_name))
+      .add("negative_handling", std::string(desaturate ? "desaturate" : "clip"))
+      .add("out_of_gamut_pixels", out_of_gamut.load())
+      .add("out_of_gamut_fraction", pixels > 0 ? out_of_gamut.load() / pixels : 0.0)
+      .add("negative_luminance_pixels", black_from_negative_luminance.load())
+      .add("over_range_pixels", over_range.load())
+      .add("over_range_fraction", pixels > 0 ? over_range.load() / pixels : 0.0);
+  result.report.seconds = clock.seconds();
+  return result;
+}
+
+cv::Mat quantiseEncoded(const cv::Mat& encoded, int bits) {
+  CV_Assert(encoded.depth() == CV_32F);
+  if (bits != 8 && bits != 16) throw std::invalid_argument("output bit depth must be 8 or 16");
+  const double max_code = bits == 8 ? 255.0 : 65535.0;
+  cv::Mat codes;
+  // convertTo rounds to nearest and saturates.
+  encoded.convertTo(codes, CV_MAKETYPE(bits == 8 ? CV_8U : CV_16U, encoded.channels()), max_code);
+  return codes;
+}
+
+}  // namespace solo

@@ -1,0 +1,53 @@
+#include <solo/render/exposure.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace solo {
+
+namespace {
+const CameraExposure kReferenceCamera{};  // ISO 3200, 1/30 s, f/2 = +3.25 stops
+constexpr double kReferenceStops = 3.25;
+}  // namespace
+
+double exposureStops(const ExposureOptions& options) {
+  if (!options.camera) {
+    if (!std::isfinite(options.stops)) throw std::invalid_argument("exposure stops must be finite");
+    return options.stops;
+  }
+  const CameraExposure& c = *options.camera;
+  if (!(c.iso > 0 && std::isfinite(c.iso))) throw std::invalid_argument("camera ISO must be positive");
+  if (!(c.shutter_s > 0 && std::isfinite(c.shutter_s)))
+    throw std::invalid_argument("camera shutter time must be positive");
+  if (!(c.f_number > 0 && std::isfinite(c.f_number))) throw std::invalid_argument("camera f-number must be positive");
+  // Sensor exposure is proportional to ISO * t / N^2.
+  const double ratio = (c.iso / kReferenceCamera.iso) * (c.shutter_s / kReferenceCamera.shutter_s) *
+                       std::pow(kReferenceCamera.f_number / c.f_number, 2.0);
+  return kReferenceStops + std::log2(ratio);
+}
+
+double exposureScale(const ExposureOptions& options) { return std::exp2(exposureStops(options)); }
+
+StageReport applyExposure(cv::Mat& linear_image, const ExposureOptions& options) {
+  Stopwatch clock;
+  StageReport report;
+  report.name = "exposure";
+  const double stops = exposureStops(options);
+  const double scale = std::exp2(stops);
+  report.add("stops", stops, "EV").add("scale", scale);
+  if (options.camera) {
+    report.add("camera_iso", options.camera->iso)
+        .add("camera_shutter", options.camera->shutter_s, "s")
+        .add("camera_f_number", options.camera->f_number);
+  }
+  if (stops == 0) {
+    report.skipped = true;
+    report.skip_reason = "exposure of 0 stops: the image is left as it is";
+  } else {
+    linear_image *= scale;
+  }
+  report.seconds = clock.seconds();
+  return report;
+}
+
+}  // namespace solo

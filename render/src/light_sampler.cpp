@@ -1,0 +1,234 @@
+#include "solo/render/light_sampler.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+namespace solo {
+namespace {
+
+// Flux of a two-sided emitter of radiance L and area A per unit L: 2 sides * pi * A, times
+// the profile's share: int g(mu) mu dmu / int mu dmu = (4 / pi^2) / (1 / 2) = 8 / pi^2.
+constexpr float kPi = 3.14159265358979f;
+constexpr float kProfileFluxShare = 8.f / (kPi * kPi);
+
+class UniformSampler final : public LightSampler {
+ public:
+  explicit UniformSampler(std::size_t count) : count_(count) {}
+  int pick(const Eigen::Vector3f&, const Eigen::Vector3f&, float u, float* pmf) const override {
+    if (count_ == 0) return -1;
+    *pmf = 1.f / static_cast<float>(count_);
+    return std::min(static_cast<int>(u * static_cast<float>(count_)), static_cast<int>(count_) - 1);
+  }
+  float pmf(const Eigen::Vector3f&, const Eigen::Vector3f&, int) const override {
+    return count_ ? 1.f / static_cast<float>(count_) : 0.f;
+  }
+
+ private:
+  std::size_t count_;
+};
+
+class PowerSampler final : public LightSampler {
+ public:
+  explicit PowerSampler(const std::vector<EmissiveTriangle>& triangles) {
+    cdf_.reserve(triangles.size());
+    double total = 0;
+    for (const auto& t : triangles) cdf_.push_back(total += t.power);
+    total_ = total;
+    for (const auto& t : triangles) pmf_.push_back(static_cast<float>(t.power / total));
+  }
+  int pick(const Eigen::Vector3f&, const Eigen::Vector3f&, float u, float* pmf) const override {
+    if (cdf_.empty() || !(total_ > 0)) return -1;
+    const double target = static_cast<double>(u) * total_;
+    auto it = std::upper_bound(cdf_.begin(), cdf_.end(), target);
+    const int index = static_cast<int>(std::min<std::ptrdiff_t>(it - cdf_.begin(), static_cast<std::ptrdiff_t>(cdf_.size()) - 1));
+    *pmf = pmf_[static_cast<std::size_t>(index)];
+    return index;
+  }
+  float pmf(const Eigen::Vector3f&, const Eigen::Vector3f&, int triangle) const override {
+    return pmf_[static_cast<std::size_t>(triangle)];
+  }
+
+ private:
+  std::vector<double> cdf_;
+  std::vector<float> pmf_;
+  double total_ = 0;
+};
+
+// A binary hierarchy over the triangles, one triangle per leaf. Each node stores its bounds
+// and power; the branch probability at a shading point is proportional to
+// power * (bound on the receiver's cosine) / (squared distance, floored by the node's size).
+class HierarchySampler final : public LightSampler {
+ public:
+  explicit HierarchySampler(const std::vector<EmissiveTriangle>& triangles) {
+    if (triangles.empty()) return;
+    std::vector<int> order(triangles.size());
+    std::iota(order.begin(), order.end(), 0);
+    leaf_of_triangle_.assign(triangles.size(), -1);
+    nodes_.reserve(2 * triangles.size());
+    build(triangles, order, 0, static_cast<int>(order.size()), -1);
+  }
+
+  int pick(const Eigen::Vector3f& p, const Eigen::Vector3f& n, float u, float* pmf) const override {
+    if (nodes_.empty()) return -1;
+    float probability = 1.f;
+    int node = 0;
+    while (nodes_[static_cast<std::size_t>(node)].triangle < 0) {
+      const Node& current = nodes_[static_cast<std::size_t>(node)];
+      const float a = importance(nodes_[static_cast<std::size_t>(current.left)], p, n);
+      const float b = importance(nodes_[static_cast<std::size_t>(current.right)], p, n);
+      if (!(a + b > 0.f)) return -1;
+      const float pa = a / (a + b);
+      if (u < pa) {
+        u = std::min(u / pa, 0.99999994f);
+        probability *= pa;
+        node = current.left;
+      } else {
+        u = std::min((u - pa) / (1.f - pa), 0.99999994f);
+        probability *= 1.f - pa;
+        node = current.right;
+      }
+    }
+    *pmf = probability;
+    return nodes_[static_cast<std::size_t>(node)].triangle;
+  }
+
+  float pmf(const Eigen::Vector3f& p, const Eigen::Vector3f& n, int triangle) const override {
+    int node = leaf_of_triangle_[static_cast<std::size_t>(triangle)];
+    float probability = 1.f;
+    while (nodes_[static_cast<std::size_t>(node)].parent >= 0) {
+      const int parent = nodes_[static_cast<std::size_t>(node)].parent;
+      const Node& up = nodes_[static_cast<std::size_t>(parent)];
+      const float a = importance(nodes_[static_cast<std::size_t>(up.left)], p, n);
+      const float b = importance(nodes_[static_cast<std::size_t>(up.right)], p, n);
+      if (!(a + b > 0.f)) return 0.f;
+      probability *= (node == up.left ? a : b) / (a + b);
+      node = parent;
+    }
+    return probability;
+  }
+
+ private:
+  struct Node {
+    Eigen::AlignedBox3f bounds;
+    float power = 0;
+    int left = -1, right = -1, parent = -1;
+    int triangle = -1;  // leaf: the triangle index
+  };
+
+  static float importance(const Node& node, const Eigen::Vector3f& p, const Eigen::Vector3f& n) {
+    const Eigen::Vector3f centre = node.bounds.center();
+    const float radius = 0.5f * node.bounds.diagonal().norm();
+    const Eigen::Vector3f to_centre = centre - p;
+    const float distance2 = to_centre.squaredNorm();
+    float cosine_bound = 1.f;
+    if (distance2 > radius * radius) {
+      // cos(max(0, theta - theta_box)) without trigonometric calls: theta is the angle between
+      // n and the direction to the centre, theta_box the box's angular radius.
+      const float inv_distance = 1.f / std::sqrt(distance2);
+      const float cos_theta = std::clamp(n.dot(to_centre) * inv_distance, -1.f, 1.f);
+      const float sin_box = std::min(1.f, radius * inv_distance);
+      const float cos_box = std::sqrt(std::max(0.f, 1.f - sin_box * sin_box));
+      if (cos_theta < cos_box) {
+        const float sin_theta = std::sqrt(std::max(0.f, 1.f - cos_theta * cos_theta));
+        cosine_bound = std::max(0.f, cos_theta * cos_box + sin_theta * sin_box);
+      }
+    }
+    return node.power * cosine_bound / std::max(distance2, std::max(radius * radius, 1e-8f));
+  }
+
+  int build(const std::vector<EmissiveTriangle>& tris, std::vector<int>& order, int begin, int end, int parent) {
+    const int index = static_cast<int>(nodes_.size());
+    nodes_.push_back({});
+    Node node;
+    node.parent = parent;
+    Eigen::AlignedBox3f centroids;
+    for (int i = begin; i < end; ++i) {
+      const EmissiveTriangle& t = tris[static_cast<std::size_t>(order[static_cast<std::size_t>(i)])];
+      node.bounds.extend(t.p0);
+      node.bounds.extend(t.p1);
+      node.bounds.extend(t.p2);
+      centroids.extend((t.p0 + t.p1 + t.p2) / 3.f);
+      node.power += t.power;
+    }
+    if (end - begin == 1) {
+      node.triangle = order[static_cast<std::size_t>(begin)];
+      leaf_of_triangle_[static_cast<std::size_t>(node.triangle)] = index;
+      nodes_[static_cast<std::size_t>(index)] = node;
+      return index;
+    }
+    int axis = 0;
+    centroids.diagonal().maxCoeff(&axis);
+    const int middle = (begin + end) / 2;
+    std::nth_element(order.begin() + begin, order.begin() + middle, order.begin() + end, [&](int a, int b) {
+      const auto& ta = tris[static_cast<std::size_t>(a)];
+      const auto& tb = tris[static_cast<std::size_t>(b)];
+      return (ta.p0 + ta.p1 + ta.p2)[axis] < (tb.p0 + tb.p1 + tb.p2)[axis];
+    });
+    nodes_[static_cast<std::size_t>(index)] = node;
+    const int left = build(tris, order, begin, middle, index);
+    const int right = build(tris, order, middle, end, index);
+    nodes_[static_cast<std::size_t>(index)].left = left;
+    nodes_[static_cast<std::size_t>(index)].right = right;
+    return index;
+  }
+
+  std::vector<Node> nodes_;
+  std::vector<int> leaf_of_triangle_;
+};
+
+}  // namespace
+
+const char* lightSamplerName(LightSamplerKind kind) {
+  switch (kind) {
+    case LightSamplerKind::Uniform: return "uniform";
+    case LightSamplerKind::Power: return "power";
+    case LightSamplerKind::Hierarchy: return "hierarchy";
+  }
+  return "hierarchy";
+}
+
+LightSamplerKind lightSamplerFromName(const std::string& name) {
+  for (LightSamplerKind k : {LightSamplerKind::Uniform, LightSamplerKind::Power, LightSamplerKind::Hierarchy})
+    if (name == lightSamplerName(k)) return k;
+  throw std::invalid_argument("unknown light sampler \"" + name + "\" (uniform, power, hierarchy)");
+}
+
+std::vector<EmissiveTriangle> collectEmissiveTriangles(const RenderScene& scene) {
+  std::vector<EmissiveTriangle> out;
+  if (scene.face_emitter.empty()) return out;
+  for (std::size_t f = 0; f < scene.faces.size(); ++f) {
+    const int e = scene.face_emitter[f];
+    if (e < 0) continue;
+    const Emitter& emitter = scene.emitters[static_cast<std::size_t>(e)];
+    const float luminance = emitter.radiance.y();
+    if (!(emitter.radiance.maxCoeff() > 0.f) || !std::isfinite(emitter.radiance.sum())) continue;
+    EmissiveTriangle t;
+    t.face = static_cast<std::uint32_t>(f);
+    t.p0 = scene.vertices[scene.faces[f][0]];
+    t.p1 = scene.vertices[scene.faces[f][1]];
+    t.p2 = scene.vertices[scene.faces[f][2]];
+    const Eigen::Vector3f cross = (t.p1 - t.p0).cross(t.p2 - t.p0);
+    t.area = 0.5f * cross.norm();
+    if (!(t.area > 0.f) || !std::isfinite(t.area)) continue;
+    t.normal = cross.normalized();
+    t.power = std::max(luminance, 1e-3f * emitter.radiance.maxCoeff()) * t.area * 2.f * kPi *
+              (emitter.directional_profile ? kProfileFluxShare : 1.f);
+    out.push_back(t);
+  }
+  return out;
+}
+
+std::unique_ptr<LightSampler> makeLightSampler(LightSamplerKind kind, const std::vector<EmissiveTriangle>& triangles) {
+  switch (kind) {
+    case LightSamplerKind::Uniform: return std::make_unique<UniformSampler>(triangles.size());
+    case LightSamplerKind::Power: return std::make_unique<PowerSampler>(triangles);
+    case LightSamplerKind::Hierarchy: return std::make_unique<HierarchySampler>(triangles);
+  }
+  return nullptr;
+}
+
+}  // namespace solo

@@ -1,0 +1,377 @@
+#include "solo/render/path_tracer.h"
+
+#include "solo/render/ray_caster.h"
+
+#include <Eigen/Geometry>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <unistd.h>
+
+namespace solo {
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+// PCG32 (O'Neill 2014): small, fast, and seedable per pixel, so a pixel's samples do not
+// depend on which thread renders it.
+class Pcg32 {
+ public:
+  Pcg32(std::uint64_t seed, std::uint64_t stream) : increment_((stream << 1u) | 1u) {
+    next();
+    state_ += seed;
+    next();
+  }
+  std::uint32_t next() {
+    const std::uint64_t old = state_;
+    state_ = old * 6364136223846793005ULL + increment_;
+    const auto xorshifted = static_cast<std::uint32_t>(((old >> 18u) ^ old) >> 27u);
+    const auto rotation = static_cast<std::uint32_t>(old >> 59u);
+    return (xorshifted >> rotation) | (xorshifted << ((32u - rotation) & 31u));
+  }
+  /// Uniform in [0, 1).
+  float uniform() { return static_cast<float>(next() >> 8) * (1.f / 16777216.f); }
+
+ private:
+  std::uint64_t state_ = 0;
+  std::uint64_t increment_;
+};
+
+float profile(bool directional, float abs_cosine) {
+  return directional ? std::cos(kPi * (abs_cosine - 1.f) * 0.5f) : 1.f;
+}
+
+// Orthonormal basis around n (Duff et al. 2017).
+void basis(const Eigen::Vector3f& n, Eigen::Vector3f& t, Eigen::Vector3f& b) {
+  const float sign = std::copysign(1.f, n.z());
+  const float a = -1.f / (sign + n.z());
+  const float c = n.x() * n.y() * a;
+  t = {1.f + sign * n.x() * n.x() * a, sign * c, -sign * n.x()};
+  b = {c, sign + n.y() * n.y() * a, -n.y()};
+}
+
+Eigen::Vector3f cosineSample(const Eigen::Vector3f& n, float u1, float u2) {
+  const float r = std::sqrt(u1), phi = 2.f * kPi * u2;
+  Eigen::Vector3f t, b;
+  basis(n, t, b);
+  const float z = std::sqrt(std::max(0.f, 1.f - u1));
+  return (t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z).normalized();
+}
+
+struct Shading {
+  Eigen::Vector3f albedo;
+  float roughness;
+  DiffuseModel model;
+
+  // BRDF value for outgoing wo and incoming wi about normal n (both unit, cosines > 0).
+  Eigen::Vector3f eval(const Eigen::Vector3f& n, const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const {
+    if (model == DiffuseModel::Lambert) return albedo / kPi;
+    const float cos_l = std::max(0.f, n.dot(wi)), cos_v = std::max(0.f, n.dot(wo));
+    const Eigen::Vector3f h = wi + wo;
+    const float h_norm = h.norm();
+    const float cos_d = h_norm > 1e-6f ? std::clamp(wi.dot(h / h_norm), 0.f, 1.f) : 0.f;
+    const float fd90 = 0.5f + 2.f * roughness * cos_d * cos_d;
+    const auto schlick = [fd90](float c) { const float m = 1.f - c; return 1.f + (fd90 - 1.f) * m * m * m * m * m; };
+    return albedo / kPi * (schlick(cos_l) * schlick(cos_v));
+  }
+};
+
+float luminance(const Eigen::Vector3f& xyz) { return xyz.y(); }
+
+struct Context {
+  const RenderScene& scene;
+  const PathTracerOptions& options;
+  const RayCaster& caster;
+  const std::vector<EmissiveTriangle>& emissive;
+  const std::vector<int>& face_to_emissive;
+  const LightSampler& sampler;
+  std::vector<Eigen::Vector3f> face_normals;  // unit geometric normals
+};
+
+struct FirstHit {
+  Eigen::Vector3f albedo{0, 0, 0}, normal{0, 0, 0};
+  float depth = 0;
+  int light_id = 0;
+};
+
+float offsetFor(float distance) { return 1e-4f * std::max(1.f, distance); }
+
+// One path sample from the camera through (px, py). Returns XYZ radiance.
+Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, FirstHit* first, std::int64_t& rays) {
+  const PinholeCamera& cam = c.scene.camera;
+  Eigen::Vector3f direction(static_cast<float>((px - cam.cx) / cam.fx), static_cast<float>((py - cam.cy) / cam.fy), 1.f);
+  const float z_per_distance = 1.f / direction.norm();
+  direction.normalize();
+  Eigen::Vector3f origin = Eigen::Vector3f::Zero();
+  Eigen::Vector3f radiance = Eigen::Vector3f::Zero(), throughput = Eigen::Vector3f::Ones();
+  float previous_bsdf_pdf = 0.f;
+  Eigen::Vector3f previous_point = origin, previous_normal = Eigen::Vector3f::UnitZ();
+  const bool has_roughness = !c.scene.face_roughness.empty();
+
+  for (int bounce = 0; bounce <= c.options.max_bounces; ++bounce) {
+    const RayHit hit = c.caster.intersect(origin, direction);
+    ++rays;
+    if (!hit.hit) {
+      radiance += throughput.cwiseProduct(c.scene.sky_radiance);
+      break;
+    }
+    const std::uint32_t face = hit.triangle;
+    const Eigen::Vector3f point = origin + direction * hit.distance;
+    Eigen::Vector3f n = c.face_normals[face];
+    const float cos_hit = n.dot(-direction);
+    if (cos_hit < 0.f) n = -n;
+    const float abs_cos_hit = std::abs(cos_hit);
+
+    const int emitter_index = c.scene.face_emitter.empty() ? -1 : c.scene.face_emitter[face];
+    if (emitter_index >= 0) {
+      const Emitter& e = c.scene.emitters[static_cast<std::size_t>(emitter_index)];
+      const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, abs_cos_hit);
+      if (bounce == 0) {
+        radiance += emitted;
+      } else {
+        const int tri = c.face_to_emissive[face];
+        float weight = 1.f;
+        if (tri >= 0 && abs_cos_hit > 0.f) {
+          const float select = c.sampler.pmf(previous_point, previous_normal, tri);
+          const float light_pdf = select / c.emissive[static_cast<std::size_t>(tri)].area * hit.distance *
+                                  hit.distance / abs_cos_hit;
+          weight = previous_bsdf_pdf * previous_bsdf_pdf /
+                   (previous_bsdf_pdf * previous_bsdf_pdf + light_pdf * light_pdf);
+        }
+        radiance += throughput.cwiseProduct(emitted) * weight;
+      }
+    }
+    const Shading shading{c.scene.face_reflectance[face],
+                          has_roughness ? c.scene.face_roughness[face] : 0.5f, c.options.diffuse};
+    if (bounce == 0 && first) {
+      first->albedo = shading.albedo;
+      first->normal = n;
+      first->depth = hit.distance * z_per_distance;
+      first->light_id = emitter_index >= 0 ? c.scene.emitters[static_cast<std::size_t>(emitter_index)].light_id : 0;
+    }
+    if (bounce == c.options.max_bounces) break;
+    const Eigen::Vector3f wo = -direction;
+    const Eigen::Vector3f shadow_origin = point + n * offsetFor(hit.distance);
+
+    // Next-event estimation: one emissive triangle, MIS-weighted against BSDF sampling.
+    float pick_pmf = 0.f;
+    const int tri = c.sampler.pick(point, n, rng.uniform(), &pick_pmf);
+    const float su = rng.uniform(), sv = rng.uniform();
+    if (tri >= 0 && pick_pmf > 0.f) {
+      const EmissiveTriangle& t = c.emissive[static_cast<std::size_t>(tri)];
+      const float root = std::sqrt(su);
+      const Eigen::Vector3f q = t.p0 * (1.f - root) + t.p1 * (root * (1.f - sv)) + t.p2 * (root * sv);
+      Eigen::Vector3f wi = q - shadow_origin;
+      const float distance2 = wi.squaredNorm();
+      const float distance = std::sqrt(distance2);
+      wi /= distance;
+      const float cos_surface = n.dot(wi);
+      const float cos_light = std::abs(t.normal.dot(wi));
+      if (cos_surface > 0.f && cos_light > 1e-6f && distance > 0.f) {
+        ++rays;
+        if (!c.caster.occluded(shadow_origin, wi, 0.f, distance * (1.f - 1e-4f))) {
+          const Emitter& e = c.scene.emitters[static_cast<std::size_t>(c.scene.face_emitter[t.face])];
+          const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, cos_light);
+          const float light_pdf = pick_pmf / t.area * distance2 / cos_light;
+          const float bsdf_pdf = cos_surface / kPi;
+          const float weight = light_pdf * light_pdf / (light_pdf * light_pdf + bsdf_pdf * bsdf_pdf);
+          radiance += throughput.cwiseProduct(shading.eval(n, wo, wi)).cwiseProduct(emitted) *
+                      (cos_surface * weight / light_pdf);
+        }
+      }
+    }
+    // Rectangle lights (headlights) are not geometry: light sampling only, weight 1.
+    for (const RectangleLight& light : c.scene.rectangle_lights) {
+      const float area = light.edge_u.cross(light.edge_v).norm();
+      const Eigen::Vector3f q = light.centre + light.edge_u * (rng.uniform() - 0.5f) + light.edge_v * (rng.uniform() - 0.5f);
+      Eigen::Vector3f wi = q - shadow_origin;
+      const float distance2 = wi.squaredNorm();
+      const float distance = std::sqrt(distance2);
+      if (!(distance > 0.f) || !(area > 0.f)) continue;
+      wi /= distance;
+      const float cos_surface = n.dot(wi);
+      const float cos_light = light.normal.dot(-wi);
+      if (cos_surface <= 0.f || cos_light <= std::cos(0.5f * light.spread_rad)) continue;
+      ++rays;
+      if (c.caster.occluded(shadow_origin, wi, 0.f, distance * (1.f - 1e-4f))) continue;
+      const float pdf = distance2 / (cos_light * area);
+      radiance += throughput.cwiseProduct(shading.eval(n, wo, wi)).cwiseProduct(light.radiance) * (cos_surface / pdf);
+    }
+
+    // BSDF sampling: cosine-weighted hemisphere.
+    const Eigen::Vector3f wi = cosineSample(n, rng.uniform(), rng.uniform());
+    const float cos_surface = n.dot(wi);
+    if (cos_surface <= 1e-7f) break;
+    const float bsdf_pdf = cos_surface / kPi;
+    throughput = throughput.cwiseProduct(shading.eval(n, wo, wi)) * (cos_surface / bsdf_pdf);
+    if (bounce + 1 >= c.options.russian_roulette_after) {
+      const float survive = std::clamp(throughput.maxCoeff(), 0.05f, 1.f);
+      if (rng.uniform() >= survive) break;
+      throughput /= survive;
+    }
+    if (!(throughput.maxCoeff() > 0.f)) break;
+    previous_bsdf_pdf = bsdf_pdf;
+    previous_point = point;
+    previous_normal = n;
+    origin = shadow_origin;
+    direction = wi;
+  }
+  return radiance;
+}
+
+class ProgressBar {
+ public:
+  ProgressBar(bool enabled, int total) : enabled_(enabled && ::isatty(2)), total_(total) {}
+  void tick() {
+    const int done = ++done_;
+    if (!enabled_) return;
+    std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+    if (!lock.owns_lock() && done != total_) return;
+    const int width = 40, filled = width * done / total_;
+    std::fprintf(stderr, "\rrender [%.*s%*s] %3d%%", filled, "########################################",
+                 width - filled, "", 100 * done / total_);
+    if (done == total_) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  }
+
+ private:
+  bool enabled_;
+  int total_;
+  std::atomic<int> done_{0};
+  std::mutex mutex_;
+};
+
+}  // namespace
+
+RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions& options) {
+  Stopwatch clock;
+  const int width = scene.camera.width, height = scene.camera.height;
+  CV_Assert(width > 0 && height > 0);
+  CV_Assert(scene.face_reflectance.size() == scene.faces.size());
+  CV_Assert(scene.face_emitter.empty() || scene.face_emitter.size() == scene.faces.size());
+  CV_Assert(options.absolute_error.empty() || (options.absolute_error.type() == CV_32F &&
+                                                options.absolute_error.size() == cv::Size(width, height)));
+
+  std::vector<float> vertices;
+  vertices.reserve(scene.vertices.size() * 3);
+  for (const Eigen::Vector3f& v : scene.vertices) vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
+  std::vector<std::uint32_t> indices;
+  indices.reserve(scene.faces.size() * 3);
+  for (const auto& f : scene.faces) indices.insert(indices.end(), f.begin(), f.end());
+  Stopwatch build_clock;
+  const RayCaster caster(std::move(vertices), std::move(indices));
+  const double build_seconds = build_clock.seconds();
+
+  const std::vector<EmissiveTriangle> emissive = collectEmissiveTriangles(scene);
+  std::vector<int> face_to_emissive(scene.faces.size(), -1);
+  for (std::size_t i = 0; i < emissive.size(); ++i) face_to_emissive[emissive[i].face] = static_cast<int>(i);
+  const std::unique_ptr<LightSampler> sampler = makeLightSampler(options.light_sampler, emissive);
+
+  Context context{scene, options, caster, emissive, face_to_emissive, *sampler, {}};
+  context.face_normals.reserve(scene.faces.size());
+  for (const auto& f : scene.faces) {
+    const Eigen::Vector3f cross = (scene.vertices[f[1]] - scene.vertices[f[0]]).cross(scene.vertices[f[2]] - scene.vertices[f[0]]);
+    const float norm = cross.norm();
+    context.face_normals.push_back(norm > 0.f ? Eigen::Vector3f(cross / norm) : Eigen::Vector3f::UnitZ());
+  }
+
+  RenderOutput out;
+  out.radiance.create(height, width, CV_32FC3);
+  out.albedo.create(height, width, CV_32FC3);
+  out.normal.create(height, width, CV_32FC3);
+  out.depth_m.create(height, width, CV_32F);
+  out.light_id.create(height, width, CV_32S);
+  out.samples.create(height, width, CV_32S);
+  out.std_error.create(height, width, CV_32F);
+
+  constexpr int kTile = 16;
+  const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
+  ProgressBar progress(options.progress, tiles_x * tiles_y);
+  std::atomic<std::int64_t> total_rays{0}, total_samples{0}, dropped{0};
+  const int min_samples = std::max(2, options.min_samples);
+  const int max_samples = std::max(min_samples, options.max_samples);
+
+  tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
+    std::int64_t rays = 0, samples_taken = 0, nonfinite = 0;
+    const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
+    for (int y = y0; y < std::min(y0 + kTile, height); ++y)
+      for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
+        Pcg32 rng(options.seed, static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(width) + static_cast<std::uint64_t>(x));
+        FirstHit first;
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        double mean_y = 0, m2_y = 0;
+        int n = 0, taken = 0;
+        const float absolute = options.absolute_error.empty() ? 0.f : options.absolute_error.at<float>(y, x);
+        double standard_error = 0;
+        while (taken < max_samples) {
+          const float jx = rng.uniform() - 0.5f, jy = rng.uniform() - 0.5f;
+          const Eigen::Vector3f value =
+              tracePath(context, static_cast<float>(x) + jx, static_cast<float>(y) + jy, rng, taken == 0 ? &first : nullptr, rays);
+          ++taken;
+          if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
+            ++nonfinite;  // never reaches the image
+            continue;
+          }
+          ++n;
+          sum += value.cast<double>();
+          const double delta = luminance(value) - mean_y;
+          mean_y += delta / n;
+          m2_y += delta * (luminance(value) - mean_y);
+          if (n >= min_samples && (n - min_samples) % 8 == 0) {
+            standard_error = std::sqrt(m2_y / (n - 1) / n);
+            if (standard_error <= std::max(options.relative_error * std::abs(mean_y), static_cast<double>(absolute))) break;
+          }
+        }
+        if (n > 1) standard_error = std::sqrt(m2_y / (n - 1) / n);
+        samples_taken += taken;
+        const Eigen::Vector3d mean = n > 0 ? Eigen::Vector3d(sum / n) : Eigen::Vector3d::Zero();
+        out.radiance.at<cv::Vec3f>(y, x) = {static_cast<float>(mean.x()), static_cast<float>(mean.y()), static_cast<float>(mean.z())};
+        out.albedo.at<cv::Vec3f>(y, x) = {first.albedo.x(), first.albedo.y(), first.albedo.z()};
+        out.normal.at<cv::Vec3f>(y, x) = {first.normal.x(), first.normal.y(), first.normal.z()};
+        out.depth_m.at<float>(y, x) = first.depth;
+        out.light_id.at<int>(y, x) = first.light_id;
+        out.samples.at<int>(y, x) = taken;
+        out.std_error.at<float>(y, x) = static_cast<float>(standard_error);
+      }
+    total_rays += rays;
+    total_samples += samples_taken;
+    dropped += nonfinite;
+    progress.tick();
+  });
+
+  const double seconds = clock.seconds();
+  StageReport& r = out.report;
+  r.name = "render";
+  r.seconds = seconds;
+  const double pixels = static_cast<double>(width) * height;
+  r.add("samples_per_pixel_mean", static_cast<double>(total_samples.load()) / pixels);
+  double max_spp = 0;
+  cv::minMaxLoc(out.samples, nullptr, &max_spp);
+  r.add("samples_per_pixel_max", static_cast<std::int64_t>(max_spp));
+  r.add("rays", total_rays.load()).add("rays_per_second", static_cast<double>(total_rays.load()) / seconds);
+  r.add("bvh_build", build_seconds, "s");
+  r.add("emissive_triangles", static_cast<std::int64_t>(emissive.size()));
+  r.add("light_sampler", std::string(lightSamplerName(options.light_sampler)));
+  r.add("nonfinite_samples_dropped", dropped.load());
+  // Noise estimate: median relative standard error over pixels that received light.
+  std::vector<float> relative;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const float v = out.radiance.at<cv::Vec3f>(y, x)[1];
+      if (v > 0.f) relative.push_back(out.std_error.at<float>(y, x) / v);
+    }
+  if (!relative.empty()) {
+    std::nth_element(relative.begin(), relative.begin() + static_cast<std::ptrdiff_t>(relative.size() / 2), relative.end());
+    r.add("relative_std_error_median", static_cast<double>(relative[relative.size() / 2]));
+  }
+  r.add("seed", static_cast<std::int64_t>(options.seed));
+  if (emissive.empty()) r.notes.push_back("no emitting triangle: no next-event estimation toward scene lights");
+  if (scene.face_roughness.empty()) r.notes.push_back("no roughness map: diffuse only");
+  else r.notes.push_back("roughness map given: used by the Disney diffuse lobe; no specular lobe in this renderer yet");
+  return out;
+}
+
+}  // namespace solo

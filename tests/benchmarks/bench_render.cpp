@@ -1,0 +1,145 @@
+// Renderer measurements on a synthetic night street (solo synth's box scene with its lights
+// switched on): raw Embree ray throughput against the tracer's, and error at equal time of the
+// three light samplers against a converged reference.
+// Run: build/release/tests/benchmarks/bench_render [WIDTHxHEIGHT] [reference_spp] [csv]
+
+#include <solo/geometry/report.h>
+#include <solo/lighting/light_category.h>
+#include <solo/render/path_tracer.h>
+#include <solo/render/ray_caster.h>
+#include <solo/render/street_scene.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <random>
+
+namespace {
+
+// Emitted luminance per category in render units (a lit window about 10, a street-light head
+// about 800): only the orders of magnitude matter for comparing samplers.
+float luminanceOf(int category) {
+  switch (static_cast<solo::LightCategory>(category)) {
+    case solo::LightCategory::WindowBuilding: return 8.f;
+    case solo::LightCategory::WindowParked: return 2.f;
+    case solo::LightCategory::WindowTransport: return 9.f;
+    case solo::LightCategory::StreetLightHighCct:
+    case solo::LightCategory::StreetLightLowCct: return 900.f;
+    case solo::LightCategory::ParkedFront:
+    case solo::LightCategory::MovingFront: return 800.f;
+    case solo::LightCategory::ParkedRear:
+    case solo::LightCategory::MovingRear: return 70.f;
+    default: return 150.f;
+  }
+}
+
+solo::RenderScene nightStreet(int width, int height) {
+  solo::StreetSceneOptions options;
+  options.width = width;
+  options.height = height;
+  const solo::StreetScene street = solo::buildStreetScene(options);
+  const solo::TriangleMesh mesh = solo::streetSceneMesh(street);
+  solo::RenderScene scene;
+  scene.camera = street.camera;
+  for (const auto& v : mesh.vertices) scene.vertices.push_back(v.cast<float>());
+  scene.faces = mesh.faces;
+  std::map<int, int> emitter_of_light;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const solo::ScenePart& part = street.parts[f / 12];
+    scene.face_reflectance.push_back(solo::reflectanceFromLinearSrgb(part.albedo));
+    int emitter = -1;
+    if (part.light_id > 0) {
+      auto it = emitter_of_light.find(part.light_id);
+      if (it == emitter_of_light.end()) {
+        const int category = solo::lightCategoryOfId(part.light_id);
+        const bool profiled = category == 7 || category == 8 || category == 9 || category == 10;
+        scene.emitters.push_back({Eigen::Vector3f(0.95f, 1.f, 0.8f) * luminanceOf(category), profiled, part.light_id});
+        it = emitter_of_light.emplace(part.light_id, static_cast<int>(scene.emitters.size()) - 1).first;
+      }
+      emitter = it->second;
+    }
+    scene.face_emitter.push_back(emitter);
+  }
+  scene.rectangle_lights = solo::egoHeadlights(2000.f);
+  return scene;
+}
+
+double relativeRmse(const cv::Mat& image, const cv::Mat& reference, const cv::Mat& light_id) {
+  double sum = 0, norm = 0;
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x) {
+      if (light_id.at<int>(y, x) != 0) continue;  // non-emitting pixels only
+      const double r = reference.at<cv::Vec3f>(y, x)[1], v = image.at<cv::Vec3f>(y, x)[1];
+      sum += (v - r) * (v - r);
+      norm += r * r;
+    }
+  return norm > 0 ? std::sqrt(sum / norm) : 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int width = 480, height = 270, reference_spp = 1024;
+  if (argc > 1) std::sscanf(argv[1], "%dx%d", &width, &height);
+  if (argc > 2) reference_spp = std::atoi(argv[2]);
+  const solo::RenderScene scene = nightStreet(width, height);
+  std::printf("night street %dx%d: %zu triangles, %zu lights, 2 headlights\n", width, height, scene.faces.size(),
+              scene.emitters.size());
+
+  // Raw Embree: camera rays then one random bounce per hit, single rays as the tracer casts them.
+  {
+    std::vector<float> vertices;
+    for (const auto& v : scene.vertices) vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
+    std::vector<std::uint32_t> indices;
+    for (const auto& f : scene.faces) indices.insert(indices.end(), f.begin(), f.end());
+    const solo::RayCaster caster(std::move(vertices), std::move(indices));
+    std::mt19937 rng(1);
+    std::normal_distribution<float> g(0, 1);
+    solo::Stopwatch clock;
+    std::int64_t rays = 0;
+    for (int pass = 0; pass < 4; ++pass)
+      for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+          const Eigen::Vector3f d = Eigen::Vector3f(static_cast<float>((x - scene.camera.cx) / scene.camera.fx),
+                                                    static_cast<float>((y - scene.camera.cy) / scene.camera.fy), 1.f)
+                                        .normalized();
+          const solo::RayHit hit = caster.intersect(Eigen::Vector3f::Zero(), d);
+          ++rays;
+          if (!hit.hit) continue;
+          const Eigen::Vector3f p = d * hit.distance * 0.999f;
+          caster.intersect(p, Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
+          ++rays;
+        }
+    const double seconds = clock.seconds();
+    std::printf("raw Embree, 1 thread: %.2f Mrays/s (%lld rays in %.2f s)\n", rays / seconds / 1e6,
+                static_cast<long long>(rays), seconds);
+  }
+
+  solo::PathTracerOptions o;
+  o.progress = false;
+  o.min_samples = o.max_samples = reference_spp;
+  o.seed = 1000;
+  solo::Stopwatch reference_clock;
+  const solo::RenderOutput reference = solo::renderPathTraced(scene, o);
+  std::printf("reference: %d spp, hierarchy sampler, %.1f s, %.2f Mrays/s on all threads\n", reference_spp,
+              reference_clock.seconds(), std::get<double>(*reference.report.find("rays_per_second")) / 1e6);
+
+  std::FILE* csv = argc > 3 ? std::fopen(argv[3], "w") : nullptr;
+  if (csv) std::fprintf(csv, "sampler,spp,seconds,relative_rmse\n");
+  std::printf("%-10s %6s %9s %14s\n", "sampler", "spp", "seconds", "relative_rmse");
+  for (auto kind : {solo::LightSamplerKind::Uniform, solo::LightSamplerKind::Power, solo::LightSamplerKind::Hierarchy})
+    for (int spp : {1, 4, 16, 64}) {
+      o.light_sampler = kind;
+      o.min_samples = o.max_samples = spp;
+      o.seed = 7;
+      solo::Stopwatch clock;
+      const solo::RenderOutput out = solo::renderPathTraced(scene, o);
+      const double seconds = clock.seconds();
+      const double error = relativeRmse(out.radiance, reference.radiance, reference.light_id);
+      std::printf("%-10s %6d %9.3f %14.4f\n", solo::lightSamplerName(kind), spp, seconds, error);
+      if (csv) std::fprintf(csv, "%s,%d,%.4f,%.5f\n", solo::lightSamplerName(kind), spp, seconds, error);
+    }
+  if (csv) std::fclose(csv);
+  return 0;
+}

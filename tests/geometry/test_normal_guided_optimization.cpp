@@ -1,0 +1,212 @@
+// Normal-guided depth optimisation (Ceres) and the paper's Adam: accuracy on planes with
+// known truth, agreement of the layouts, and the numerical-stability cases of issue 4.
+
+#include <solo/geometry/adam_depth_optimizer.h>
+#include <solo/geometry/normal_guided_optimization.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace {
+
+solo::PinholeCamera camera(int width, int height, double f) {
+  solo::PinholeCamera c;
+  c.fx = c.fy = f, c.cx = (width - 1) / 2.0, c.cy = (height - 1) / 2.0, c.width = width, c.height = height;
+  return c;
+}
+
+// A tilted plane n . X = c seen by `cam`: exact depth and normals.
+struct Plane {
+  cv::Mat depth, normals;
+};
+Plane plane(const solo::PinholeCamera& cam, cv::Vec3d n, double c) {
+  n = cv::normalize(n);
+  Plane p{cv::Mat(cam.height, cam.width, CV_32F), cv::Mat(cam.height, cam.width, CV_32FC3)};
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      const cv::Vec3d ray((x - cam.cx) / cam.fx, (y - cam.cy) / cam.fy, 1);
+      p.depth.at<float>(y, x) = static_cast<float>(c / n.dot(ray));
+      p.normals.at<cv::Vec3f>(y, x) = cv::Vec3f(n);
+    }
+  return p;
+}
+
+cv::Mat noisy(const cv::Mat& depth, double relative, std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::normal_distribution<double> noise(0, relative);
+  cv::Mat out = depth.clone();
+  for (int y = 0; y < out.rows; ++y)
+    for (int x = 0; x < out.cols; ++x)
+      if (out.at<float>(y, x) > 0) out.at<float>(y, x) *= static_cast<float>(1 + noise(random));
+  return out;
+}
+
+double rmse(const cv::Mat& a, const cv::Mat& b) { return cv::norm(a, b, cv::NORM_L2, b > 0) / std::sqrt(cv::countNonZero(b > 0)); }
+
+void expectFiniteAndNotWorse(const solo::NormalGuidedOptimizationResult& r, const cv::Mat& input) {
+  EXPECT_TRUE(cv::checkRange(r.depth_m));
+  EXPECT_LE(r.final.total, r.initial.total);
+  EXPECT_TRUE(std::isfinite(r.final.total));
+  EXPECT_EQ(cv::countNonZero(r.depth_m > 0), cv::countNonZero(input > 0)) << "same valid pixels";
+}
+
+TEST(NormalGuidedOptimization, RecoversATiltedPlaneFromNoisyDepth) {
+  const solo::PinholeCamera cam = camera(64, 48, 60);
+  const Plane truth = plane(cam, {0.3, -0.2, -1}, -8);
+  const cv::Mat input = noisy(truth.depth, 0.02, 1);
+  const auto r = solo::optimizeDepthWithNormals(input, truth.normals, {}, {}, cam);
+  expectFiniteAndNotWorse(r, input);
+  EXPECT_LT(rmse(r.depth_m, truth.depth), 0.5 * rmse(input, truth.depth));
+  EXPECT_LT(r.final.tangent, 0.05 * r.initial.tangent);
+}
+
+TEST(NormalGuidedOptimization, LayoutsAndOptimisersAgreeOnTheMinimum) {
+  const solo::PinholeCamera cam = camera(24, 18, 30);
+  const Plane truth = plane(cam, {-0.4, 0.1, -1}, -5);
+  const cv::Mat input = noisy(truth.depth, 0.03, 2);
+  solo::NormalGuidedOptimizationOptions lbfgs, per_pixel;
+  lbfgs.max_iterations = 500, lbfgs.function_tolerance = 1e-12;
+  per_pixel.layout = solo::DepthSolverLayout::kPerPixelResidualBlocks;
+  per_pixel.max_iterations = 100, per_pixel.function_tolerance = 1e-12;
+  const auto a = solo::optimizeDepthWithNormals(input, truth.normals, {}, {}, cam, lbfgs);
+  const auto b = solo::optimizeDepthWithNormals(input, truth.normals, {}, {}, cam, per_pixel);
+  EXPECT_NEAR(a.final.total, b.final.total, 1e-3 * b.final.total);
+  EXPECT_LT(cv::norm(a.depth_m, b.depth_m, cv::NORM_INF), 1e-2);
+  solo::AdamOptions adam;
+  const auto c = solo::optimizeDepthWithAdam(input, truth.normals, {}, {}, cam, adam);
+  EXPECT_LT(c.final.total, c.initial.total);
+  EXPECT_LT(a.final.total, c.final.total) << "1000 steps of 2e-4 m do not converge";
+}
+
+TEST(NormalGuidedOptimization, AdamsFirstStepMovesEveryPixelByTheLearningRate) {
+  const solo::PinholeCamera cam = camera(10, 8, 20);
+  const Plane truth = plane(cam, {0.2, 0.1, -1}, -4);
+  const cv::Mat input = noisy(truth.depth, 0.05, 3);
+  solo::AdamOptions o;
+  o.iterations = 1;
+  const auto r = solo::optimizeDepthWithAdam(input, truth.normals, {}, {}, cam, o);
+  ASSERT_LT(r.final.total, r.initial.total);
+  const cv::Mat step = cv::abs(r.depth_m - input);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 10; ++x) EXPECT_NEAR(step.at<float>(y, x), 2e-4, 1e-6) << "bias-corrected |m / sqrt v| = 1";
+}
+
+TEST(NormalGuidedOptimizationStability, GrazingNormals) {
+  // Normals perpendicular to each pixel's ray (n . ray = 0) and n_z = 0: no slope information.
+  const solo::PinholeCamera cam = camera(16, 12, 20);
+  cv::Mat depth(12, 16, CV_32F, cv::Scalar(10)), normals(12, 16, CV_32FC3);
+  for (int y = 0; y < 12; ++y)
+    for (int x = 0; x < 16; ++x) {
+      const cv::Vec3d ray((x - cam.cx) / cam.fx, (y - cam.cy) / cam.fy, 1);
+      normals.at<cv::Vec3f>(y, x) = cv::Vec3f(cv::normalize(ray.cross(cv::Vec3d(0, 1, 0)).cross(ray)));
+    }
+  normals.row(0).setTo(cv::Scalar(1, 0, 0));
+  const cv::Mat input = noisy(depth, 0.01, 4);
+  for (const auto model : {solo::TangentModel::kPerspective, solo::TangentModel::kPaperGraph}) {
+    solo::NormalGuidedOptimizationOptions o;
+    o.objective.tangent_model = model;
+    expectFiniteAndNotWorse(solo::optimizeDepthWithNormals(input, normals, {}, {}, cam, o), input);
+    solo::AdamOptions a;
+    a.objective.tangent_model = model;
+    expectFiniteAndNotWorse(solo::optimizeDepthWithAdam(input, normals, {}, {}, cam, a), input);
+  }
+}
+
+TEST(NormalGuidedOptimizationStability, NormalsPointingAwayFromTheCameraActLikeTheirFlip) {
+  const solo::PinholeCamera cam = camera(20, 14, 25);
+  const Plane truth = plane(cam, {0.2, 0.3, -1}, -6);
+  const cv::Mat input = noisy(truth.depth, 0.02, 5);
+  const cv::Mat away = -truth.normals;
+  const auto front = solo::optimizeDepthWithNormals(input, truth.normals, {}, {}, cam);
+  const auto back = solo::optimizeDepthWithNormals(input, away, {}, {}, cam);
+  expectFiniteAndNotWorse(back, input);
+  EXPECT_NEAR(back.final.total, front.final.total, 1e-9 * front.initial.total) << "r is odd in n";
+}
+
+TEST(NormalGuidedOptimizationStability, InvalidAndSkyPixelsInsideTheStencil) {
+  const solo::PinholeCamera cam = camera(30, 20, 30);
+  const Plane truth = plane(cam, {0, 0.2, -1}, -9);
+  cv::Mat input = noisy(truth.depth, 0.02, 6);
+  input.rowRange(0, 5).setTo(0);                 // sky
+  input(cv::Rect(10, 10, 1, 1)).setTo(0);        // isolated holes
+  input(cv::Rect(20, 12, 1, 1)).setTo(0);
+  input.col(15).setTo(0);                        // a split: one-sided differences on both sides
+  cv::Mat normals = truth.normals.clone();
+  normals(cv::Rect(3, 15, 2, 2)).setTo(cv::Scalar::all(0));  // no normal there
+  const auto r = solo::optimizeDepthWithNormals(input, normals, {}, {}, cam);
+  expectFiniteAndNotWorse(r, input);
+  EXPECT_EQ(cv::countNonZero(r.depth_m.rowRange(0, 5)), 0);
+  cv::Mat visible_truth = truth.depth.clone();
+  visible_truth.setTo(0, input <= 0);
+  EXPECT_LT(rmse(r.depth_m, visible_truth), rmse(input, visible_truth));
+  expectFiniteAndNotWorse(solo::optimizeDepthWithAdam(input, normals, {}, {}, cam), input);
+}
+
+TEST(NormalGuidedOptimizationStability, DepthsFromHalfAMetreToAKilometre) {
+  const solo::PinholeCamera cam = camera(40, 30, 40);
+  cv::Mat depth(30, 40, CV_32F), normals(30, 40, CV_32FC3, cv::Scalar(0, 0, -1)), labels(30, 40, CV_32S);
+  for (int y = 0; y < 30; ++y)
+    for (int x = 0; x < 40; ++x) {
+      depth.at<float>(y, x) = x < 20 ? 0.5f : 1000.f;
+      labels.at<int>(y, x) = x < 20 ? 24001 : 11;
+    }
+  const cv::Mat input = noisy(depth, 0.01, 7);
+  for (const cv::Mat& segments : {cv::Mat(), labels}) {
+    const auto r = solo::optimizeDepthWithNormals(input, normals, {}, segments, cam);
+    expectFiniteAndNotWorse(r, input);
+    cv::Mat near_part = r.depth_m.colRange(0, 20), far_part = r.depth_m.colRange(20, 40);
+    double lo, hi;
+    cv::minMaxLoc(near_part, &lo, &hi);
+    EXPECT_GT(lo, 0.0);
+    cv::minMaxLoc(far_part, &lo, &hi);
+    EXPECT_LT(hi, 2000.0);
+  }
+  expectFiniteAndNotWorse(solo::optimizeDepthWithAdam(input, normals, {}, labels, cam), input);
+}
+
+TEST(NormalGuidedOptimizationStability, ASingleValidPixel) {
+  const solo::PinholeCamera cam = camera(5, 5, 10);
+  cv::Mat depth(5, 5, CV_32F, cv::Scalar(0));
+  depth.at<float>(2, 3) = 4;
+  const cv::Mat normals(5, 5, CV_32FC3, cv::Scalar(0, 0, -1));
+  for (const auto layout : {solo::DepthSolverLayout::kWholeImageLbfgs, solo::DepthSolverLayout::kPerPixelResidualBlocks}) {
+    solo::NormalGuidedOptimizationOptions o;
+    o.layout = layout;
+    const auto r = solo::optimizeDepthWithNormals(depth, normals, {}, {}, cam, o);
+    expectFiniteAndNotWorse(r, depth);
+    EXPECT_FLOAT_EQ(r.depth_m.at<float>(2, 3), 4.f) << "no neighbour: only the data term";
+  }
+  const auto a = solo::optimizeDepthWithAdam(depth, normals, {}, {}, cam);
+  EXPECT_FLOAT_EQ(a.depth_m.at<float>(2, 3), 4.f);
+  const auto none = solo::optimizeDepthWithNormals(cv::Mat(3, 3, CV_32F, cv::Scalar(0)), cv::Mat(3, 3, CV_32FC3), {}, {}, cam);
+  EXPECT_EQ(cv::countNonZero(none.depth_m), 0);
+}
+
+TEST(NormalGuidedOptimizationStability, AllPixelsUncertainLeavesTheFilteredDepth) {
+  const solo::PinholeCamera cam = camera(12, 9, 15);
+  const Plane truth = plane(cam, {0.1, 0.1, -1}, -3);
+  const cv::Mat input = noisy(truth.depth, 0.02, 8);
+  const cv::Mat uncertain(9, 12, CV_8U, cv::Scalar(255));
+  const auto r = solo::optimizeDepthWithNormals(input, truth.normals, uncertain, {}, cam);
+  expectFiniteAndNotWorse(r, input);
+  EXPECT_EQ(r.initial.total, 0);
+  EXPECT_LT(cv::norm(r.depth_m, input, cv::NORM_INF), 1e-6);
+}
+
+TEST(NormalGuidedOptimizationStability, AnImageOnePixelWide) {
+  const solo::PinholeCamera cam = camera(1, 40, 30);
+  const Plane truth = plane(cam, {0, 0.5, -1}, -6);
+  const cv::Mat input = noisy(truth.depth, 0.02, 9);
+  for (const auto layout : {solo::DepthSolverLayout::kWholeImageLbfgs, solo::DepthSolverLayout::kPerPixelResidualBlocks}) {
+    solo::NormalGuidedOptimizationOptions o;
+    o.layout = layout;
+    const auto r = solo::optimizeDepthWithNormals(input, truth.normals, {}, {}, cam, o);
+    expectFiniteAndNotWorse(r, input);
+    EXPECT_LT(rmse(r.depth_m, truth.depth), rmse(input, truth.depth));
+  }
+  expectFiniteAndNotWorse(solo::optimizeDepthWithAdam(input, truth.normals, {}, {}, cam), input);
+}
+
+}  // namespace

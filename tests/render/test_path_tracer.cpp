@@ -1,0 +1,307 @@
+// The path tracer against closed forms: furnace, rectangle-light irradiance on a Lambertian
+// plane, inverse-square falloff, the emission profile, direct view of an emitter, energy
+// bookkeeping, unbiasedness across samplers and sample counts, determinism.
+
+#include <solo/render/light_sampler.h>
+#include <solo/render/path_tracer.h>
+
+#include "test_support.h"
+
+#include <Eigen/Geometry>
+#include <tbb/global_control.h>
+
+#include <cmath>
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Adds the quad corner, corner + u, corner + u + v, corner + v as two faces.
+void addQuad(solo::RenderScene& s, const Eigen::Vector3f& corner, const Eigen::Vector3f& u, const Eigen::Vector3f& v,
+             float reflectance, int emitter = -1) {
+  const auto base = static_cast<std::uint32_t>(s.vertices.size());
+  s.vertices.insert(s.vertices.end(), {corner, corner + u, corner + u + v, corner + v});
+  s.faces.push_back({base, base + 1, base + 2});
+  s.faces.push_back({base, base + 2, base + 3});
+  for (int k = 0; k < 2; ++k) {
+    s.face_reflectance.push_back(Eigen::Vector3f::Constant(reflectance));
+    s.face_emitter.push_back(emitter);
+  }
+}
+
+solo::PinholeCamera camera(int size, double focal) { return {focal, focal, (size - 1) / 2.0, (size - 1) / 2.0, size, size}; }
+
+// A narrow camera whose centre pixel ((size - 1) / 2) looks along (x_over_z, y_over_z, 1):
+// with a long focal length each pixel covers a small patch, so a pixel's value is the
+// radiance at one point rather than an average over a wide footprint.
+solo::PinholeCamera cameraLookingAt(int size, double focal, double x_over_z, double y_over_z) {
+  const double c = (size - 1) / 2.0;
+  return {focal, focal, c - focal * x_over_z, c - focal * y_over_z, size, size};
+}
+
+// A closed cube room [-1, 1]^3 around the camera, every wall emitting radiance 1 and
+// reflecting `reflectance`.
+solo::RenderScene furnace(float reflectance) {
+  solo::RenderScene s;
+  s.emitters.push_back({Eigen::Vector3f::Ones(), false, 1});
+  const Eigen::Vector3f ex = Eigen::Vector3f::UnitX() * 2, ey = Eigen::Vector3f::UnitY() * 2, ez = Eigen::Vector3f::UnitZ() * 2;
+  const Eigen::Vector3f lo(-1, -1, -1), hi(1, 1, 1);
+  addQuad(s, lo, ex, ey, reflectance, 0);
+  addQuad(s, lo, ey, ez, reflectance, 0);
+  addQuad(s, lo, ez, ex, reflectance, 0);
+  addQuad(s, hi, -ex, -ey, reflectance, 0);
+  addQuad(s, hi, -ey, -ez, reflectance, 0);
+  addQuad(s, hi, -ez, -ex, reflectance, 0);
+  s.camera = camera(16, 12);
+  return s;
+}
+
+double meanY(const cv::Mat& radiance) { return cv::mean(radiance)[1]; }
+
+// Irradiance factor of a rectangle parallel to the receiver, corner above the point:
+// int cos cos / r^2 dA over [0, a] x [0, b] at height h (the form factor times pi).
+double cornerIntegral(double a, double b, double h) {
+  const double A = std::abs(a) / h, B = std::abs(b) / h;
+  const double f = 0.5 * (A / std::sqrt(1 + A * A) * std::atan(B / std::sqrt(1 + A * A)) +
+                          B / std::sqrt(1 + B * B) * std::atan(A / std::sqrt(1 + B * B)));
+  return (a < 0) != (b < 0) ? -f : f;
+}
+double rectangleIntegral(double x0, double x1, double y0, double y1, double h) {
+  return cornerIntegral(x1, y1, h) - cornerIntegral(x0, y1, h) - cornerIntegral(x1, y0, h) + cornerIntegral(x0, y0, h);
+}
+
+}  // namespace
+
+TEST(PathTracer, WhiteFurnaceConvergesToTheGeometricSeries) {
+  // Every path sees radiance 1 at each vertex: L = sum a^k = 1 / (1 - a) with unbounded bounces.
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.max_bounces = 200;
+  o.min_samples = o.max_samples = 64;
+  o.progress = false;
+  const auto out = solo::renderPathTraced(furnace(0.5f), o);
+  EXPECT_NEAR(meanY(out.radiance), 2.0, 0.02);
+  // Energy bookkeeping: reflectance 1 with a hard limit of 5 bounces gives exactly 6.
+  o.max_bounces = 5;
+  o.russian_roulette_after = 100;
+  const auto capped = solo::renderPathTraced(furnace(1.0f), o);
+  EXPECT_NEAR(meanY(capped.radiance), 6.0, 0.06);
+  double hi = 0;
+  cv::minMaxLoc(capped.radiance.reshape(1), nullptr, &hi);
+  EXPECT_LT(hi, 6.0 * 1.5) << "no pixel far above the bound";
+}
+
+TEST(PathTracer, LambertianPlaneUnderRectangleLightsMatchesTheClosedForm) {
+  for (const auto& [half_size, height] : {std::pair{0.05f, 2.0f}, std::pair{2.0f, 1.0f}}) {
+    SCOPED_TRACE(half_size);
+    solo::RenderScene s;
+    addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);  // facing the camera
+    solo::RectangleLight light;
+    light.centre = {0, 0, 5 - height};
+    light.normal = {0, 0, 1};
+    light.edge_u = {2 * half_size, 0, 0};
+    light.edge_v = {0, 2 * half_size, 0};
+    light.radiance = Eigen::Vector3f::Constant(3.f);
+    s.rectangle_lights.push_back(light);
+    solo::PathTracerOptions o;
+    o.diffuse = solo::DiffuseModel::Lambert;
+    o.min_samples = o.max_samples = 40000;  // uniform area sampling of a large light: about 0.5 % standard error
+    o.progress = false;
+    // Plane points straight below the light's centre, near its edge, and outside it.
+    for (const auto& [x, y] : {std::pair{0.0, 0.0}, std::pair{0.9 * half_size, 0.3 * half_size},
+                               std::pair{1.5 * half_size + 0.5, -0.7 * half_size}}) {
+      s.camera = cameraLookingAt(1, 2000, x / 5, y / 5);  // one pixel covering 2.5 mm of the plane
+      const auto out = solo::renderPathTraced(s, o);
+      const double irradiance = 3.0 * rectangleIntegral(-half_size - x, half_size - x, -half_size - y, half_size - y, height);
+      const double expected = 0.5 / kPi * irradiance;
+      EXPECT_NEAR(out.radiance.at<cv::Vec3f>(0, 0)[1], expected, 0.02 * expected) << x << "," << y;
+    }
+  }
+}
+
+TEST(PathTracer, SmallEmitterFallsOffWithTheInverseSquare) {
+  // A 2 cm emitting square facing a plane at distance d: E = L A / d^2 below it.
+  double measured[2];
+  const float distances[2] = {0.5f, 1.0f};
+  for (int i = 0; i < 2; ++i) {
+    solo::RenderScene s;
+    s.camera = cameraLookingAt(5, 2000, 0.2, 0.2);  // the centre pixel sees (1, 1, 5)
+    addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 1.0f);
+    s.emitters.push_back({Eigen::Vector3f::Constant(1000.f), false, 7});
+    // Emitter above the plane point (1, 1, 5), off every camera ray to that point.
+    addQuad(s, {0.99f, 0.99f, 5 - distances[i]}, {0.02f, 0, 0}, {0, 0.02f, 0}, 0.f, 0);
+    solo::PathTracerOptions o;
+    o.diffuse = solo::DiffuseModel::Lambert;
+    o.max_bounces = 1;
+    o.min_samples = o.max_samples = 1;
+    o.progress = false;
+    cv::Mat sum(5, 5, CV_32FC3, cv::Scalar::all(0));
+    for (int seed = 1; seed <= 200; ++seed) {
+      o.seed = static_cast<std::uint64_t>(seed);
+      sum += solo::renderPathTraced(s, o).radiance;
+    }
+    measured[i] = sum.at<cv::Vec3f>(2, 2)[1] / 200.0;
+    const double expected = 1.0 / kPi * 1000.0 * 0.0004 / (distances[i] * distances[i]);
+    EXPECT_NEAR(measured[i], expected, 0.03 * expected);
+  }
+  EXPECT_NEAR(measured[0] / measured[1], 4.0, 0.12);
+}
+
+TEST(PathTracer, DirectionalProfileMatchesG) {
+  // A small profiled emitter seen by a plane point at angle theta off its normal:
+  // E = L g(cos theta) cos theta cos theta_r A / d^2.
+  solo::RenderScene s;
+  s.camera = cameraLookingAt(5, 2000, 0.2, 0.0);  // the centre pixel sees (1, 0, 5)
+  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 1.0f);
+  s.emitters.push_back({Eigen::Vector3f::Constant(1000.f), true, 10});
+  addQuad(s, {-0.01f, -0.01f, 4}, {0.02f, 0, 0}, {0, 0.02f, 0}, 0.f, 0);  // normal along z, 1 m from the plane
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.max_bounces = 1;
+  o.min_samples = o.max_samples = 4000;
+  o.progress = false;
+  const auto out = solo::renderPathTraced(s, o);
+  // The plane point (1, 0, 5): d = sqrt(2), cos theta = cos theta_r = 1 / sqrt(2).
+  const double c = 1 / std::sqrt(2.0), g = std::cos(kPi * (c - 1) / 2);
+  const double expected = 1.0 / kPi * 1000.0 * g * c * c * 0.0004 / 2.0;
+  EXPECT_NEAR(out.radiance.at<cv::Vec3f>(2, 2)[1], expected, 0.03 * expected);
+  // The profile's flux share used for power sampling is its exact integral 8 / pi^2.
+  double integral = 0;
+  const int n = 100000;
+  for (int i = 0; i < n; ++i) {
+    const double mu = (i + 0.5) / n;
+    integral += std::cos(kPi * (mu - 1) / 2) * mu / n;
+  }
+  EXPECT_NEAR(integral / 0.5, 8 / (kPi * kPi), 1e-6);
+}
+
+TEST(PathTracer, DirectViewOfAnEmitterIsItsRadiance) {
+  solo::RenderScene s;
+  s.camera = camera(4, 400);
+  s.emitters.push_back({Eigen::Vector3f(2.f, 3.f, 4.f), true, 12005});
+  addQuad(s, {-10, -10, 2}, {0, 20, 0}, {20, 0, 0}, 0.f, 0);
+  solo::PathTracerOptions o;
+  o.min_samples = o.max_samples = 4;
+  o.progress = false;
+  const auto out = solo::renderPathTraced(s, o);
+  // Every pixel looks within 0.3 degrees of the normal: g is 1 to within 1e-6.
+  const cv::Vec3f v = out.radiance.at<cv::Vec3f>(1, 1);
+  EXPECT_NEAR(v[0], 2.f, 1e-4f);
+  EXPECT_NEAR(v[1], 3.f, 1e-4f);
+  EXPECT_NEAR(v[2], 4.f, 1e-4f);
+  EXPECT_EQ(out.light_id.at<int>(1, 1), 12005);
+  EXPECT_NEAR(out.depth_m.at<float>(1, 1), 2.f, 1e-3f);
+}
+
+TEST(PathTracer, SamplersAgreeAndPmfsMatchPicks) {
+  // Many lights of different power: all three samplers estimate the same image.
+  solo::RenderScene s;
+  s.camera = camera(8, 6);
+  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.7f);
+  for (int i = 0; i < 40; ++i) {
+    s.emitters.push_back({Eigen::Vector3f::Constant(10.f + 40.f * (i % 5)), i % 2 == 0, i});
+    const float x = -3.f + 0.15f * i, y = (i % 7) - 3.f;
+    addQuad(s, {x, y, 4.5f - 0.05f * (i % 3)}, {0.05f, 0, 0}, {0, 0.05f, 0}, 0.f, i);
+  }
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.min_samples = o.max_samples = 256;
+  o.max_bounces = 1;
+  o.progress = false;
+  double means[3];
+  int k = 0;
+  for (auto kind : {solo::LightSamplerKind::Uniform, solo::LightSamplerKind::Power, solo::LightSamplerKind::Hierarchy}) {
+    o.light_sampler = kind;
+    means[k++] = meanY(solo::renderPathTraced(s, o).radiance);
+  }
+  EXPECT_NEAR(means[1] / means[0], 1.0, 0.03);
+  EXPECT_NEAR(means[2] / means[0], 1.0, 0.03);
+
+  const auto triangles = solo::collectEmissiveTriangles(s);
+  ASSERT_EQ(triangles.size(), 80u);
+  const auto hierarchy = solo::makeLightSampler(solo::LightSamplerKind::Hierarchy, triangles);
+  const Eigen::Vector3f p(0.3f, -0.2f, 5.f), n(0, 0, -1);
+  double total = 0;
+  for (int t = 0; t < 80; ++t) total += hierarchy->pmf(p, n, t);
+  EXPECT_NEAR(total, 1.0, 1e-4);
+  std::vector<int> counts(80, 0);
+  const int draws = 200000;
+  for (int i = 0; i < draws; ++i) {
+    float pmf = 0;
+    const int t = hierarchy->pick(p, n, (i + 0.5f) / draws, &pmf);
+    ASSERT_GE(t, 0);
+    EXPECT_NEAR(pmf, hierarchy->pmf(p, n, t), 1e-5f * std::max(1.f, pmf));
+    ++counts[static_cast<std::size_t>(t)];
+  }
+  for (int t = 0; t < 80; ++t) EXPECT_NEAR(counts[static_cast<std::size_t>(t)] / double(draws), hierarchy->pmf(p, n, t), 2e-3);
+}
+
+TEST(PathTracer, MeanOfLowSampleRendersEqualsAHighSampleRender) {
+  const solo::RenderScene s = furnace(0.6f);
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Disney;
+  o.progress = false;
+  o.min_samples = o.max_samples = 4;
+  double low = 0;
+  for (int seed = 1; seed <= 16; ++seed) {
+    o.seed = static_cast<std::uint64_t>(seed);
+    low += meanY(solo::renderPathTraced(s, o).radiance) / 16;
+  }
+  o.seed = 99;
+  o.min_samples = o.max_samples = 64;
+  const auto high = solo::renderPathTraced(s, o);
+  const double sigma = cv::mean(high.std_error)[0] / std::sqrt(256.0);  // std error of the image mean, roughly
+  EXPECT_NEAR(low, meanY(high.radiance), std::max(8 * sigma, 0.01 * meanY(high.radiance)));
+}
+
+TEST(PathTracer, DeterministicForASeedWhateverTheThreadCount) {
+  const solo::RenderScene s = furnace(0.5f);
+  solo::PathTracerOptions o;
+  o.progress = false;
+  o.min_samples = 8;
+  o.max_samples = 32;
+  cv::Mat one, two;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = solo::renderPathTraced(s, o).radiance;
+  }
+  two = solo::renderPathTraced(s, o).radiance;
+  EXPECT_EQ(cv::norm(one, two, cv::NORM_INF), 0.0);
+  o.seed = 2;
+  EXPECT_GT(cv::norm(one, solo::renderPathTraced(s, o).radiance, cv::NORM_INF), 0.0);
+}
+
+TEST(PathTracer, NoNanOrInfReachesTheImage) {
+  solo::RenderScene s;
+  s.camera = camera(6, 4);
+  addQuad(s, {-5, -5, 3}, {0, 10, 0}, {10, 0, 0}, 0.9f);
+  // A degenerate (zero-area) emitter and an absurdly bright tiny one.
+  s.emitters.push_back({Eigen::Vector3f::Constant(3e38f), false, 1});
+  addQuad(s, {0, 0, 2}, {0, 0, 0}, {0.1f, 0, 0}, 0.f, 0);
+  addQuad(s, {0.2f, 0.2f, 2.5f}, {1e-4f, 0, 0}, {0, 1e-4f, 0}, 0.f, 0);
+  solo::PathTracerOptions o;
+  o.min_samples = o.max_samples = 16;
+  o.progress = false;
+  const auto out = solo::renderPathTraced(s, o);
+  EXPECT_TRUE(cv::checkRange(out.radiance));
+  EXPECT_TRUE(cv::checkRange(out.std_error));
+}
+
+TEST(PathTracer, AdaptiveSamplingStopsEarlyWhereTheImageIsSmooth) {
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.min_samples = 16;
+  o.max_samples = 1024;
+  o.relative_error = 0.05;
+  o.progress = false;
+  const auto out = solo::renderPathTraced(furnace(0.3f), o);
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(out.samples, &lo, &hi);
+  EXPECT_LT(hi, 1024) << "a furnace at 5 % relative error never needs the maximum";
+  // The promise: the estimated standard error is below the target where sampling stopped early.
+  for (int y = 0; y < out.samples.rows; ++y)
+    for (int x = 0; x < out.samples.cols; ++x)
+      if (out.samples.at<int>(y, x) < 1024) {
+        EXPECT_LE(out.std_error.at<float>(y, x), 0.05f * out.radiance.at<cv::Vec3f>(y, x)[1] * 1.0001f);
+      }
+}

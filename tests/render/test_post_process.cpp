@@ -1,0 +1,115 @@
+#include <solo/render/post_process.h>
+
+#include "test_support.h"
+
+#include <cmath>
+#include <limits>
+
+namespace {
+
+solo::PostProcessOptions noiseless() {
+  solo::PostProcessOptions options;
+  options.noise = false;
+  options.glare = false;
+  return options;
+}
+
+const solo::StageReport& step(const solo::PostProcessResult& r, const std::string& name) {
+  for (const auto& s : r.steps)
+    if (s.name == name) return s;
+  throw std::runtime_error("no step " + name);
+}
+
+const double kReferenceScale = std::exp2(3.25);
+
+}  // namespace
+
+TEST(PostProcess, WhiteEAtUnitExposureBecomesSrgbWhiteAndGreyStaysNeutral) {
+  cv::Mat xyz(2, 2, CV_32FC3, cv::Scalar::all(1.0 / kReferenceScale));
+  xyz.at<cv::Vec3f>(1, 1) = cv::Vec3f::all(static_cast<float>(0.18 / kReferenceScale));
+  const solo::PostProcessResult r = solo::postProcess(xyz, noiseless());
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(r.encoded.at<cv::Vec3f>(0, 0)[c], 1.0, 1e-5);
+    EXPECT_NEAR(r.linear_rgb.at<cv::Vec3f>(0, 0)[c], 1.0, 1e-5);
+    EXPECT_NEAR(r.encoded.at<cv::Vec3f>(1, 1)[c], std::pow(0.18, 1 / 2.2), 1e-5);
+  }
+  ASSERT_EQ(r.steps.size(), 6u);
+  const char* order[] = {"input", "glare", "exposure", "noise", "adaptation", "colour"};
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(r.steps[i].name, order[i]);
+  EXPECT_EQ(r.report.name, "post");
+  EXPECT_NE(r.report.find("exposure.stops"), nullptr);
+  EXPECT_NE(r.report.find("adaptation.m00"), nullptr);
+}
+
+TEST(PostProcess, EverySwitchedOffStepSaysSo) {
+  solo::PostProcessOptions options = noiseless();
+  options.exposure = false;
+  options.adaptation = false;
+  const cv::Mat xyz(4, 4, CV_32FC3, cv::Scalar(0.2, 0.2, 0.2));
+  const solo::PostProcessResult r = solo::postProcess(xyz, options);
+  for (const char* name : {"glare", "exposure", "noise", "adaptation"}) {
+    EXPECT_TRUE(step(r, name).skipped) << name;
+    EXPECT_EQ(step(r, name).skip_reason.rfind("switched off", 0), 0u) << name;
+  }
+  EXPECT_EQ(r.report.notes.size(), 4u);
+  // Without adaptation, E white (X = Y = Z) is not neutral in sRGB: red exceeds blue.
+  const cv::Vec3f p = r.linear_rgb.at<cv::Vec3f>(0, 0);
+  EXPECT_GT(p[0], p[2]);
+}
+
+TEST(PostProcess, NonFiniteAndNegativeInputsAreZeroedAndCounted) {
+  cv::Mat xyz(3, 3, CV_32FC3, cv::Scalar::all(0.05));
+  xyz.at<cv::Vec3f>(0, 0) = {std::numeric_limits<float>::quiet_NaN(), 0.05f, 0.05f};
+  xyz.at<cv::Vec3f>(1, 1) = cv::Vec3f::all(std::numeric_limits<float>::infinity());
+  xyz.at<cv::Vec3f>(2, 2) = {-1.f, -1.f, -1.f};
+  xyz.at<cv::Vec3f>(2, 0) = {0.05f, -std::numeric_limits<float>::infinity(), 0.05f};
+  const solo::PostProcessResult r = solo::postProcess(xyz, noiseless());
+  const solo::StageReport& input = step(r, "input");
+  EXPECT_EQ(std::get<std::int64_t>(*input.find("nan_values")), 1);
+  EXPECT_EQ(std::get<std::int64_t>(*input.find("inf_values")), 4);
+  EXPECT_EQ(std::get<std::int64_t>(*input.find("negative_values")), 3);
+  ASSERT_EQ(input.notes.size(), 1u);
+  EXPECT_TRUE(cv::checkRange(r.encoded, true, nullptr, 0.0, 1.0 + 1e-6));
+  EXPECT_EQ(r.encoded.at<cv::Vec3f>(1, 1), cv::Vec3f(0, 0, 0));
+  EXPECT_EQ(r.encoded.at<cv::Vec3f>(2, 2), cv::Vec3f(0, 0, 0));
+  // With glare and noise on, the zeroed pixels do not poison the image either.
+  const solo::PostProcessResult full = solo::postProcess(xyz, solo::PostProcessOptions{});
+  EXPECT_TRUE(cv::checkRange(full.encoded));
+}
+
+TEST(PostProcess, AllBlackImage) {
+  const cv::Mat black = cv::Mat::zeros(32, 48, CV_32FC3);
+  const solo::PostProcessResult quiet = solo::postProcess(black, noiseless());
+  EXPECT_EQ(cv::countNonZero(quiet.encoded.reshape(1)), 0);
+  solo::PostProcessOptions with_glare = noiseless();
+  with_glare.glare = true;
+  const solo::PostProcessResult glare = solo::postProcess(black, with_glare);
+  EXPECT_TRUE(step(glare, "glare").skipped);
+  EXPECT_NE(step(glare, "glare").skip_reason.find("no pixel brighter"), std::string::npos);
+  // Sensor noise at the black level still shows (as in a real night photo), finite and in range.
+  const solo::PostProcessResult noisy = solo::postProcess(black, solo::PostProcessOptions{});
+  EXPECT_TRUE(cv::checkRange(noisy.encoded, true, nullptr, 0.0, 1.0 + 1e-6));
+  EXPECT_GT(cv::mean(noisy.encoded)[1], 0.0);
+}
+
+TEST(PostProcess, TinyVeryBrightSourceBurnsOutWithoutOverflow) {
+  cv::Mat xyz = cv::Mat::zeros(300, 400, CV_32FC3);
+  xyz.at<cv::Vec3f>(150, 200) = cv::Vec3f::all(1e7f);
+  solo::PostProcessOptions options;
+  options.noise = false;
+  const solo::PostProcessResult r = solo::postProcess(xyz, options);
+  EXPECT_TRUE(cv::checkRange(r.encoded, true, nullptr, 0.0, 1.0 + 1e-6));
+  EXPECT_NEAR(r.encoded.at<cv::Vec3f>(150, 200)[1], 1.0, 1e-6);
+  // The glow reaches far: 100 px away the kernel still passes 1e7 * 9.5 * k >> 1.
+  EXPECT_NEAR(r.encoded.at<cv::Vec3f>(150, 300)[1], 1.0, 1e-6);
+  EXPECT_GT(std::get<std::int64_t>(*step(r, "colour").find("over_range_pixels")), 1000);
+  EXPECT_EQ(std::get<std::string>(*step(r, "glare").find("method")), "direct");
+}
+
+TEST(PostProcess, RejectsBadImagesAndOptionsBeforeWorking) {
+  EXPECT_THROW(solo::postProcess(cv::Mat(), {}), std::invalid_argument);
+  EXPECT_THROW(solo::postProcess(cv::Mat::zeros(4, 4, CV_32FC1), {}), std::invalid_argument);
+  solo::PostProcessOptions options;
+  options.noise_options.iso = 12800;
+  EXPECT_THROW(solo::postProcess(cv::Mat::zeros(4, 4, CV_32FC3), options), std::invalid_argument);
+}

@@ -1,0 +1,52 @@
+// `solo depth`: outputs, report, switches and errors.
+
+#include <solo/geometry/image_io.h>
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.h"
+
+using solo::test::runSolo;
+using solo::test::TempDir;
+
+namespace {
+
+const std::string kScene = "\"" + (std::filesystem::path(SOLO_PROJECT_DATA_DIR) / "default" / "scene.json").string() + "\"";
+
+TEST(CliDepth, WritesRefinedDepthNormalsMaskAndReport) {
+  TempDir dir;
+  const auto r = runSolo("depth " + kScene + " -o \"" + (dir / "refined.exr").string() + "\" --report \"" +
+                         (dir / "r.json").string() + "\"");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const cv::Mat depth = solo::readDepth(dir / "refined.exr", 0);
+  EXPECT_EQ(depth.size(), cv::Size(960, 540)) << "the image resolution, not the estimate's";
+  const cv::Mat normals = solo::readNormals(dir / "refined.normals.exr");
+  EXPECT_EQ(normals.size(), depth.size());
+  const cv::Mat mask = solo::readLabels(dir / "refined.uncertain.png");
+  EXPECT_GT(cv::countNonZero(mask), 0);
+  const auto j = nlohmann::json::parse(solo::test::readText(dir / "r.json"));
+  EXPECT_EQ(j["command"], "depth");
+  std::vector<std::string> names;
+  for (const auto& stage : j["stages"]) names.push_back(stage["name"]);
+  EXPECT_EQ(names, (std::vector<std::string>{"input", "upsample", "filter", "uncertain", "optimize", "refine"}));
+  EXPECT_EQ(j["stages"][5]["metrics"]["uncertain_pixels"], cv::countNonZero(mask));
+}
+
+TEST(CliDepth, SwitchedOffStepsAreReportedAsSkipped) {
+  TempDir dir;
+  const auto r = runSolo("depth " + kScene + " -o \"" + (dir / "d.pfm").string() + "\" --no-optimize --no-uncertain");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(solo::test::readText(dir / "d.report.json"));
+  EXPECT_TRUE(j["stages"][3]["skipped"].get<bool>());
+  EXPECT_EQ(j["stages"][4]["skip_reason"], "switched off");
+}
+
+TEST(CliDepth, AMissingSceneIsAnErrorNamingItAndWritesNothing) {
+  TempDir dir;
+  const auto r = runSolo("depth \"" + (dir / "none.json").string() + "\" -o \"" + (dir / "out.exr").string() + "\"");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("none.json"), std::string::npos) << r.output;
+  EXPECT_TRUE(solo::test::listFolder(dir.path()).empty());
+}
+
+}  // namespace

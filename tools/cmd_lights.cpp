@@ -1,0 +1,66 @@
+#include "commands.h"
+
+#include <solo/geometry/error.h>
+#include <solo/geometry/image_io.h>
+#include <solo/geometry/report.h>
+#include <solo/geometry/scene.h>
+#include <solo/lighting/light_overlay.h>
+#include <solo/lighting/light_record.h>
+#include <solo/lighting/light_stage.h>
+
+#include <iostream>
+
+namespace fs = std::filesystem;
+
+namespace solo::tools {
+
+fs::path defaultIlluminantTable() { return dataDirectory() / "illuminants" / "night_illuminants.csv"; }
+
+int runLights(const LightsOptions& options) {
+  Stopwatch total;
+  const fs::path scene_file = options.scene ? *options.scene : defaultScene();
+  RunReport report;
+  report.command = "lights";
+  report.scene = scene_file.string();
+  report.seed = options.seed;
+  report.versions = dependencyVersions();
+
+  const Scene scene = loadScene(scene_file);
+  LightRecord record;
+  if (options.from_record) {
+    // An edited record: validate it against the scene and write it back normalised.
+    Stopwatch clock;
+    record = readLightRecord(*options.from_record);
+    if (record.tree.width != scene.width() || record.tree.height != scene.height())
+      throw InputError(*options.from_record, "made for a " + std::to_string(record.tree.width) + "x" +
+                                                 std::to_string(record.tree.height) + " image, the scene is " +
+                                                 std::to_string(scene.width()) + "x" + std::to_string(scene.height()));
+    StageReport stage;
+    stage.name = "lights";
+    stage.seconds = clock.seconds();
+    std::int64_t on = 0;
+    for (const LightState& s : record.instantiation.lights) on += s.on;
+    stage.add("lights", static_cast<std::int64_t>(record.tree.lights.size())).add("lights_on", on);
+    stage.notes.push_back("lights read from " + options.from_record->string() + " (no sampling)");
+    report.stages.push_back(stage);
+  } else {
+    LightStageOptions stage_options;
+    stage_options.instantiation.seed = options.seed;
+    stage_options.instantiation.ablation = options.ablation;
+    stage_options.instantiation.ablation_luminance_cd_m2 = options.ablation_luminance_cd_m2;
+    stage_options.illuminant_table = options.table ? *options.table : defaultIlluminantTable();
+    LightStageResult result = runLightStage(scene, cv::Mat(), stage_options);
+    record = std::move(result.record);
+    report.stages.push_back(std::move(result.report));
+  }
+
+  writeLightRecord(options.output, record);
+  if (options.overlay) writeImage(*options.overlay, drawLightOverlay(scene.image, record.tree, record.instantiation.lights));
+  report.total_seconds = total.seconds();
+  if (options.report) writeReportJson(*options.report, report);
+  std::cout << reportSummary(report) << "lights: " << options.output.string() << "\n";
+  if (options.overlay) std::cout << "overlay: " << options.overlay->string() << "\n";
+  return 0;
+}
+
+}  // namespace solo::tools

@@ -1,0 +1,110 @@
+// solo mesh from-depth / solo mesh clean: the mesh stage on its own (docs/mesh.md).
+
+#include "commands.h"
+
+#include <solo/geometry/depth_mesh.h>
+#include <solo/geometry/error.h>
+#include <solo/geometry/image_io.h>
+#include <solo/geometry/mesh_cleanup.h>
+#include <solo/geometry/report.h>
+#include <solo/geometry/scene.h>
+#include <solo/geometry/triangle_mesh.h>
+
+#include <cstdio>
+#include <iostream>
+#include <variant>
+
+namespace fs = std::filesystem;
+
+namespace solo::tools {
+namespace {
+
+std::string formatMetric(const Metric& m) {
+  char buffer[64];
+  if (const auto* d = std::get_if<double>(&m.value)) std::snprintf(buffer, sizeof buffer, "%.6g", *d);
+  else if (const auto* i = std::get_if<std::int64_t>(&m.value)) std::snprintf(buffer, sizeof buffer, "%lld", static_cast<long long>(*i));
+  else if (const auto* b = std::get_if<bool>(&m.value)) std::snprintf(buffer, sizeof buffer, "%s", *b ? "yes" : "no");
+  else return std::get<std::string>(m.value);
+  return buffer;
+}
+
+/// The readable summary: every metric on its own line, then the notes.
+void printStage(const StageReport& stage) {
+  std::cout << "solo " << stage.name << "\n";
+  if (stage.skipped) std::cout << "  skipped: " << stage.skip_reason << "\n";
+  for (const Metric& m : stage.metrics) {
+    char line[160];
+    std::snprintf(line, sizeof line, "  %-38s %s%s%s\n", m.name.c_str(), formatMetric(m).c_str(),
+                  m.unit.empty() ? "" : " ", m.unit.c_str());
+    std::cout << line;
+  }
+  for (const std::string& n : stage.notes) std::cout << "  note: " << n << "\n";
+  std::printf("  %-38s %.3f s\n", "total time", stage.seconds);
+  std::cout.flush();
+}
+
+void writeReport(const std::optional<fs::path>& file, const std::string& command, const std::string& input,
+                 const StageReport& stage) {
+  if (!file) return;
+  RunReport report;
+  report.command = command;
+  report.scene = input;
+  report.versions = dependencyVersions();
+  report.stages.push_back(stage);
+  report.total_seconds = stage.seconds;
+  writeReportJson(*file, report);
+}
+
+}  // namespace
+
+int runMeshFromDepth(const MeshFromDepthOptions& options) {
+  const Scene scene = loadScene(options.scene);
+  cv::Mat uncertain;
+  if (options.uncertain) {
+    uncertain = readLabels(*options.uncertain);
+    uncertain.convertTo(uncertain, CV_8U);
+  }
+  cv::Mat true_depth, true_normals;
+  if (options.truth) {
+    const Scene truth = loadScene(*options.truth);
+    if (truth.depth_m.size() != scene.depth_m.size())
+      throw InputError(*options.truth, "ground-truth depth is " + std::to_string(truth.depth_m.cols) + "x" +
+                                           std::to_string(truth.depth_m.rows) + ", the scene's depth " +
+                                           std::to_string(scene.depth_m.cols) + "x" + std::to_string(scene.depth_m.rows));
+    if (truth.normals.empty()) throw InputError(*options.truth, "ground truth has no normals");
+    true_depth = truth.depth_m;
+    true_normals = truth.normals;
+  }
+  DepthMeshCleanupOptions cleanup;
+  cleanup.close_solids = !options.no_solids;
+  cleanup.evaluate = !options.no_evaluation;
+  StageReport stage;
+  DepthMesh mesh = meshFromScene(scene.depth_m, scene.camera, scene.instances, uncertain, cleanup, stage, true_depth,
+                                 true_normals);
+  const Stopwatch clock;
+  writeMesh(options.output, toTriangleMesh(mesh.mesh));
+  stage.add("seconds_write", clock.seconds(), "s");
+  stage.seconds += clock.seconds();
+  printStage(stage);
+  writeReport(options.report, "mesh from-depth", options.scene.string(), stage);
+  return 0;
+}
+
+int runMeshClean(const MeshCleanOptions& options) {
+  Stopwatch clock;
+  const TriangleMesh input = readMesh(options.input);
+  const double read_seconds = clock.seconds();
+  StageReport stage;
+  const TriangleMesh output = cleanMesh(input, MeshCleanupOptions{}, stage, options.input);
+  stage.metrics.insert(stage.metrics.begin(), Metric{"seconds_read", read_seconds, "s"});
+  clock = Stopwatch();
+  if (output.faces.empty()) throw InputError(options.input, "the mesh has no face: nothing to write");
+  writeMesh(options.output, output);
+  stage.add("seconds_write", clock.seconds(), "s");
+  stage.seconds += read_seconds + clock.seconds();
+  printStage(stage);
+  writeReport(options.report, "mesh clean", options.input.string(), stage);
+  return 0;
+}
+
+}  // namespace solo::tools

@@ -1,0 +1,182 @@
+// `solo post`: the camera-like post-process applied to a linear XYZ render (white point E),
+// and `solo fda`: the Fourier domain adaptation baseline on two photos.
+
+#include "commands.h"
+
+#include <solo/geometry/error.h>
+#include <solo/geometry/image_io.h>
+#include <solo/geometry/report.h>
+#include <solo/render/colour_encoding.h>
+#include <solo/render/fda.h>
+#include <solo/render/post_process.h>
+
+#include <algorithm>
+#include <cctype>
+#include <iostream>
+#include <stdexcept>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace solo::tools {
+namespace {
+
+std::string lowerExtension(const fs::path& file) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+/// A 3-channel CV_32F image from any file readImageRaw reads: alpha dropped, integer files
+/// divided by their largest code.
+cv::Mat readThreeChannels(const fs::path& file, StageReport* report) {
+  ImageFileInfo info;
+  cv::Mat raw = readImageRaw(file, &info);
+  if (raw.channels() != 3 && raw.channels() != 4)
+    throw InputError(file, "expected 3 channels (X, Y, Z) or 4 with alpha, found " + std::to_string(raw.channels()));
+  if (raw.channels() == 4) {
+    std::vector<cv::Mat> planes;
+    cv::split(raw, planes);
+    planes.pop_back();
+    cv::merge(planes, raw);
+  }
+  double max_code = 0;
+  if (info.pixel_type == "uint8") max_code = 255;
+  if (info.pixel_type == "uint16") max_code = 65535;
+  if (max_code > 0) {
+    raw /= max_code;
+    if (report)
+      report->notes.push_back(file.string() + " holds " + info.pixel_type +
+                              " codes: divided by " + std::to_string(static_cast<int>(max_code)) +
+                              " (an integer file cannot hold values above its white)");
+  }
+  return raw;
+}
+
+/// Writes the result by extension: .png/.tif 8-bit (16-bit on request) of the encoded
+/// image, .jpg 8-bit, .exr float linear sRGB.
+void writeOutput(const fs::path& file, const cv::Mat& encoded, const cv::Mat& linear_rgb, bool sixteen_bit) {
+  const std::string ext = lowerExtension(file);
+  if (ext == ".exr") {
+    writeImage(file, linear_rgb);
+  } else if (ext == ".png" || ext == ".tif" || ext == ".tiff") {
+    writeImage(file, quantiseEncoded(encoded, sixteen_bit ? 16 : 8));
+  } else if (ext == ".jpg" || ext == ".jpeg") {
+    if (sixteen_bit) throw InputError(file, "JPEG holds 8 bits only: use .png or .tif for --16bit");
+    writeImage(file, quantiseEncoded(encoded, 8));
+  } else {
+    throw InputError(file, "unsupported output format \"" + ext + "\" (use .png, .tif, .jpg or .exr)");
+  }
+}
+
+}  // namespace
+
+void writePostOutput(const fs::path& file, const cv::Mat& encoded, const cv::Mat& linear_rgb, bool sixteen_bit) {
+  writeOutput(file, encoded, linear_rgb, sixteen_bit);
+}
+
+int runPost(const PostOptions& o) {
+  Stopwatch total;
+  PostProcessOptions options;
+  options.glare = !o.no_glare;
+  options.glare_options.size = o.glare_size;
+  options.glare_options.threshold = o.glare_threshold;
+  if (o.glare_method == "auto") options.glare_options.method = GlareMethod::Automatic;
+  else if (o.glare_method == "direct") options.glare_options.method = GlareMethod::Direct;
+  else if (o.glare_method == "fft") options.glare_options.method = GlareMethod::Fft;
+  else if (o.glare_method == "tiled") options.glare_options.method = GlareMethod::TiledFft;
+  else throw InputError("--glare-method", "expected auto, direct, fft or tiled, got \"" + o.glare_method + "\"");
+  if (!(o.glare_threshold >= 0)) throw InputError("--glare-threshold", "must be 0 or more");
+  if (o.glare_size < 2 || o.glare_size > 11) throw InputError("--glare-size", "must be between 2 and 11");
+
+  options.exposure_options.stops = o.stops;
+  if (o.shutter_s || o.f_number) {
+    CameraExposure camera;
+    camera.iso = o.iso;
+    if (o.shutter_s) camera.shutter_s = *o.shutter_s;
+    if (o.f_number) camera.f_number = *o.f_number;
+    if (!(camera.shutter_s > 0)) throw InputError("--shutter", "must be a positive time in seconds");
+    if (!(camera.f_number > 0)) throw InputError("--f-number", "must be positive");
+    options.exposure_options.camera = camera;
+  }
+  options.noise = !o.no_noise;
+  options.noise_options.iso = o.iso;
+  options.noise_options.std_scale = o.noise_scale;
+  options.noise_options.seed = o.seed;
+  try {
+    noiseCalibrationAtIso(o.iso);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("--iso", e.what());
+  }
+  if (!(o.noise_scale >= 0)) throw InputError("--noise-scale", "must be 0 or more");
+  options.adaptation = !o.no_adaptation;
+  if (o.curve == "gamma2.2") options.encoding_options.curve = TransferCurve::Gamma22;
+  else if (o.curve == "srgb") options.encoding_options.curve = TransferCurve::Srgb;
+  else if (o.curve == "linear") options.encoding_options.curve = TransferCurve::Linear;
+  else throw InputError("--curve", "expected gamma2.2, srgb or linear, got \"" + o.curve + "\"");
+  if (o.negatives == "desaturate") options.encoding_options.negatives = NegativeHandling::Desaturate;
+  else if (o.negatives == "clip") options.encoding_options.negatives = NegativeHandling::Clip;
+  else throw InputError("--negatives", "expected desaturate or clip, got \"" + o.negatives + "\"");
+
+  RunReport report;
+  report.command = "post";
+  report.seed = o.seed;
+  report.scene = o.input.string();
+  report.versions = dependencyVersions();
+  StageReport read;
+  read.name = "read";
+  Stopwatch clock;
+  const cv::Mat xyz = readThreeChannels(o.input, &read);
+  read.seconds = clock.seconds();
+  read.add("width", static_cast<std::int64_t>(xyz.cols), "px");
+  read.add("height", static_cast<std::int64_t>(xyz.rows), "px");
+  report.stages.push_back(read);
+
+  PostProcessResult result = postProcess(xyz, options);
+  for (StageReport& step : result.steps) report.stages.push_back(std::move(step));
+
+  clock = Stopwatch();
+  writeOutput(o.output, result.encoded, result.linear_rgb, o.sixteen_bit);
+  StageReport write;
+  write.name = "write";
+  write.seconds = clock.seconds();
+  write.add("file", o.output.string());
+  write.add("content", std::string(lowerExtension(o.output) == ".exr" ? "linear sRGB, float"
+                                   : o.sixteen_bit                     ? "encoded sRGB, 16 bit"
+                                                                       : "encoded sRGB, 8 bit"));
+  report.stages.push_back(write);
+  report.total_seconds = total.seconds();
+  if (o.report) writeReportJson(*o.report, report);
+  std::cout << reportSummary(report) << "wrote " << o.output.string() << "\n";
+  return 0;
+}
+
+int runFda(const FdaCommandOptions& o) {
+  Stopwatch total;
+  if (!(o.beta >= 0 && o.beta <= 1)) throw InputError("--beta", "must be in [0, 1]");
+  RunReport report;
+  report.command = "fda";
+  report.scene = o.source.string();
+  report.versions = dependencyVersions();
+  const cv::Mat source = readColorImage(o.source);
+  const cv::Mat target = readColorImage(o.target);
+  FdaOptions options;
+  options.beta = o.beta;
+  FdaResult result = fourierDomainAdaptation(source, target, options);
+  const std::string ext = lowerExtension(o.output);
+  if (ext == ".exr") {
+    writeImage(o.output, result.image);  // unclamped, as encoded in the inputs
+  } else {
+    if (ext != ".png" && ext != ".tif" && ext != ".tiff" && ext != ".jpg" && ext != ".jpeg")
+      throw InputError(o.output, "unsupported output format \"" + ext + "\" (use .png, .tif, .jpg or .exr)");
+    cv::Mat clamped = cv::max(cv::min(result.image, 1.0), 0.0);
+    writeImage(o.output, quantiseEncoded(clamped, o.sixteen_bit && ext != ".jpg" && ext != ".jpeg" ? 16 : 8));
+  }
+  report.stages.push_back(std::move(result.report));
+  report.total_seconds = total.seconds();
+  if (o.report) writeReportJson(*o.report, report);
+  std::cout << reportSummary(report) << "wrote " << o.output.string() << "\n";
+  return 0;
+}
+
+}  // namespace solo::tools
