@@ -1,22 +1,29 @@
-// `solo eval depth|normals|mesh`: reads the inputs, computes the metrics (solo_geometry) and
+// `solo eval depth|normals|mesh|scene`: reads the inputs, computes the metrics (solo_geometry) and
 // writes one record three ways: a table on the terminal, JSON on stdout (--json), and a row
 // appended to a CSV file (--csv). Every record of a command has the same fields in the same
 // order, so rows of a sweep line up under one header.
 
 #include "commands.h"
 
+#include <solo/geometry/depth_mesh.h>
 #include <solo/geometry/depth_metrics.h>
 #include <solo/geometry/error.h>
 #include <solo/geometry/image_io.h>
 #include <solo/geometry/mesh_metrics.h>
 #include <solo/geometry/normal_metrics.h>
 #include <solo/geometry/report.h>
+#include <solo/geometry/scene.h>
+#include <solo/geometry/spurious_faces.h>
 #include <solo/geometry/triangle_mesh.h>
+#include <solo/geometry/upsample_maps.h>
+
+#include <opencv2/imgproc.hpp>
 
 #include <nlohmann/json.hpp>
 
 #include <fcntl.h>
 #include <unistd.h>
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cstdio>
@@ -97,11 +104,14 @@ std::string tableValue(const FieldValue& v) {
 
 std::string recordToTable(const EvalRecord& r) {
   std::string out = "solo " + r.command + "\n";
-  const auto add_rows = [&out](const std::vector<Field>& fields, bool skip_missing) {
+  int width = 30;  // labels are padded to the longest one
+  for (const std::vector<Field>* fields : {&r.inputs, &r.options, &r.metrics})
+    for (const Field& f : *fields) width = std::max(width, static_cast<int>(f.label.size()));
+  const auto add_rows = [&out, width](const std::vector<Field>& fields, bool skip_missing) {
     for (const Field& f : fields) {
       if (skip_missing && std::holds_alternative<std::monostate>(f.value)) continue;
-      char label[64];
-      std::snprintf(label, sizeof label, "  %-30s ", f.label.c_str());
+      char label[128];
+      std::snprintf(label, sizeof label, "  %-*s ", width, f.label.c_str());
       const bool has_unit = !f.unit.empty() && !std::holds_alternative<std::monostate>(f.value);
       out += label + tableValue(f.value) + (has_unit ? " " + f.unit : "") + "\n";
     }
@@ -111,7 +121,7 @@ std::string recordToTable(const EvalRecord& r) {
   out += "  ----\n";
   add_rows(r.metrics, true);
   char time[64];
-  std::snprintf(time, sizeof time, "  %-30s %.3f s\n", "time", r.seconds);
+  std::snprintf(time, sizeof time, "  %-*s %.3f s\n", width, "time", r.seconds);
   return out + time;
 }
 
@@ -180,115 +190,68 @@ int emit(const EvalRecord& r, const EvalOutputOptions& output) {
 
 cv::Mat readMask(const std::optional<fs::path>& mask) { return mask ? readLabels(*mask) : cv::Mat(); }
 
-}  // namespace
-
-int runEvalDepth(const EvalDepthOptions& o) {
-  Stopwatch clock;
-  DepthEvaluationInput input;
-  input.prediction_m = readDepth(o.prediction, o.prediction_scale_m_per_unit);
-  input.ground_truth_m = readDepth(o.ground_truth, o.ground_truth_scale_m_per_unit);
-  input.mask = readMask(o.mask);
-  input.prediction_file = o.prediction;
-  input.ground_truth_file = o.ground_truth;
-  if (o.mask) input.mask_file = *o.mask;
-  DepthMetricsOptions options;
-  options.min_depth_m = o.min_depth_m;
-  options.max_depth_m = o.max_depth_m;
-  options.median_scaling = o.median_scaling;
-  options.clamp_prediction = o.clamp_prediction;
-  const DepthMetrics m = evaluateDepth(input, options);
-
-  EvalRecord r;
-  r.command = "eval depth";
-  r.inputs = {{"prediction", "prediction", o.prediction.string(), ""},
-              {"ground_truth", "ground truth", o.ground_truth.string(), ""},
-              {"mask", "mask", optionalPath(o.mask), ""}};
-  r.options = {
-      {"min_depth_m", "min depth (gt >)", optionalNumber(o.min_depth_m), "m"},
-      {"max_depth_m", "max depth (gt <)", optionalNumber(o.max_depth_m), "m"},
-      {"median_scaling", "median scaling", o.median_scaling, ""},
-      {"clamp_prediction", "clamp prediction", o.clamp_prediction, ""},
-      {"prediction_scale_m_per_unit", "prediction file scale", scaleOption(o.prediction_scale_m_per_unit), "m/unit"},
-      {"ground_truth_scale_m_per_unit", "ground-truth file scale", scaleOption(o.ground_truth_scale_m_per_unit),
-       "m/unit"}};
-  r.metrics = {{"pixels", "pixels", m.pixels, ""},
-               {"masked_out", "  masked out", m.masked_out, ""},
-               {"ground_truth_invalid", "  no ground truth", m.ground_truth_invalid, ""},
-               {"outside_range", "  gt outside depth range", m.outside_range, ""},
-               {"prediction_invalid", "  no prediction", m.prediction_invalid, ""},
-               {"valid_pixels", "  valid (evaluated)", m.valid_pixels, ""},
-               {"scale", "scale applied to prediction", m.scale, ""},
-               {"abs_rel", "AbsRel", m.abs_rel, ""},
-               {"sq_rel_m", "SqRel", m.sq_rel_m, "m"},
-               {"rmse_m", "RMSE", m.rmse_m, "m"},
-               {"rmse_log", "RMSElog", m.rmse_log, ""},
-               {"delta1", "delta < 1.25", m.delta1, ""},
-               {"delta2", "delta < 1.25^2", m.delta2, ""},
-               {"delta3", "delta < 1.25^3", m.delta3, ""}};
-  r.seconds = clock.seconds();
-  return emit(r, o.output);
+/// A record of several maps' metrics prefixes keys ("est_depth_") and table labels.
+Field prefixed(const std::string& key_prefix, const std::string& label_prefix, Field f) {
+  f.key = key_prefix + f.key;
+  const std::size_t indent = f.label.find_first_not_of(' ');  // sub-rows stay indented
+  f.label = f.label.substr(0, indent) + label_prefix + f.label.substr(indent);
+  return f;
 }
 
-int runEvalNormals(const EvalNormalsOptions& o) {
-  Stopwatch clock;
-  NormalEvaluationInput input;
-  input.prediction = readNormals(o.prediction);
-  input.ground_truth = readNormals(o.ground_truth);
-  input.mask = readMask(o.mask);
-  input.prediction_file = o.prediction;
-  input.ground_truth_file = o.ground_truth;
-  if (o.mask) input.mask_file = *o.mask;
-  const NormalMetrics m = evaluateNormals(input);
+/// The fields of one depth evaluation; without `accounting`, only the scale and the metrics.
+std::vector<Field> depthFields(const DepthMetrics& m, const std::string& key_prefix, const std::string& label_prefix,
+                               bool accounting) {
+  std::vector<Field> fields;
+  if (accounting)
+    fields = {{"pixels", "pixels", m.pixels, ""},
+              {"masked_out", "  masked out", m.masked_out, ""},
+              {"ground_truth_invalid", "  no ground truth", m.ground_truth_invalid, ""},
+              {"outside_range", "  gt outside depth range", m.outside_range, ""},
+              {"prediction_invalid", "  no prediction", m.prediction_invalid, ""},
+              {"valid_pixels", "  valid (evaluated)", m.valid_pixels, ""}};
+  const std::vector<Field> metrics = {{"scale", "scale applied to prediction", m.scale, ""},
+                                      {"abs_rel", "AbsRel", m.abs_rel, ""},
+                                      {"sq_rel_m", "SqRel", m.sq_rel_m, "m"},
+                                      {"rmse_m", "RMSE", m.rmse_m, "m"},
+                                      {"rmse_log", "RMSElog", m.rmse_log, ""},
+                                      {"delta1", "delta < 1.25", m.delta1, ""},
+                                      {"delta2", "delta < 1.25^2", m.delta2, ""},
+                                      {"delta3", "delta < 1.25^3", m.delta3, ""}};
+  fields.insert(fields.end(), metrics.begin(), metrics.end());
+  for (Field& f : fields) f = prefixed(key_prefix, label_prefix, f);
+  return fields;
+}
 
-  EvalRecord r;
-  r.command = "eval normals";
-  r.inputs = {{"prediction", "prediction", o.prediction.string(), ""},
-              {"ground_truth", "ground truth", o.ground_truth.string(), ""},
-              {"mask", "mask", optionalPath(o.mask), ""}};
-  r.metrics = {{"pixels", "pixels", m.pixels, ""},
-               {"masked_out", "  masked out", m.masked_out, ""},
-               {"ground_truth_invalid", "  no ground truth", m.ground_truth_invalid, ""},
-               {"prediction_invalid", "  no prediction", m.prediction_invalid, ""},
-               {"valid_pixels", "  valid (evaluated)", m.valid_pixels, ""},
-               {"mean_deg", "mean angle", m.mean_deg, "deg"},
-               {"median_deg", "median angle", m.median_deg, "deg"},
-               {"rmse_deg", "RMSE angle", m.rmse_deg, "deg"}};
+std::vector<Field> normalFields(const NormalMetrics& m, const std::string& key_prefix,
+                                const std::string& label_prefix) {
+  std::vector<Field> fields = {{"pixels", "pixels", m.pixels, ""},
+                               {"masked_out", "  masked out", m.masked_out, ""},
+                               {"ground_truth_invalid", "  no ground truth", m.ground_truth_invalid, ""},
+                               {"prediction_invalid", "  no prediction", m.prediction_invalid, ""},
+                               {"valid_pixels", "  valid (evaluated)", m.valid_pixels, ""},
+                               {"mean_deg", "mean angle", m.mean_deg, "deg"},
+                               {"median_deg", "median angle", m.median_deg, "deg"},
+                               {"rmse_deg", "RMSE angle", m.rmse_deg, "deg"}};
   const char* const threshold_keys[] = {"under_5_deg", "under_7_5_deg", "under_11_25_deg", "under_22_5_deg",
                                         "under_30_deg"};
   const char* const threshold_labels[] = {"share < 5 deg", "share < 7.5 deg", "share < 11.25 deg", "share < 22.5 deg",
                                           "share < 30 deg"};
   for (std::size_t t = 0; t < kNormalAngleThresholdsDeg.size(); ++t)
-    r.metrics.push_back({threshold_keys[t], threshold_labels[t], m.share_under[t], ""});
-  r.seconds = clock.seconds();
-  return emit(r, o.output);
+    fields.push_back({threshold_keys[t], threshold_labels[t], m.share_under[t], ""});
+  for (Field& f : fields) f = prefixed(key_prefix, label_prefix, f);
+  return fields;
 }
 
-int runEvalMesh(const EvalMeshOptions& o) {
-  Stopwatch clock;
-  MeshReadStats read_stats;
-  const TriangleMesh mesh = readMesh(o.mesh, &read_stats);
-  const MeshMetrics m = evaluateMesh(mesh);
-  std::optional<MeshDistances> d;
-  if (o.reference) {
-    const TriangleMesh reference = readMesh(*o.reference);
-    MeshDistanceOptions options;
-    options.samples = o.samples;
-    options.seed = o.seed;
-    d = measureMeshDistances(mesh, reference, options, o.mesh, *o.reference);
-  }
+std::vector<Field> meshFields(const MeshMetrics& m, const MeshReadStats& read_stats,
+                              const std::optional<MeshDistances>& d, const std::string& key_prefix,
+                              const std::string& label_prefix) {
   const auto quality = [&m](double TriangleQuality::*field) {
     return m.quality ? FieldValue((*m.quality).*field) : FieldValue(std::monostate{});
   };
   const auto distance = [&d](auto MeshDistances::*field) {
     return d ? FieldValue((*d).*field) : FieldValue(std::monostate{});
   };
-
-  EvalRecord r;
-  r.command = "eval mesh";
-  r.inputs = {{"mesh", "mesh", o.mesh.string(), ""}, {"reference", "reference", optionalPath(o.reference), ""}};
-  r.options = {{"samples", "samples per direction", o.samples, ""},
-               {"seed", "seed", static_cast<std::int64_t>(o.seed), ""}};
-  r.metrics = {
+  std::vector<Field> fields = {
       {"vertices", "vertices", m.vertices, ""},
       {"faces", "faces (triangles)", m.faces, ""},
       {"polygons_triangulated", "  polygons fan-split on read", read_stats.polygons_triangulated, ""},
@@ -321,6 +284,342 @@ int runEvalMesh(const EvalMeshOptions& o) {
       {"ref_bbox_diagonal", "ref bounding-box diagonal", distance(&MeshDistances::reference_bbox_diagonal), ""},
       {"mesh_vertices_checked", "mesh vertices checked", distance(&MeshDistances::mesh_vertices_checked), ""},
       {"ref_vertices_checked", "ref vertices checked", distance(&MeshDistances::reference_vertices_checked), ""}};
+  for (Field& f : fields) f = prefixed(key_prefix, label_prefix, f);
+  return fields;
+}
+
+/// The same fields without values: a part of a record that did not run keeps its columns.
+std::vector<Field> blanked(std::vector<Field> fields) {
+  for (Field& f : fields) f.value = std::monostate{};
+  return fields;
+}
+
+}  // namespace
+
+int runEvalDepth(const EvalDepthOptions& o) {
+  Stopwatch clock;
+  DepthEvaluationInput input;
+  input.prediction_m = readDepth(o.prediction, o.prediction_scale_m_per_unit);
+  input.ground_truth_m = readDepth(o.ground_truth, o.ground_truth_scale_m_per_unit);
+  input.mask = readMask(o.mask);
+  input.prediction_file = o.prediction;
+  input.ground_truth_file = o.ground_truth;
+  if (o.mask) input.mask_file = *o.mask;
+  DepthMetricsOptions options;
+  options.min_depth_m = o.min_depth_m;
+  options.max_depth_m = o.max_depth_m;
+  options.median_scaling = o.median_scaling;
+  options.clamp_prediction = o.clamp_prediction;
+  const DepthMetrics m = evaluateDepth(input, options);
+
+  EvalRecord r;
+  r.command = "eval depth";
+  r.inputs = {{"prediction", "prediction", o.prediction.string(), ""},
+              {"ground_truth", "ground truth", o.ground_truth.string(), ""},
+              {"mask", "mask", optionalPath(o.mask), ""}};
+  r.options = {
+      {"min_depth_m", "min depth (gt >)", optionalNumber(o.min_depth_m), "m"},
+      {"max_depth_m", "max depth (gt <)", optionalNumber(o.max_depth_m), "m"},
+      {"median_scaling", "median scaling", o.median_scaling, ""},
+      {"clamp_prediction", "clamp prediction", o.clamp_prediction, ""},
+      {"prediction_scale_m_per_unit", "prediction file scale", scaleOption(o.prediction_scale_m_per_unit), "m/unit"},
+      {"ground_truth_scale_m_per_unit", "ground-truth file scale", scaleOption(o.ground_truth_scale_m_per_unit),
+       "m/unit"}};
+  r.metrics = depthFields(m, "", "", true);
+  r.seconds = clock.seconds();
+  return emit(r, o.output);
+}
+
+int runEvalNormals(const EvalNormalsOptions& o) {
+  Stopwatch clock;
+  NormalEvaluationInput input;
+  input.prediction = readNormals(o.prediction);
+  input.ground_truth = readNormals(o.ground_truth);
+  input.mask = readMask(o.mask);
+  input.prediction_file = o.prediction;
+  input.ground_truth_file = o.ground_truth;
+  if (o.mask) input.mask_file = *o.mask;
+  const NormalMetrics m = evaluateNormals(input);
+
+  EvalRecord r;
+  r.command = "eval normals";
+  r.inputs = {{"prediction", "prediction", o.prediction.string(), ""},
+              {"ground_truth", "ground truth", o.ground_truth.string(), ""},
+              {"mask", "mask", optionalPath(o.mask), ""}};
+  r.metrics = normalFields(m, "", "");
+  r.seconds = clock.seconds();
+  return emit(r, o.output);
+}
+
+int runEvalMesh(const EvalMeshOptions& o) {
+  Stopwatch clock;
+  MeshReadStats read_stats;
+  const TriangleMesh mesh = readMesh(o.mesh, &read_stats);
+  const MeshMetrics m = evaluateMesh(mesh);
+  std::optional<MeshDistances> d;
+  if (o.reference) {
+    const TriangleMesh reference = readMesh(*o.reference);
+    MeshDistanceOptions options;
+    options.samples = o.samples;
+    options.seed = o.seed;
+    d = measureMeshDistances(mesh, reference, options, o.mesh, *o.reference);
+  }
+  EvalRecord r;
+  r.command = "eval mesh";
+  r.inputs = {{"mesh", "mesh", o.mesh.string(), ""}, {"reference", "reference", optionalPath(o.reference), ""}};
+  r.options = {{"samples", "samples per direction", o.samples, ""},
+               {"seed", "seed", static_cast<std::int64_t>(o.seed), ""}};
+  r.metrics = meshFields(m, read_stats, d, "", "");
+  r.seconds = clock.seconds();
+  return emit(r, o.output);
+}
+
+
+namespace {
+
+/// The "ground_truth" entry of a scene manifest, resolved against the manifest's folder.
+fs::path groundTruthManifest(const fs::path& manifest) {
+  std::ifstream in(manifest);
+  if (!in) throw InputError(manifest, "cannot be read");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(manifest, std::string("not valid JSON: ") + e.what());
+  }
+  if (!j.is_object() || !j.contains("ground_truth"))
+    throw InputError(manifest, "has no \"ground_truth\" entry: not a synthetic scene (`solo synth` writes one)");
+  const nlohmann::json& v = j.at("ground_truth");
+  if (!v.is_string() || v.get<std::string>().empty())
+    throw InputError(manifest, "\"ground_truth\" must be a non-empty path string");
+  const fs::path p(v.get<std::string>());
+  return p.is_absolute() ? p : manifest.parent_path() / p;
+}
+
+/// <folder>/<stem>.<what><extension>: the files `solo depth` writes beside its output.
+fs::path besideOutput(const fs::path& output, const std::string& what, const std::string& extension) {
+  return output.parent_path() / (output.stem().string() + "." + what + extension);
+}
+
+/// A file given by flag (it must exist: the reader says so otherwise), or the default when it
+/// exists; none with `reason` set otherwise.
+std::optional<fs::path> locate(const std::optional<fs::path>& given, const fs::path& fallback,
+                               const std::string& how_to_make_it, std::string& reason) {
+  if (given) return given;
+  std::error_code ec;
+  if (fs::exists(fallback, ec)) return fallback;
+  reason = fallback.string() + " not found (" + how_to_make_it + ")";
+  return std::nullopt;
+}
+
+/// A map of the image's size: as is, or resized by nearest neighbour (label maps).
+cv::Mat nearestTo(const cv::Mat& map, cv::Size size) {
+  if (map.empty() || map.size() == size) return map;
+  cv::Mat out;
+  cv::resize(map, out, size, 0, 0, cv::INTER_NEAREST);
+  return out;
+}
+
+void append(std::vector<Field>& to, const std::vector<Field>& fields) { to.insert(to.end(), fields.begin(), fields.end()); }
+
+FieldValue reasonValue(const std::string& reason) {
+  return reason.empty() ? FieldValue(std::monostate{}) : FieldValue(reason);
+}
+
+}  // namespace
+
+int runEvalScene(const EvalSceneOptions& o) {
+  Stopwatch clock;
+  std::error_code ec;
+  if (!fs::is_directory(o.scene_dir, ec)) throw InputError(o.scene_dir, "folder not found");
+  const fs::path manifest = o.scene_dir / "scene.json";
+  if (!fs::exists(manifest, ec))
+    throw InputError(manifest, "file not found: not a scene folder (`solo synth -o DIR` writes one)");
+  const Scene scene = loadScene(manifest);
+  const fs::path truth_manifest = groundTruthManifest(manifest);
+  if (!fs::exists(truth_manifest, ec)) throw InputError(truth_manifest, "file not found (the ground truth " + manifest.string() + " names)");
+  const Scene truth = loadScene(truth_manifest);
+
+  // Everything is compared at the image resolution, the ground truth's.
+  const cv::Size size = scene.image.size();
+  if (truth.depth_m.size() != size)
+    throw InputError(truth.manifest.depth, "ground-truth depth is " + std::to_string(truth.depth_m.cols) + "x" +
+                                               std::to_string(truth.depth_m.rows) + ", the image " +
+                                               std::to_string(size.width) + "x" + std::to_string(size.height));
+  const bool truth_has_normals = !truth.normals.empty();
+  if (truth_has_normals && truth.normals.size() != size)
+    throw InputError(*truth.manifest.normals, "ground-truth normals are not of the image's size");
+  const std::string no_true_normals = truth_has_normals ? "" : "the ground truth has no normals";
+
+  std::string refined_reason, refined_normals_reason, uncertain_reason, mesh_reason, distance_reason;
+  const std::optional<fs::path> refined =
+      locate(o.refined, o.scene_dir / "refined.exr", "solo depth SCENE_DIR/scene.json -o SCENE_DIR/refined.exr",
+             refined_reason);
+  std::optional<fs::path> refined_normals, uncertain;
+  if (refined) {
+    const fs::path normals_file = besideOutput(*refined, "normals", refined->extension().string());
+    if (fs::exists(normals_file, ec)) refined_normals = normals_file;
+    else refined_normals_reason = normals_file.string() + " not found";
+    const fs::path uncertain_file = besideOutput(*refined, "uncertain", ".png");
+    if (fs::exists(uncertain_file, ec)) uncertain = uncertain_file;
+    else uncertain_reason = uncertain_file.string() + " not found: uncertain criterion not applied";
+  } else {
+    refined_normals_reason = "no refined depth";
+    uncertain_reason = "no refined depth: uncertain criterion not applied";
+  }
+  if (refined_normals_reason.empty() && !no_true_normals.empty()) refined_normals_reason = no_true_normals;
+  const std::optional<fs::path> mesh_file =
+      locate(o.mesh, o.scene_dir / "mesh.ply", "solo mesh from-depth SCENE_DIR/scene.json -o SCENE_DIR/mesh.ply",
+             mesh_reason);
+  const fs::path reference_file = o.scene_dir / "gt" / "mesh.ply";
+  const bool has_reference = fs::exists(reference_file, ec);
+  if (!mesh_file) distance_reason = "no mesh";
+  else if (!has_reference) distance_reason = reference_file.string() + " not found";
+
+  EvalRecord r;
+  r.command = "eval scene";
+  r.inputs = {{"scene_dir", "scene folder", o.scene_dir.string(), ""},
+              {"manifest", "estimated inputs", manifest.string(), ""},
+              {"ground_truth", "ground truth", truth_manifest.string(), ""},
+              {"refined", "refined depth", optionalPath(refined), ""},
+              {"refined_normals", "refined normals", optionalPath(refined_normals), ""},
+              {"uncertain", "uncertain mask", optionalPath(uncertain), ""},
+              {"mesh", "mesh", optionalPath(mesh_file), ""},
+              {"reference_mesh", "reference mesh",
+               mesh_file && has_reference ? FieldValue(reference_file.string()) : FieldValue(std::monostate{}), ""}};
+  r.options = {{"samples", "samples per direction", o.samples, ""},
+               {"seed", "seed", static_cast<std::int64_t>(o.seed), ""}};
+  r.metrics = {{"width", "image width", std::int64_t{size.width}, "px"},
+               {"height", "image height", std::int64_t{size.height}, "px"}};
+
+  // (a) the estimated maps, upsampled to the image resolution as depth refinement's first step does.
+  const cv::Mat estimated_depth = resizeValidBilinear(scene.depth_m, size);
+  const auto evaluateDepthPair = [&](const cv::Mat& prediction, const fs::path& prediction_file,
+                                     const std::string& key, const std::string& label) {
+    DepthEvaluationInput input;
+    input.prediction_m = prediction;
+    input.ground_truth_m = truth.depth_m;
+    input.prediction_file = prediction_file;
+    input.ground_truth_file = truth.manifest.depth;
+    DepthMetricsOptions scaled;
+    scaled.median_scaling = true;
+    append(r.metrics, depthFields(evaluateDepth(input), key, label, true));
+    append(r.metrics, depthFields(evaluateDepth(input, scaled), key + "median_scaled_", label + "median-scaled ", false));
+  };
+  const auto skipDepth = [&](const std::string& key, const std::string& label) {
+    append(r.metrics, blanked(depthFields(DepthMetrics{}, key, label, true)));
+    append(r.metrics, blanked(depthFields(DepthMetrics{}, key + "median_scaled_", label + "median-scaled ", false)));
+  };
+  const auto evaluateNormalPair = [&](const cv::Mat& prediction, const fs::path& prediction_file,
+                                      const std::string& key, const std::string& label) {
+    NormalEvaluationInput input;
+    input.prediction = prediction;
+    input.ground_truth = truth.normals;
+    input.prediction_file = prediction_file;
+    input.ground_truth_file = *truth.manifest.normals;
+    append(r.metrics, normalFields(evaluateNormals(input), key, label));
+  };
+  const auto skipNormals = [&](const std::string& key, const std::string& label) {
+    append(r.metrics, blanked(normalFields(NormalMetrics{}, key, label)));
+  };
+
+  evaluateDepthPair(estimated_depth, scene.manifest.depth, "est_depth_", "est. depth ");
+  std::string est_normals_reason = scene.normals.empty() ? "the manifest names no normals" : no_true_normals;
+  r.metrics.push_back({"est_normals_skipped", "est. normals skipped", reasonValue(est_normals_reason), ""});
+  if (est_normals_reason.empty())
+    evaluateNormalPair(resizeNormalsBilinear(scene.normals, size), *scene.manifest.normals, "est_normals_",
+                       "est. normals ");
+  else
+    skipNormals("est_normals_", "est. normals ");
+
+  // (b) the refined depth and the normals of it that `solo depth` wrote.
+  cv::Mat refined_depth;
+  r.metrics.push_back({"refined_skipped", "refined depth skipped", reasonValue(refined_reason), ""});
+  if (refined) {
+    refined_depth = readDepth(*refined, 0);
+    evaluateDepthPair(refined_depth, *refined, "refined_depth_", "refined depth ");
+  } else {
+    skipDepth("refined_depth_", "refined depth ");
+  }
+  r.metrics.push_back(
+      {"refined_normals_skipped", "refined normals skipped", reasonValue(refined_normals_reason), ""});
+  if (refined_normals_reason.empty())
+    evaluateNormalPair(readNormals(*refined_normals), *refined_normals, "refined_normals_", "refined normals ");
+  else
+    skipNormals("refined_normals_", "refined normals ");
+
+  // (c) spurious faces of the depth mesh (refined depth, else the upsampled estimate), scored
+  // against the faces the exact depth and normals call spurious, as `solo mesh from-depth --truth`.
+  const bool spurious_from_refined = !refined_depth.empty();
+  r.metrics.push_back({"spurious_skipped", "spurious faces skipped", reasonValue(no_true_normals), ""});
+  r.metrics.push_back({"spurious_depth", "spurious faces: mesh of",
+                       no_true_normals.empty()
+                           ? FieldValue(std::string(spurious_from_refined ? "refined" : "estimated (upsampled)"))
+                           : FieldValue(std::monostate{}),
+                       ""});
+  r.metrics.push_back({"spurious_uncertain_skipped", "  uncertain mask skipped", reasonValue(uncertain_reason), ""});
+  std::vector<Field> spurious_fields;
+  {
+    const cv::Mat& depth = spurious_from_refined ? refined_depth : estimated_depth;
+    const fs::path& depth_file = spurious_from_refined ? *refined : scene.manifest.depth;
+    if (depth.size() != size)
+      throw InputError(depth_file, "depth is " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
+                                       ", the image " + std::to_string(size.width) + "x" +
+                                       std::to_string(size.height));
+    DetectionScore occlusion_score, all_score;
+    SpuriousFaceResult found;
+    std::int64_t truth_faces = 0;
+    if (no_true_normals.empty()) {
+      const cv::Mat instances = nearestTo(scene.instances, size);
+      cv::Mat uncertain_mask;
+      if (uncertain) {
+        readLabels(*uncertain).convertTo(uncertain_mask, CV_8U);
+        uncertain_mask = nearestTo(uncertain_mask, size);
+      }
+      const DepthMesh mesh = meshFromDepth(depth, scene.camera, instances);
+      found = findSpuriousFaces(mesh, depth, instances, uncertain_mask);
+      const std::vector<std::uint8_t> truth_flags = spuriousFacesFromGroundTruth(mesh, truth.depth_m, truth.normals);
+      std::vector<std::uint8_t> occlusion(found.criteria.size());
+      for (std::size_t i = 0; i < occlusion.size(); ++i) occlusion[i] = (found.criteria[i] & kOcclusionCriteria) != 0;
+      occlusion_score = scoreDetection(occlusion, truth_flags);
+      all_score = scoreDetection(found.spurious, truth_flags);
+      truth_faces = occlusion_score.true_positives + occlusion_score.false_negatives;
+    }
+    spurious_fields = {
+        {"spurious_mesh_faces", "  depth-mesh faces", found.faces_checked, ""},
+        {"spurious_truth_faces", "  spurious by ground truth", truth_faces, ""},
+        {"spurious_removed", "  removed (all criteria)", found.removed, ""},
+        {"spurious_by_depth_jump", "    by depth jump", found.by_depth_jump, ""},
+        {"spurious_by_uncertain_mask", "    by uncertain mask", found.by_uncertain, ""},
+        {"spurious_by_instance_boundary", "    by instance boundary", found.by_instance_boundary, ""},
+        {"spurious_true_positives", "  true positives", occlusion_score.true_positives, ""},
+        {"spurious_false_positives", "  false positives", occlusion_score.false_positives, ""},
+        {"spurious_false_negatives", "  false negatives", occlusion_score.false_negatives, ""},
+        {"spurious_precision", "spurious-face precision", occlusion_score.precision, ""},
+        {"spurious_recall", "spurious-face recall", occlusion_score.recall, ""},
+        {"removal_precision_with_instance_cut", "  precision with instance cut", all_score.precision, ""},
+        {"removal_recall_with_instance_cut", "  recall with instance cut", all_score.recall, ""}};
+    if (!no_true_normals.empty()) spurious_fields = blanked(spurious_fields);
+  }
+  append(r.metrics, spurious_fields);
+
+  // (d) the mesh written into the folder, and its distances to the scene's exact mesh.
+  r.metrics.push_back({"mesh_skipped", "mesh skipped", reasonValue(mesh_reason), ""});
+  r.metrics.push_back({"mesh_distances_skipped", "mesh distances skipped", reasonValue(distance_reason), ""});
+  if (mesh_file) {
+    MeshReadStats read_stats;
+    const TriangleMesh mesh = readMesh(*mesh_file, &read_stats);
+    std::optional<MeshDistances> d;
+    if (has_reference) {
+      MeshDistanceOptions options;
+      options.samples = o.samples;
+      options.seed = o.seed;
+      d = measureMeshDistances(mesh, readMesh(reference_file), options, *mesh_file, reference_file);
+    }
+    append(r.metrics, meshFields(evaluateMesh(mesh), read_stats, d, "mesh_", "mesh "));
+  } else {
+    append(r.metrics, blanked(meshFields(MeshMetrics{}, MeshReadStats{}, std::nullopt, "mesh_", "mesh ")));
+  }
   r.seconds = clock.seconds();
   return emit(r, o.output);
 }

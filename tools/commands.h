@@ -97,6 +97,18 @@ struct EvalMeshOptions {
 };
 int runEvalMesh(const EvalMeshOptions& options);
 
+/// `solo eval scene`: a synthetic scene folder's estimated maps and the outputs written into it
+/// (refined depth, mesh) against its ground truth (docs/evaluation.md).
+struct EvalSceneOptions {
+  std::filesystem::path scene_dir;                ///< holds scene.json with "ground_truth"
+  std::optional<std::filesystem::path> refined;   ///< none: <scene_dir>/refined.exr when present
+  std::optional<std::filesystem::path> mesh;      ///< none: <scene_dir>/mesh.ply when present
+  std::int64_t samples = 100000;  ///< random surface points per direction for the mesh distances
+  std::uint64_t seed = 0;         ///< seeds the surface sampling
+  EvalOutputOptions output;
+};
+int runEvalScene(const EvalSceneOptions& options);
+
 struct SynthOptions {
   std::filesystem::path output;  ///< folder to create
   std::uint64_t seed = 1;

@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
   convert_cmd->add_option("--output-scale", convert.output_scale_m_per_unit, "Metres per unit of a 16-bit PNG depth output")
       ->capture_default_str();
 
-  CLI::App* eval_cmd = app.add_subcommand("eval", "Evaluate depth, normals or a mesh (docs/evaluation.md)");
+  CLI::App* eval_cmd = app.add_subcommand("eval", "Evaluate depth, normals, a mesh or a synthetic scene (docs/evaluation.md)");
   eval_cmd->require_subcommand(1);
   const auto add_eval_output = [](CLI::App* cmd, EvalOutputOptions& output) {
     cmd->add_flag("--json", output.json, "Print the results as JSON on stdout instead of a table");
@@ -103,6 +103,19 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{100000000}));
   eval_mesh_cmd->add_option("--seed", eval_mesh.seed, "Seed of the surface sampling")->capture_default_str();
   add_eval_output(eval_mesh_cmd, eval_mesh.output);
+
+  EvalSceneOptions eval_scene;
+  CLI::App* eval_scene_cmd = eval_cmd->add_subcommand(
+      "scene", "A synthetic scene's estimated maps and outputs (refined depth, mesh) against its ground truth");
+  eval_scene_cmd->add_option("scene_dir", eval_scene.scene_dir, "Scene folder (solo synth -o DIR)")->required();
+  eval_scene_cmd->add_option("--refined", eval_scene.refined,
+                             "Refined depth of solo depth (default: SCENE_DIR/refined.exr when present)");
+  eval_scene_cmd->add_option("--mesh", eval_scene.mesh, "Mesh to evaluate (default: SCENE_DIR/mesh.ply when present)");
+  eval_scene_cmd->add_option("--samples", eval_scene.samples, "Random surface points per direction (mesh distances)")
+      ->capture_default_str()
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{100000000}));
+  eval_scene_cmd->add_option("--seed", eval_scene.seed, "Seed of the surface sampling")->capture_default_str();
+  add_eval_output(eval_scene_cmd, eval_scene.output);
 
   SynthOptions synth;
   std::string synth_size = "960x540";
@@ -228,6 +241,7 @@ int main(int argc, char** argv) {
     if (eval_depth_cmd->parsed()) return runEvalDepth(eval_depth);
     if (eval_normals_cmd->parsed()) return runEvalNormals(eval_normals);
     if (eval_mesh_cmd->parsed()) return runEvalMesh(eval_mesh);
+    if (eval_scene_cmd->parsed()) return runEvalScene(eval_scene);
     if (synth_cmd->parsed()) return runSynth(synth);
     if (depth_cmd->parsed()) return runDepth(depth);
     if (mesh_from_depth_cmd->parsed()) return runMeshFromDepth(mesh_from_depth);

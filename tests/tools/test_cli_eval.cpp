@@ -235,3 +235,188 @@ TEST(CliEval, MeshErrors) {
   r = runSolo("eval mesh " + quoted(dir / "tri.off") + " --ref " + quoted(dir / "tri.off") + " --samples 0");
   EXPECT_NE(r.exit_code, 0);
 }
+
+// ---- solo eval scene ------------------------------------------------------------------
+
+namespace {
+
+/// A small synthetic scene (estimated maps at half resolution, exact ground truth beside them).
+std::filesystem::path synthScene(const TempDir& dir, const std::string& name = "scene") {
+  const std::filesystem::path scene = dir / name;
+  const auto r = runSolo("synth --size 160x90 --seed 3 -o " + quoted(scene));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return scene;
+}
+
+nlohmann::json evalSceneJson(const std::string& arguments) {
+  const auto r = runSolo("eval scene " + arguments + " --json");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return r.exit_code == 0 ? nlohmann::json::parse(r.output) : nlohmann::json::object();
+}
+
+}  // namespace
+
+TEST(CliEvalScene, GroundTruthAgainstItselfIsExact) {
+  TempDir dir;
+  const std::filesystem::path scene = synthScene(dir);
+  // A folder whose "estimated" maps are the ground truth itself, at full resolution.
+  nlohmann::json manifest = nlohmann::json::parse(readText(scene / "gt/scene.json"));
+  for (const char* key : {"image", "depth", "normals", "albedo", "roughness", "instances", "labels", "lights",
+                          "light_groups"})
+    manifest[key] = (scene / "gt" / manifest[key].get<std::string>()).lexically_normal().string();
+  manifest["ground_truth"] = (scene / "gt/scene.json").string();
+  std::filesystem::create_directories(dir / "self");
+  solo::test::writeText(dir / "self/scene.json", manifest.dump(2));
+
+  const auto j = evalSceneJson(quoted(dir / "self"));
+  ASSERT_TRUE(j.contains("metrics"));
+  const auto& m = j["metrics"];
+  EXPECT_EQ(j["command"], "eval scene");
+  EXPECT_EQ(m["width"], 160);
+  EXPECT_EQ(m["height"], 90);
+  EXPECT_EQ(m["est_depth_prediction_invalid"], 0);
+  EXPECT_GT(m["est_depth_valid_pixels"].get<std::int64_t>(), 160 * 90 / 2);
+  EXPECT_EQ(m["est_depth_abs_rel"].get<double>(), 0.0);
+  EXPECT_EQ(m["est_depth_rmse_m"].get<double>(), 0.0);
+  EXPECT_EQ(m["est_depth_delta1"].get<double>(), 1.0);
+  EXPECT_EQ(m["est_depth_median_scaled_scale"].get<double>(), 1.0);
+  EXPECT_EQ(m["est_normals_mean_deg"].get<double>(), 0.0);
+  EXPECT_EQ(m["est_normals_under_5_deg"].get<double>(), 1.0);
+  EXPECT_TRUE(m["est_normals_skipped"].is_null());
+  // Exact depth: the removal is scored; the synthetic street has occlusions to find.
+  EXPECT_EQ(m["spurious_depth"], "estimated (upsampled)");
+  EXPECT_GT(m["spurious_truth_faces"].get<std::int64_t>(), 0);
+  for (const char* key : {"spurious_precision", "spurious_recall"}) {
+    EXPECT_GE(m[key].get<double>(), 0.5) << key;
+    EXPECT_LE(m[key].get<double>(), 1.0) << key;
+  }
+
+  // The same with the true depth 5 % too far: AbsRel 0.05 exactly; median scaling undoes it.
+  cv::Mat far = solo::readDepth(scene / "gt/depth.exr", 0) * 1.05;
+  solo::writeDepth(dir / "self/far.exr", far);
+  manifest["depth"] = (dir / "self/far.exr").string();
+  solo::test::writeText(dir / "self/scene.json", manifest.dump(2));
+  const auto scaled = evalSceneJson(quoted(dir / "self"));
+  ASSERT_TRUE(scaled.contains("metrics"));
+  const auto& s = scaled["metrics"];
+  EXPECT_NEAR(s["est_depth_abs_rel"].get<double>(), 0.05, 1e-6);
+  EXPECT_EQ(s["est_depth_delta1"].get<double>(), 1.0);
+  EXPECT_NEAR(s["est_depth_median_scaled_scale"].get<double>(), 1 / 1.05, 1e-6);
+  EXPECT_LT(s["est_depth_median_scaled_abs_rel"].get<double>(), 1e-6);
+  EXPECT_EQ(s["est_normals_mean_deg"].get<double>(), 0.0);
+}
+
+TEST(CliEvalScene, EstimatedMapsAndSkippedOutputs) {
+  TempDir dir;
+  const std::filesystem::path scene = synthScene(dir);
+  const double bias =
+      nlohmann::json::parse(readText(scene / "synth.json"))["perturbations"]["depth_scale_bias_drawn"].get<double>();
+  ASSERT_GT(std::abs(bias - 1), 0.01) << "seed 3 is expected to draw a visible scale bias";
+  ASSERT_LE(std::abs(bias - 1), 0.06);
+
+  const auto j = evalSceneJson(quoted(scene));
+  ASSERT_TRUE(j.contains("metrics"));
+  const auto& m = j["metrics"];
+  EXPECT_EQ(j["inputs"]["ground_truth"], (scene / "gt/scene.json").string());
+  // Half-resolution depth with a global scale bias, noise and bleeding across depth edges. At
+  // 160x90 the bleeding (2 low-res px each side of every edge) dominates: AbsRel is well above
+  // the bias, and median scaling does not remove it (measured: 0.0625 unscaled, 0.0720 scaled,
+  // scale 1.033 for a bias of 0.984; docs/evaluation.md).
+  const double abs_rel = m["est_depth_abs_rel"].get<double>();
+  const double scaled_abs_rel = m["est_depth_median_scaled_abs_rel"].get<double>();
+  EXPECT_GT(abs_rel, std::abs(bias - 1));
+  EXPECT_LT(abs_rel, 0.15);
+  EXPECT_GT(scaled_abs_rel, 0.02);
+  EXPECT_LT(scaled_abs_rel, 0.15);
+  EXPECT_NEAR(m["est_depth_median_scaled_scale"].get<double>() * bias, 1.0, 0.05);
+  EXPECT_GT(m["est_depth_delta1"].get<double>(), 0.9);
+  EXPECT_EQ(m["est_depth_pixels"], 160 * 90);
+  EXPECT_GT(m["est_depth_ground_truth_invalid"].get<std::int64_t>(), 0) << "sky has no ground-truth depth";
+  // Blurred normals with 3 degrees of noise per pixel.
+  EXPECT_GT(m["est_normals_mean_deg"].get<double>(), 1.0);
+  EXPECT_LT(m["est_normals_mean_deg"].get<double>(), 30.0);
+  // No refined depth: the mesh is made of the upsampled estimate; both scores are fractions.
+  EXPECT_EQ(m["spurious_depth"], "estimated (upsampled)");
+  for (const char* key : {"spurious_precision", "spurious_recall", "removal_precision_with_instance_cut",
+                          "removal_recall_with_instance_cut"}) {
+    ASSERT_TRUE(m[key].is_number()) << key;
+    EXPECT_GE(m[key].get<double>(), 0.0) << key;
+    EXPECT_LE(m[key].get<double>(), 1.0) << key;
+  }
+  // Outputs not written are skipped with the reason; their metrics are null.
+  EXPECT_NE(m["refined_skipped"].get<std::string>().find("refined.exr not found"), std::string::npos);
+  EXPECT_NE(m["mesh_skipped"].get<std::string>().find("mesh.ply not found"), std::string::npos);
+  EXPECT_TRUE(m["refined_depth_abs_rel"].is_null());
+  EXPECT_TRUE(m["refined_normals_mean_deg"].is_null());
+  EXPECT_TRUE(m["mesh_faces"].is_null());
+  EXPECT_TRUE(m["mesh_chamfer"].is_null());
+  EXPECT_TRUE(j["inputs"]["refined"].is_null());
+
+  const auto table = runSolo("eval scene " + quoted(scene));
+  ASSERT_EQ(table.exit_code, 0) << table.output;
+  EXPECT_NE(table.output.find("refined depth skipped"), std::string::npos) << table.output;
+  EXPECT_NE(table.output.find("spurious-face precision"), std::string::npos) << table.output;
+  EXPECT_EQ(table.output.find("refined depth AbsRel"), std::string::npos) << table.output;
+}
+
+TEST(CliEvalScene, RefinedDepthAndMeshOneCsvRowPerRun) {
+  TempDir dir;
+  const std::filesystem::path scene = synthScene(dir);
+  const std::string csv = " --csv " + quoted(dir / "scene.csv");
+  auto r = runSolo("eval scene " + quoted(scene) + csv);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+
+  r = runSolo("depth " + quoted(scene / "scene.json") + " -o " + quoted(scene / "refined.exr"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = runSolo("mesh from-depth " + quoted(scene / "scene.json") + " -o " + quoted(scene / "mesh.ply") +
+              " --uncertain " + quoted(scene / "refined.uncertain.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = evalSceneJson(quoted(scene) + " --samples 2000" + csv);
+  ASSERT_TRUE(j.contains("metrics"));
+  const auto& m = j["metrics"];
+  EXPECT_EQ(j["inputs"]["refined"], (scene / "refined.exr").string());
+  EXPECT_EQ(j["inputs"]["refined_normals"], (scene / "refined.normals.exr").string());
+  EXPECT_EQ(j["inputs"]["uncertain"], (scene / "refined.uncertain.png").string());
+  EXPECT_TRUE(m["refined_skipped"].is_null());
+  EXPECT_GT(m["refined_depth_valid_pixels"].get<std::int64_t>(), 0);
+  EXPECT_LT(m["refined_depth_median_scaled_abs_rel"].get<double>(), 0.1);
+  EXPECT_LT(m["refined_normals_mean_deg"].get<double>(), 45.0);
+  EXPECT_EQ(m["spurious_depth"], "refined");
+  EXPECT_GE(m["spurious_precision"].get<double>(), 0.0);
+  EXPECT_LE(m["spurious_recall"].get<double>(), 1.0);
+  EXPECT_GT(m["mesh_faces"].get<std::int64_t>(), 1000);
+  EXPECT_TRUE(m["mesh_skipped"].is_null());
+  EXPECT_TRUE(m["mesh_distances_skipped"].is_null());
+  // Distances to the exact box mesh: hole patches behind occluders and blended edge depths lie
+  // off every true surface, so the mean is metres at this size, far below the scene's extent.
+  EXPECT_GT(m["mesh_mean_to_ref"].get<double>(), 0.0);
+  EXPECT_LE(m["mesh_mean_to_ref"].get<double>(), m["mesh_hausdorff_to_ref"].get<double>());
+  EXPECT_LT(m["mesh_mean_to_ref"].get<double>(), 0.1 * m["mesh_ref_bbox_diagonal"].get<double>());
+
+  const auto rows = readCsv(dir / "scene.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].at("refined"), "");
+  EXPECT_EQ(rows[0].at("refined_depth_abs_rel"), "");
+  EXPECT_EQ(rows[0].at("mesh_chamfer"), "");
+  EXPECT_EQ(rows[0].at("spurious_depth"), "estimated (upsampled)");
+  EXPECT_EQ(std::stod(rows[0].at("est_depth_abs_rel")), m["est_depth_abs_rel"].get<double>());
+  EXPECT_EQ(rows[1].at("spurious_depth"), "refined");
+  EXPECT_EQ(std::stod(rows[1].at("mesh_chamfer")), m["mesh_chamfer"].get<double>());
+}
+
+TEST(CliEvalScene, ErrorsNameTheFile) {
+  TempDir dir;
+  auto r = runSolo("eval scene " + quoted(dir.path()));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find((dir / "scene.json").string() + ": file not found"), std::string::npos) << r.output;
+
+  const std::filesystem::path scene = synthScene(dir);
+  r = runSolo("eval scene " + quoted(scene / "gt"));  // a manifest, but not of estimated maps
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find((scene / "gt/scene.json").string() + ": has no \"ground_truth\""), std::string::npos)
+      << r.output;
+
+  r = runSolo("eval scene " + quoted(scene) + " --refined " + quoted(dir / "none.exr"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("none.exr"), std::string::npos) << r.output;
+}
