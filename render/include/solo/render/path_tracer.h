@@ -21,7 +21,7 @@ enum class DiffuseModel {
 };
 
 struct PathTracerOptions {
-  int min_samples = 16;   ///< per pixel before the error estimate is trusted
+  int min_samples = 16;   ///< per pixel before the error estimate is trusted; at least 2 are taken
   int max_samples = 256;  ///< per pixel
   /// Stop a pixel when the standard error of its mean luminance (Y) is below
   /// max(relative_error * mean, absolute_error[pixel]).
