@@ -17,6 +17,8 @@ find_package(CLI11 CONFIG REQUIRED)
 find_package(nlohmann_json 3 CONFIG REQUIRED)
 if(SOLO_BUILD_TESTS)
   find_package(GTest CONFIG REQUIRED)
+  # libtiff (libtiff-dev) writes the synthetic DNG files of the raw gray-card tests.
+  find_package(TIFF REQUIRED)
 endif()
 if(SOLO_BUILD_BENCHMARKS)
   find_package(benchmark CONFIG REQUIRED)

@@ -7,6 +7,7 @@
 #include <solo/geometry/report.h>
 #include <solo/geometry/triangle_mesh.h>
 #include <solo/geometry/version.h>
+#include <solo/render/day_scene.h>
 #include <solo/render/scene_raster.h>
 #include <solo/render/street_scene.h>
 
@@ -57,6 +58,8 @@ int runSynth(const SynthOptions& o) {
   }
   if (o.width < 16 || o.height < 16 || o.width > 8192 || o.height > 8192)
     throw InputError("--size", "image size must be between 16 and 8192 pixels per side");
+  if (o.day_render != "raster" && o.day_render != "path")
+    throw InputError("--day-render", "expected raster or path, got \"" + o.day_render + "\"");
   if (fs::exists(o.output) && !o.force)
     throw InputError(o.output, "already exists (pass --force to replace it)");
 
@@ -85,8 +88,21 @@ int runSynth(const SynthOptions& o) {
   stage("ground_truth", clock.seconds()).add("sky_pixels", sky).add("light_pixels", light_pixels);
 
   clock = Stopwatch();
-  const cv::Mat day = renderDaylight(scene, truth);
-  stage("daylight", clock.seconds()).add("samples_per_pixel", std::int64_t{1});
+  cv::Mat day;
+  if (o.day_render == "path") {
+    DayRenderOptions day_options;
+    day_options.seed = o.seed;
+    day_options.progress = true;
+    DaylightRender traced = renderDaylightPathTraced(scene, day_options);
+    day = std::move(traced.linear_rgb);
+    traced.report.seconds = clock.seconds();
+    traced.report.notes.push_back("day image path traced: sun and sky gradient, NEE + MIS (--day-render path)");
+    report.stages.push_back(std::move(traced.report));
+  } else {
+    day = renderDaylight(scene, truth);
+    stage("daylight", clock.seconds()).add("samples_per_pixel", std::int64_t{1}).notes.push_back(
+        "day image rastered: sun with one shadow ray, sky as an ambient term (--day-render path traces it)");
+  }
 
   clock = Stopwatch();
   PredictionNoiseOptions noise;
@@ -152,6 +168,7 @@ int runSynth(const SynthOptions& o) {
         {"generator", "solo synth " + soloVersion()},
         {"seed", o.seed},
         {"variant", o.variant},
+        {"day_render", o.day_render},
         {"width", o.width},
         {"height", o.height},
         {"camera", camera},

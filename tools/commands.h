@@ -48,12 +48,33 @@ struct NightOptions {
   std::string light_sampler = "power";
   int min_samples = 4, max_samples = 16;  ///< per pixel
   double relative_error = 0.1;            ///< adaptive sampling target on each pixel's luminance
+  /// Stop sampling a pixel once its standard error is below noise_factor x the sensor noise's
+  /// sigma there (instead of the relative error); docs/rendering.md.
+  bool noise_target = false;
+  double noise_factor = 0.5;
   bool glare = true, noise = true;
   double glare_threshold = -1;  ///< Y before exposure; < 0: what will clip (the reference uses 0)
   /// Luminance exposed to sensor white, cd/m^2; <= 0: auto exposure (metering the street).
   double sensor_white_cd_m2 = 0;
+  /// Quality preset (draft, default, final; tools/night_presets.cpp). main.cpp applies it to
+  /// every knob not given on the command line or in the config file.
+  std::string preset = "default";
+  int optimize_iterations = 10;      ///< Ceres iterations of the normal-guided optimisation
+  double optimize_tolerance = 1e-9;  ///< relative decrease of the objective that stops it
+  std::optional<std::filesystem::path> contact_sheet;  ///< PNG grid of the stages' pictures
+  std::optional<std::filesystem::path> write_config;   ///< the effective configuration (TOML)
 };
 int runNight(const NightOptions& options);
+
+/// `solo night --batch`: every scene of a list or folder, each in a child process (docs/batch.md).
+/// The NightOptions give the output folder (output), the batch seed and a scene (refused).
+struct NightBatchOptions {
+  std::optional<std::filesystem::path> list;  ///< list file of manifests, or a folder searched for them
+  std::string shard = "0/1";                  ///< i/N: scenes k with k % N == i
+  int jobs = 1;                               ///< scenes converted at once
+  std::vector<std::string> arguments;         ///< the command line, forwarded to the scenes minus the batch's own
+};
+int runNightBatch(const NightBatchOptions& batch, const NightOptions& night);
 
 struct ConvertOptions {
   std::string kind = "depth";  ///< "depth" or "normals"
@@ -115,6 +136,7 @@ struct SynthOptions {
   int width = 960, height = 540;  ///< pixels
   std::string variant = "default";  ///< see streetVariantName
   bool force = false;               ///< replace an existing folder
+  std::string day_render = "raster";  ///< day image: "raster" (1 ray + 1 shadow ray per pixel) or "path" (path traced sun and sky)
 };
 int runSynth(const SynthOptions& options);
 
@@ -216,5 +238,21 @@ struct FdaCommandOptions {
   std::optional<std::filesystem::path> report;
 };
 int runFda(const FdaCommandOptions& options);
+
+/// `solo bench accuracy`: sweeps of the knobs that trade accuracy for time on a synthetic scene
+/// with exact ground truth; CSV per stage, gnuplot plots and a README in `output`
+/// (docs/accuracy.md).
+struct BenchAccuracyOptions {
+  std::filesystem::path output;                ///< folder to write (created)
+  std::optional<std::filesystem::path> scene;  ///< a `solo synth` folder or its scene.json; none: made in output/scene
+  int width = 960, height = 540;               ///< pixels, of the scene made
+  std::uint64_t seed = 1;                      ///< the scene made, lights, renders, surface sampling
+  bool quick = false;                          ///< fewer points (tests, a first look)
+  std::vector<std::string> stages = {"refine", "mesh", "render", "end_to_end"};
+  int reference_spp = 0;  ///< samples per pixel of the converged references; 0: 256 (64 with quick)
+  int repeats = 3;        ///< timing runs of a cheap point (median)
+  bool plots = true;      ///< write gnuplot scripts and run gnuplot when it is on PATH
+};
+int runBenchAccuracy(const BenchAccuracyOptions& options);
 
 }  // namespace solo::tools

@@ -2,6 +2,7 @@
 // each subcommand fills an options struct (commands.h) and calls its run function.
 
 #include "commands.h"
+#include "night_presets.h"
 
 #include <solo/geometry/error.h>
 
@@ -29,21 +30,31 @@ int main(int argc, char** argv) {
   night_cmd->add_option("--seed", night.seed, "Random seed (lights, render, sensor noise)")->capture_default_str();
   night_cmd->add_option("--render-exr", night.render_exr, "Also write the linear XYZ render (and AOVs beside it)");
   night_cmd->add_flag("--16bit", night.sixteen_bit, "16-bit PNG/TIFF output");
-  night_cmd->add_flag("!--no-refine", night.refine, "Skip the depth filter, uncertainty and optimisation");
-  night_cmd->add_flag("!--no-optimize", night.optimize, "Skip the normal-guided depth optimisation");
-  night_cmd->add_flag("!--no-solids", night.solids, "Leave foreground objects as open sheets");
-  night_cmd->add_flag("--evaluate-mesh", night.evaluate_mesh, "Count self-intersections and non-manifold parts (slow)");
+  night_cmd->add_flag("--refine,!--no-refine", night.refine, "Depth filter, uncertainty and optimisation (default on)");
+  night_cmd->add_flag("--optimize,!--no-optimize", night.optimize, "Normal-guided depth optimisation (preset)");
+  night_cmd->add_option("--optimize-iterations", night.optimize_iterations, "Its solver iterations (preset)")
+      ->capture_default_str()->check(CLI::Range(1, 100000));
+  night_cmd->add_option("--optimize-tolerance", night.optimize_tolerance,
+                        "It stops when the objective decreases by less than this, relative (preset)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
+  night_cmd->add_flag("--solids,!--no-solids", night.solids, "Close foreground objects into solids (default on)");
+  night_cmd->add_flag("--evaluate-mesh,!--no-evaluate-mesh", night.evaluate_mesh,
+                      "Count self-intersections and non-manifold parts (slow; preset)");
   night_cmd->add_flag("--ablation", night.ablation, "The paper's ablation: every light on, white, one strength");
   night_cmd->add_option("--lights", night.lights_record, "Use this (edited) light record instead of a new draw");
-  night_cmd->add_flag("!--no-headlights", night.headlights, "No ego-vehicle headlights");
+  night_cmd->add_flag("--headlights,!--no-headlights", night.headlights, "Ego-vehicle headlights (default on)");
   night_cmd->add_option("--headlight-flux", night.headlight_flux_lm, "Flux of each headlight, lm")->capture_default_str();
   night_cmd->add_option("--light-sampler", night.light_sampler, "uniform, power or hierarchy")->capture_default_str();
   night_cmd->add_option("--min-spp", night.min_samples, "Samples per pixel before adaptive stopping")->capture_default_str();
   night_cmd->add_option("--max-spp", night.max_samples, "Samples per pixel at most")->capture_default_str();
   night_cmd->add_option("--relative-error", night.relative_error, "Adaptive sampling target (relative standard error)")
       ->capture_default_str();
-  night_cmd->add_flag("!--no-glare", night.glare, "Skip fog glare");
-  night_cmd->add_flag("!--no-noise", night.noise, "Skip sensor noise");
+  night_cmd->add_flag("--noise-target", night.noise_target,
+                      "Adaptive sampling to the sensor noise: stop at noise-factor x its sigma (replaces --relative-error)");
+  night_cmd->add_option("--noise-factor", night.noise_factor, "Render noise allowed, as a fraction of the sensor noise")
+      ->capture_default_str();
+  night_cmd->add_flag("--glare,!--no-glare", night.glare, "Fog glare (preset)");
+  night_cmd->add_flag("--noise,!--no-noise", night.noise, "Sensor noise (preset)");
   night_cmd->add_option("--sensor-white", night.sensor_white_cd_m2,
                          "Luminance exposed to sensor white, cd/m2; 0 = auto exposure")
       ->capture_default_str();
@@ -51,6 +62,31 @@ int main(int argc, char** argv) {
                         "Luminance above which pixels glow (render units before exposure); -1 = what clips; "
                         "the reference uses 0")
       ->capture_default_str();
+  night_cmd->add_option("--preset", night.preset, "Quality: draft, default or final (docs/presets.md); options "
+                        "given on the command line or in the config file override it")
+      ->capture_default_str()->check(CLI::IsMember(nightPresetNames()));
+  night_cmd->add_option("--contact-sheet", night.contact_sheet,
+                        "Also write a PNG grid: day, raw and refined depth, removed faces, lights, night");
+  night_cmd->add_option("--write-config", night.write_config,
+                        "Write the effective configuration (preset applied) to this file, then run")
+      ->configurable(false);
+  // CLI11 reads config files on the main app only: `solo night --config F` falls through to it.
+  app.set_config("--config", "", "Config file (TOML/INI) with a [night] section; docs/presets.md");
+  app.allow_config_extras(CLI::config_extras_mode::error);
+  night_cmd->fallthrough();
+  night_cmd->footer("Every option can also come from a config file: --config FILE, keys under [night] named like the "
+                    "long options without dashes (docs/presets.md). The command line overrides the file, and "
+                    "both override the preset.");
+
+  NightBatchOptions night_batch;
+  CLI::Option* batch_opt = night_cmd->add_option(
+      "--batch", night_batch.list,
+      "Convert every scene of a list file (one manifest a line) or a folder; -o is then the output folder "
+      "(docs/batch.md)")->configurable(false);
+  night_cmd->add_option("--shard", night_batch.shard, "With --batch: take scenes k with k % N == i (i/N, 0-based)")
+      ->capture_default_str()->needs(batch_opt)->configurable(false);
+  night_cmd->add_option("--jobs", night_batch.jobs, "With --batch: scenes converted at once (child processes)")
+      ->capture_default_str()->needs(batch_opt)->configurable(false);
 
   ConvertOptions convert;
   CLI::App* convert_cmd = app.add_subcommand("convert", "Convert a depth or normal map between formats");
@@ -126,6 +162,8 @@ int main(int argc, char** argv) {
   synth_cmd->add_option("--variant", synth.variant, "default, grazing, thin-pole, near-object, wide-sky, no-lights")
       ->capture_default_str();
   synth_cmd->add_flag("--force", synth.force, "Replace the output folder if it exists");
+  synth_cmd->add_option("--day-render", synth.day_render, "Day image: raster (fast) or path (path-traced sun and sky)")
+      ->capture_default_str();
 
   LightsOptions lights;
   CLI::App* lights_cmd = app.add_subcommand("lights", "Group and instantiate the scene's light sources (docs/lighting.md)");
@@ -229,13 +267,72 @@ int main(int argc, char** argv) {
   depth_cmd->add_flag("!--no-uncertain", depth.uncertain, "Skip the uncertain regions");
   depth_cmd->add_flag("!--no-optimize", depth.optimize, "Skip the normal-guided optimisation");
 
-  CLI11_PARSE(app, argc, argv);
+  BenchAccuracyOptions bench_accuracy;
+  std::string bench_size = "960x540";
+  CLI::App* bench_cmd = app.add_subcommand("bench", "Measurements on synthetic scenes (docs/accuracy.md)");
+  bench_cmd->require_subcommand(1);
+  CLI::App* bench_accuracy_cmd = bench_cmd->add_subcommand(
+      "accuracy", "Sweep the knobs that trade accuracy for time against ground truth: CSV and plots per stage");
+  bench_accuracy_cmd->add_option("-o,--output", bench_accuracy.output, "Folder to write (CSV, .gp, PNG, README)")
+      ->required();
+  CLI::Option* bench_scene = bench_accuracy_cmd->add_option(
+      "--scene", bench_accuracy.scene, "A solo synth folder (or its scene.json) instead of making one");
+  bench_accuracy_cmd->add_option("--scene-size", bench_size, "Size WIDTHxHEIGHT of the scene made")
+      ->capture_default_str()
+      ->excludes(bench_scene);
+  bench_accuracy_cmd->add_option("--seed", bench_accuracy.seed, "Seed: scene made, lights, renders")
+      ->capture_default_str();
+  bench_accuracy_cmd->add_flag("--quick", bench_accuracy.quick, "Fewer points, smaller samples");
+  bench_accuracy_cmd->add_option("--stages", bench_accuracy.stages, "Sweeps to run: refine,mesh,render,end_to_end")
+      ->delimiter(',')
+      ->capture_default_str();
+  bench_accuracy_cmd->add_option("--reference-spp", bench_accuracy.reference_spp,
+                                 "Samples per pixel of the converged references (0: 256, 64 with --quick)")
+      ->capture_default_str();
+  bench_accuracy_cmd->add_option("--repeats", bench_accuracy.repeats, "Timing runs of a cheap point (median)")
+      ->capture_default_str();
+  bench_accuracy_cmd->add_flag("!--no-plots", bench_accuracy.plots, "Write no gnuplot script and run no gnuplot");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // CLI11 does not name the config file in its errors: say which file it was.
+    const CLI::Option* config = app.get_config_ptr();
+    if (config && config->count() > 0 &&
+        (dynamic_cast<const CLI::ConfigError*>(&e) || dynamic_cast<const CLI::FileError*>(&e))) {
+      const std::string file = config->as<std::string>();
+      std::string problem = e.what();
+      const std::string extra = "INI was not able to parse ";
+      if (problem.rfind(extra, 0) == 0) problem = "unknown key or malformed line \"" + problem.substr(extra.size()) + "\"";
+      std::cerr << "solo: error: " << file << ": " << problem << " (config file; docs/presets.md)\n";
+      return 2;
+    }
+    if (config && config->count() > 0 &&
+        (dynamic_cast<const CLI::ConversionError*>(&e) || dynamic_cast<const CLI::ArgumentMismatch*>(&e))) {
+      std::cerr << "solo: error: " << e.what() << " (on the command line or in the config file "
+                << config->as<std::string>() << ")\n";
+      return 2;
+    }
+    return app.exit(e);
+  }
   if (synth_cmd->parsed() && std::sscanf(synth_size.c_str(), "%dx%d", &synth.width, &synth.height) != 2) {
     std::cerr << "solo: error: --size: expected WIDTHxHEIGHT, got \"" << synth_size << "\"\n";
     return 2;
   }
+  if (bench_accuracy_cmd->parsed() &&
+      std::sscanf(bench_size.c_str(), "%dx%d", &bench_accuracy.width, &bench_accuracy.height) != 2) {
+    std::cerr << "solo: error: --scene-size: expected WIDTHxHEIGHT, got \"" << bench_size << "\"\n";
+    return 2;
+  }
   try {
+    // The preset fills every knob the command line and the config file left unset.
+    if (night_cmd->parsed())
+      applyNightPreset(night, [night_cmd](const std::string& flag) { return night_cmd->count(flag) > 0; });
     if (info_cmd->parsed()) return runInfo(info);
+    if (night_cmd->parsed() && night_batch.list) {
+      night_batch.arguments.assign(argv, argv + argc);
+      return runNightBatch(night_batch, night);
+    }
     if (night_cmd->parsed()) return runNight(night);
     if (convert_cmd->parsed()) return runConvert(convert);
     if (eval_depth_cmd->parsed()) return runEvalDepth(eval_depth);
@@ -251,6 +348,7 @@ int main(int argc, char** argv) {
     if (illuminant_regenerate_cmd->parsed()) return runIlluminantRegenerate(illuminant_regenerate);
     if (post_cmd->parsed()) return runPost(post);
     if (fda_cmd->parsed()) return runFda(fda);
+    if (bench_accuracy_cmd->parsed()) return runBenchAccuracy(bench_accuracy);
   } catch (const solo::InputError& e) {
     std::cerr << "solo: error: " << e.what() << "\n";
     return 2;

@@ -13,6 +13,7 @@ packages=(
   libembree-dev
   libopencv-dev
   libopenimageio-dev openimageio-tools
+  libtiff-dev
   libgtest-dev libgmock-dev
   libbenchmark-dev
   libtbb-dev

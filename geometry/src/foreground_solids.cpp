@@ -51,8 +51,10 @@ cv::Mat depthBehind(const DepthMesh& m, const std::vector<OpenMesh::FaceHandle>&
         }
         if (b[0] < -1e-9 || b[1] < -1e-9 || b[2] < -1e-9) continue;
         const double z = 1.0 / (b[0] * w[0] + b[1] * w[1] + b[2] * w[2]);
-        const double front = visibleDepth(u, v);
-        if (z <= front + std::max(0.05, 0.01 * front)) continue;
+        // Every patch strictly behind the visible surface counts, however close: one a few
+        // centimetres behind a thing (the road patch at a tyre's contact) is what a back pushed
+        // the full class thickness would pierce.
+        if (z <= visibleDepth(u, v)) continue;
         float& slot = behind.at<float>(v, u);
         slot = std::min(slot, static_cast<float>(z));
       }
@@ -138,9 +140,12 @@ SolidClosing closeForegroundSolids(DepthMesh& m, const std::vector<OpenMesh::Fac
     if (pixel[0] >= 0 && pixel[1] >= 0 && pixel[0] < m.width && pixel[1] < m.height) {
       const double z_behind = behind.at<float>(pixel[1], pixel[0]);
       if (std::isfinite(z_behind) && z_behind > p[2]) {
-        const double room = z_behind - p[2] - options.clearance_m;
-        if (room < t) {
-          t = std::max(options.min_thickness_m, room);
+        const double gap = z_behind - p[2];
+        if (gap - options.clearance_m < t) {
+          // Keep the clearance when there is room for the minimum thickness; otherwise stay
+          // halfway to the surface behind: thinner than the minimum, but never through it.
+          t = gap - options.clearance_m >= options.min_thickness_m ? gap - options.clearance_m
+                                                                    : std::min(options.min_thickness_m, 0.5 * gap);
           ++result.vertices_clamped;
         }
       }

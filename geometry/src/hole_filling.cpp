@@ -83,6 +83,16 @@ bool triangulatePolyline(const std::vector<Point>& polyline, const HoleFillOptio
 
 void refineAndFair(const std::vector<Point>& polyline, const HoleFillOptions& options, const Stopwatch& clock,
                    HolePatch& patch) {
+  // Refinement makes triangles of about the boundary's edge length: a patch that would get more
+  // vertices than can be faired keeps its triangulation (refined without fairing it would only be
+  // a denser copy of the same surface, at the cost of the refinement and of its verification).
+  const int n = static_cast<int>(polyline.size());
+  double edge_sum = 0, area = 0;
+  for (int i = 0; i < n; ++i) edge_sum += std::sqrt(CGAL::squared_distance(polyline[i], polyline[(i + 1) % n]));
+  for (const auto& f : patch.faces)
+    area += std::sqrt(Triangle(polyline[f[0]], polyline[f[1]], polyline[f[2]]).squared_area());
+  const double edge = edge_sum / n;
+  if (edge > 0 && area / (0.866 * edge * edge) > options.max_fair_vertices) return;
   PatchMesh mesh;
   std::vector<PatchMesh::Vertex_index> vertices;
   for (const Point& p : polyline) vertices.push_back(mesh.add_vertex(p));
@@ -97,7 +107,6 @@ void refineAndFair(const std::vector<Point>& polyline, const HoleFillOptions& op
   if (!new_vertices.empty() && static_cast<int>(new_vertices.size()) <= options.max_fair_vertices)
     patch.faired = PMP::fair(mesh, new_vertices, CGAL::parameters::fairing_continuity(options.fairing_continuity));
   // Boundary vertices keep indices 0..n-1; the others are numbered in order of addition.
-  const int n = static_cast<int>(polyline.size());
   std::vector<int> index(mesh.number_of_vertices(), -1);
   for (int i = 0; i < n; ++i) index[vertices[i]] = i;
   patch.new_points.clear();
@@ -212,17 +221,42 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
       patch.filled = true;
       return patch;
     }
-    if (!triangulatePolyline(polyline, options, clock, patch.faces, patch.failure)) return patch;
+    if (!triangulatePolyline(polyline, options, clock, patch.faces, patch.failure)) {
+      patch.triangulation_failed = true;
+      return patch;
+    }
     if (method == HoleFillMethod::triangulate_refine_fair) refineAndFair(polyline, options, clock, patch);
     patch.filled = true;
   } catch (const DeadlineExceeded&) {
+    const bool triangulated = !patch.faces.empty();
     patch = HolePatch{};
+    patch.triangulation_failed = !triangulated;
     patch.failure = "exceeded its time limit of " + std::to_string(options.time_limit_s) + " s";
   } catch (const std::exception& e) {
     patch = HolePatch{};
     patch.failure = std::string("CGAL failed: ") + e.what();
   }
   return patch;
+}
+
+bool patchFacesIntersect(const std::vector<Eigen::Vector3d>& points_in, const std::array<int, 3>& a,
+                         const std::array<int, 3>& b) {
+  // Only the (at most six) corners are converted: callers test pairs one at a time.
+  std::vector<Point> points(6);
+  std::array<int, 3> la{}, lb{};
+  int used = 0;
+  int ids[6];
+  const auto local = [&](int i) {
+    for (int k = 0; k < used; ++k)
+      if (ids[k] == i) return k;
+    ids[used] = i;
+    points[used] = toPoint(points_in[i]);
+    return used++;
+  };
+  for (int k = 0; k < 3; ++k) la[k] = local(a[k]);
+  for (int k = 0; k < 3; ++k) lb[k] = local(b[k]);
+  if (faceIsDegenerate(points, la) || faceIsDegenerate(points, lb)) return false;
+  return facesIntersect(points, la, lb);
 }
 
 std::vector<std::uint8_t> findIntersectingFaces(const std::vector<Eigen::Vector3d>& points_in,

@@ -88,8 +88,16 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
 
   Stopwatch step;
   const SpuriousFaceResult spurious = findSpuriousFaces(m, depth_m, instances, uncertain, options.spurious);
-  for (const auto f : mesh.faces())
-    if (spurious.spurious[f.idx()]) mesh.delete_face(f, true);
+  m.removed_spurious = cv::Mat::zeros(m.height, m.width, CV_8U);
+  for (const auto f : mesh.faces()) {
+    if (!spurious.spurious[f.idx()]) continue;
+    for (const auto v : mesh.fv_range(f)) {
+      const OpenMesh::Vec2i p = mesh.property(m.properties.pixel, v);
+      if (p[0] >= 0 && p[1] >= 0 && p[0] < m.width && p[1] < m.height)
+        m.removed_spurious.at<std::uint8_t>(p[1], p[0]) |= spurious.criteria[f.idx()];
+    }
+    mesh.delete_face(f, true);
+  }
   report.add("spurious_faces_removed", spurious.removed);
   report.add("spurious_by_depth_jump", spurious.by_depth_jump);
   report.add("spurious_by_grazing_angle", spurious.by_grazing);
@@ -129,7 +137,7 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
   HoleClosing holes;
   step = Stopwatch();
   if (options.fill_holes) {
-    holes = closeHoles(mesh, loops.holes, options.hole_filling, PixelMapping{m.properties, m.camera, m.width, m.height});
+    holes = closeHoles(mesh, loops.holes, options.hole_filling, PixelMapping{m.properties, m.camera, m.width, m.height, &m.vertex_of_pixel});
     addHoleCounts(report, holes);
   } else {
     report.notes.push_back("hole filling off: " + std::to_string(loops.holes.size()) + " holes left open");

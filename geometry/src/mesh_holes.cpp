@@ -5,6 +5,7 @@
 #include <map>
 
 #include <opencv2/core.hpp>
+#include <opencv2/core/utility.hpp>
 
 namespace solo {
 namespace {
@@ -13,6 +14,7 @@ using Face = std::array<int, 3>;
 
 struct Attempt {
   std::size_t hole = 0;
+  HoleFillMethod method = HoleFillMethod::triangulate_refine_fair;
   HolePatch patch;
   std::vector<Face> faces;  ///< global indices: mesh vertex handles, then new points
 };
@@ -37,6 +39,84 @@ int majorityInstance(const SurfaceMesh& mesh, const ImageVertexProperties& p, co
       ->first;
 }
 
+/// The method tried after `method` failed or was rejected; false when none is left.
+bool nextMethod(HoleFillMethod& method) {
+  switch (method) {
+    case HoleFillMethod::triangulate_refine_fair: method = HoleFillMethod::triangulate; return true;
+    case HoleFillMethod::triangulate: method = HoleFillMethod::centroid_fan; return true;
+    case HoleFillMethod::centroid_fan: return false;
+  }
+  return false;
+}
+
+bool boxesOverlap(const std::vector<Eigen::Vector3d>& p, const Face& a, const Face& b) {
+  for (int axis = 0; axis < 3; ++axis) {
+    const double a0 = std::min({p[a[0]][axis], p[a[1]][axis], p[a[2]][axis]});
+    const double a1 = std::max({p[a[0]][axis], p[a[1]][axis], p[a[2]][axis]});
+    const double b0 = std::min({p[b[0]][axis], p[b[1]][axis], p[b[2]][axis]});
+    const double b1 = std::max({p[b[0]][axis], p[b[1]][axis], p[b[2]][axis]});
+    if (a1 < b0 || b1 < a0) return false;
+  }
+  return true;
+}
+
+/// x extent of the triangle `uv` inside the horizontal strip y0 <= y <= y1 (false: it misses).
+bool xRangeInStrip(const Eigen::Vector2d uv[3], double y0, double y1, double& x0, double& x1) {
+  x0 = 1e300, x1 = -1e300;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector2d& a = uv[k];
+    const Eigen::Vector2d& b = uv[(k + 1) % 3];
+    if (a.y() >= y0 && a.y() <= y1) x0 = std::min(x0, a.x()), x1 = std::max(x1, a.x());
+    for (const double y : {y0, y1}) {
+      if ((a.y() - y) * (b.y() - y) >= 0 || a.y() == b.y()) continue;
+      const double x = a.x() + (b.x() - a.x()) * (y - a.y()) / (b.y() - a.y());
+      x0 = std::min(x0, x), x1 = std::max(x1, x);
+    }
+  }
+  return x0 <= x1;
+}
+
+/// Whether a patch meets a face of a depth mesh: each patch face is tested against the mesh
+/// faces around a pixel within one pixel (both axes) of its projection.
+bool patchMeetsDepthMesh(const Attempt& attempt, const std::vector<Eigen::Vector3d>& points, const SurfaceMesh& mesh,
+                         const PixelMapping& pixels) {
+  std::vector<int> near;
+  std::vector<Face> corners;
+  for (const Face& g : attempt.faces) {
+    Eigen::Vector2d uv[3];
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d& p = points[g[k]];
+      if (!(p.z() > 0)) return true;  // cannot be placed in the image: not verified, not kept
+      uv[k] = pixels.camera.project(p);
+    }
+    const double ymin = std::min({uv[0].y(), uv[1].y(), uv[2].y()}), ymax = std::max({uv[0].y(), uv[1].y(), uv[2].y()});
+    const int r0 = std::max(0, static_cast<int>(std::ceil(ymin - 1))), r1 = std::min(pixels.height - 1, static_cast<int>(std::floor(ymax + 1)));
+    near.clear();
+    for (int y = r0; y <= r1; ++y) {
+      double x0 = 0, x1 = 0;
+      if (!xRangeInStrip(uv, y - 1.0, y + 1.0, x0, x1)) continue;
+      const int c0 = std::max(0, static_cast<int>(std::ceil(x0 - 1))), c1 = std::min(pixels.width - 1, static_cast<int>(std::floor(x1 + 1)));
+      for (int x = c0; x <= c1; ++x) {
+        const int vi = (*pixels.vertex_of_pixel)[static_cast<std::size_t>(y) * pixels.width + x];
+        if (vi < 0) continue;
+        const OpenMesh::VertexHandle vh(vi);
+        if (mesh.status(vh).deleted()) continue;
+        for (const auto f : mesh.vf_range(vh))
+          if (!mesh.status(f).deleted()) near.push_back(f.idx());
+      }
+    }
+    std::sort(near.begin(), near.end());
+    near.erase(std::unique(near.begin(), near.end()), near.end());
+    for (const int fi : near) {
+      Face t{};
+      int k = 0;
+      for (const auto v : mesh.fv_range(OpenMesh::FaceHandle(fi))) t[k++] = v.idx();
+      if (boxesOverlap(points, g, t) && patchFacesIntersect(points, g, t)) return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, const HoleFillOptions& options,
@@ -44,6 +124,7 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
   HoleClosing result;
   result.holes = static_cast<std::int64_t>(holes.size());
   if (holes.empty()) return result;
+  const bool by_pixels = pixels && pixels->vertex_of_pixel;
 
   std::vector<Eigen::Vector3d> points;
   points.reserve(mesh.n_vertices());
@@ -51,33 +132,52 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
     const auto& p = mesh.point(v);
     points.emplace_back(p[0], p[1], p[2]);
   }
-  std::vector<Face> others = liveFaces(mesh);
+  // Without pixels every live face is a potential obstacle; with them the mesh is looked up
+  // per pixel and only accepted patches are listed here.
+  std::vector<Face> others = by_pixels ? std::vector<Face>{} : liveFaces(mesh);
   std::vector<std::string> last_failure(holes.size());
   std::vector<std::size_t> pending(holes.size());
+  std::vector<HoleFillMethod> method_of(holes.size(), HoleFillMethod::triangulate_refine_fair);
   for (std::size_t i = 0; i < holes.size(); ++i) {
     pending[i] = i;
     result.largest_hole_vertices = std::max<std::int64_t>(result.largest_hole_vertices, holes[i].size());
+    if (static_cast<int>(holes[i].size()) <= options.max_triangulation_only_vertices)
+      method_of[i] = HoleFillMethod::triangulate;
   }
   std::vector<Attempt> accepted;
+  std::vector<std::size_t> given_up;
 
-  for (const HoleFillMethod method :
-       {HoleFillMethod::triangulate_refine_fair, HoleFillMethod::triangulate, HoleFillMethod::centroid_fan}) {
-    if (pending.empty()) break;
+  while (!pending.empty()) {
+    // Patches of independent holes: computed in parallel, each into its own slot.
+    std::vector<Attempt> tries(pending.size());
+    cv::parallel_for_(cv::Range(0, static_cast<int>(pending.size())), [&](const cv::Range& range) {
+      for (int i = range.start; i < range.end; ++i) {
+        const std::size_t hole = pending[i];
+        std::vector<Eigen::Vector3d> boundary;
+        for (const auto v : holes[hole]) boundary.push_back(points[v.idx()]);
+        tries[i].hole = hole;
+        tries[i].method = method_of[hole];
+        tries[i].patch = fillHolePolyline(boundary, method_of[hole], options);
+      }
+    });
     std::vector<Attempt> attempts;
     std::vector<std::size_t> still_pending;
+    const auto retry = [&](std::size_t hole, const std::string& why) {
+      last_failure[hole] = std::string(holeFillMethodName(method_of[hole])) + ": " + why;
+      if (nextMethod(method_of[hole])) still_pending.push_back(hole);
+      else given_up.push_back(hole);
+    };
     std::vector<Eigen::Vector3d> round_points = points;
-    for (const std::size_t hole : pending) {
-      std::vector<Eigen::Vector3d> boundary;
-      for (const auto v : holes[hole]) boundary.push_back(points[v.idx()]);
-      Attempt attempt;
-      attempt.hole = hole;
-      attempt.patch = fillHolePolyline(boundary, method, options);
+    for (Attempt& attempt : tries) {
+      const std::size_t hole = attempt.hole;
       if (!attempt.patch.filled) {
-        last_failure[hole] = std::string(holeFillMethodName(method)) + ": " + attempt.patch.failure;
-        still_pending.push_back(hole);
+        // A triangulation that failed inside the full pipeline fails alone too: go to the fan.
+        const bool skip = attempt.patch.triangulation_failed && method_of[hole] == HoleFillMethod::triangulate_refine_fair;
+        retry(hole, attempt.patch.failure);
+        if (skip && !still_pending.empty() && still_pending.back() == hole) method_of[hole] = HoleFillMethod::centroid_fan;
         continue;
       }
-      const int n = static_cast<int>(boundary.size());
+      const int n = static_cast<int>(holes[hole].size());
       const int base = static_cast<int>(round_points.size());
       round_points.insert(round_points.end(), attempt.patch.new_points.begin(), attempt.patch.new_points.end());
       for (const auto& f : attempt.patch.faces) {
@@ -87,52 +187,33 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
       }
       attempts.push_back(std::move(attempt));
     }
+
+    // Verification: against the mesh (per pixel, in parallel, or all faces at once), then the
+    // survivors against each other and against the patches accepted in earlier rounds.
+    std::vector<std::uint8_t> rejected(attempts.size(), 0);
+    if (by_pixels) {
+      cv::parallel_for_(cv::Range(0, static_cast<int>(attempts.size())), [&](const cv::Range& range) {
+        for (int a = range.start; a < range.end; ++a)
+          rejected[a] = patchMeetsDepthMesh(attempts[a], round_points, mesh, *pixels) ? 1 : 0;
+      });
+    }
     std::vector<Face> candidates;
     std::vector<std::size_t> owner;
-    for (std::size_t a = 0; a < attempts.size(); ++a)
+    for (std::size_t a = 0; a < attempts.size(); ++a) {
+      if (rejected[a]) continue;
       for (const auto& f : attempts[a].faces) {
         candidates.push_back(f);
         owner.push_back(a);
       }
-    // For a mesh made from an image, a face can only meet a patch where their projections overlap:
-    // check against the faces with a corner inside the patches' pixel bounding boxes.
-    std::vector<Face> nearby;
-    if (pixels) {
-      cv::Mat region = cv::Mat::zeros(pixels->height, pixels->width, CV_8U);
-      for (const Attempt& attempt : attempts) {
-        double u0 = 1e300, v0 = 1e300, u1 = -1e300, v1 = -1e300;
-        for (const auto& f : attempt.faces)
-          for (const int i : f) {
-            const Eigen::Vector3d& p = round_points[i];
-            if (!(p.z() > 0)) continue;
-            const Eigen::Vector2d uv = pixels->camera.project(p);
-            u0 = std::min(u0, uv.x()), v0 = std::min(v0, uv.y()), u1 = std::max(u1, uv.x()), v1 = std::max(v1, uv.y());
-          }
-        if (u0 > u1) continue;
-        const int a = std::clamp(static_cast<int>(std::floor(u0)) - 2, 0, pixels->width - 1);
-        const int b = std::clamp(static_cast<int>(std::ceil(v0 - 1)) - 2, 0, pixels->height - 1);
-        const int c = std::clamp(static_cast<int>(std::ceil(u1)) + 2, 0, pixels->width - 1);
-        const int d = std::clamp(static_cast<int>(std::ceil(v1)) + 2, 0, pixels->height - 1);
-        region(cv::Rect(a, b, c - a + 1, d - b + 1)).setTo(1);
-      }
-      const auto inside = [&](int vertex) {
-        if (vertex >= static_cast<int>(mesh.n_vertices())) return true;  // an accepted patch's new vertex
-        const OpenMesh::Vec2i p = mesh.property(pixels->properties.pixel, OpenMesh::VertexHandle(vertex));
-        return p[0] < 0 || p[1] < 0 || p[0] >= pixels->width || p[1] >= pixels->height || region.at<std::uint8_t>(p[1], p[0]);
-      };
-      for (const Face& f : others)
-        if (inside(f[0]) || inside(f[1]) || inside(f[2])) nearby.push_back(f);
     }
-    const std::vector<std::uint8_t> hit = findIntersectingFaces(round_points, candidates, pixels ? nearby : others);
-    std::vector<std::uint8_t> rejected(attempts.size(), 0);
+    const std::vector<std::uint8_t> hit = findIntersectingFaces(round_points, candidates, others);
     for (std::size_t i = 0; i < hit.size(); ++i)
       if (hit[i]) rejected[owner[i]] = 1;
     for (std::size_t a = 0; a < attempts.size(); ++a) {
       Attempt& attempt = attempts[a];
       if (rejected[a]) {
         ++result.patches_rejected_for_intersection;
-        last_failure[attempt.hole] = std::string(holeFillMethodName(method)) + ": the patch intersects the mesh";
-        still_pending.push_back(attempt.hole);
+        retry(attempt.hole, "the patch intersects the mesh");
         continue;
       }
       // Renumber the new points after the accepted ones.
@@ -146,8 +227,10 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
         attempt.faces.push_back(g);
         others.push_back(g);
       }
-      switch (method) {
-        case HoleFillMethod::triangulate_refine_fair: ++result.by_refine_fair; break;
+      switch (attempt.method) {  // a patch too large to fair came back as its triangulation
+        case HoleFillMethod::triangulate_refine_fair:
+          ++(attempt.patch.new_points.empty() ? result.by_triangulation : result.by_refine_fair);
+          break;
         case HoleFillMethod::triangulate: ++result.by_triangulation; break;
         case HoleFillMethod::centroid_fan: ++result.by_centroid_fan; break;
       }
@@ -156,6 +239,7 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
     std::sort(still_pending.begin(), still_pending.end());
     pending = std::move(still_pending);
   }
+  pending = std::move(given_up);
 
   // Attach the accepted patches. Points beyond the mesh's vertices are new vertices, in order.
   const int first_new = static_cast<int>(mesh.n_vertices());

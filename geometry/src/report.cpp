@@ -39,6 +39,7 @@ std::string reportToJson(const RunReport& r) {
   j["command"] = r.command;
   j["scene"] = r.scene;
   j["seed"] = r.seed;
+  if (!r.preset.empty()) j["preset"] = r.preset;
   j["total_seconds"] = r.total_seconds;
   auto& versions = j["versions"] = nlohmann::ordered_json::object();
   for (const auto& [name, version] : r.versions) versions[name] = version;
@@ -67,7 +68,9 @@ void writeReportJson(const std::filesystem::path& file, const RunReport& report)
 
 std::string reportSummary(const RunReport& r) {
   std::ostringstream out;
-  out << "solo " << r.command << "  scene: " << r.scene << "  seed: " << r.seed << "\n";
+  out << "solo " << r.command << "  scene: " << r.scene << "  seed: " << r.seed;
+  if (!r.preset.empty()) out << "  preset: " << r.preset;
+  out << "\n";
   for (const StageReport& s : r.stages) {
     char head[96];
     std::snprintf(head, sizeof head, "  %-12s %8.3f s  ", s.name.c_str(), s.seconds);

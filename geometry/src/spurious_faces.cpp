@@ -36,18 +36,26 @@ class JumpTest {
   JumpTest(const DepthMesh& mesh, const cv::Mat& depth, const SpuriousFaceOptions& options)
       : mesh_(mesh), depth_(depth), options_(options), focal_px_(0.5 * (mesh.camera.fx + mesh.camera.fy)) {}
 
+  /// The footprint test alone: |za - zb| over `factor` pixel footprints at the nearer depth.
+  bool exceedsFootprints(const OpenMesh::Vec2i& a, const OpenMesh::Vec2i& b, double factor) const {
+    const double za = depth_.at<float>(a[1], a[0]), zb = depth_.at<float>(b[1], b[0]);
+    const int du = b[0] - a[0], dv = b[1] - a[1];
+    return std::abs(za - zb) > factor * std::min(za, zb) / focal_px_ * std::sqrt(double(du * du + dv * dv));
+  }
+
   bool isJump(const OpenMesh::Vec2i& a, const OpenMesh::Vec2i& b) const {
+    const double factor = options_.depth_jump_factor;
     const double za = depth_.at<float>(a[1], a[0]), zb = depth_.at<float>(b[1], b[0]);
     const int du = b[0] - a[0], dv = b[1] - a[1];
     const double length_px = std::sqrt(double(du * du + dv * dv));
     const double footprint_m = std::min(za, zb) / focal_px_ * length_px;
-    if (std::abs(za - zb) <= options_.depth_jump_factor * footprint_m) return false;
+    if (std::abs(za - zb) <= factor * footprint_m) return false;
     if (!options_.extrapolation_test) return true;
     const double wa = 1.0 / za, wb = 1.0 / zb;
     // A side without a pixel behind it (image frame, sky) cannot be extrapolated: only jumps
     // larger than edge_of_data_factor times the criterion are cut there.
     if (!hasVertex(a[0] - du, a[1] - dv) || !hasVertex(b[0] + du, b[1] + dv))
-      return std::abs(za - zb) > options_.edge_of_data_factor * options_.depth_jump_factor * footprint_m;
+      return std::abs(za - zb) > options_.edge_of_data_factor * factor * footprint_m;
     const double slope_a = wa - inverseDepth(a[0] - du, a[1] - dv);
     const double slope_b = inverseDepth(b[0] + du, b[1] + dv) - wb;
     // Side a: wa + t slope_a; side b: wb + (t - 1) slope_b; t = 0 at a, 1 at b.
@@ -155,7 +163,11 @@ SpuriousFaceResult findSpuriousFaces(const DepthMesh& m, const cv::Mat& depth_m,
           const bool inside_one_thing = !instances.empty() && one_instance &&
                                         isForegroundThingClass(cityscapesClassOfInstance(ids[0])) &&
                                         zmax - zmin <= options.uncertain_same_object_span_m;
-          is_uncertain = !inside_one_thing;
+          // The mask marks where the depth is unreliable, not where surfaces part: a face in it
+          // goes only when one of its edges also jumps (the footprint test alone, since the
+          // extrapolation and step tests need the reliable depth the mask says is missing).
+          for (int k = 0; k < 3 && !inside_one_thing && !is_uncertain; ++k)
+            is_uncertain = jumps.exceedsFootprints(fp.pixel[k], fp.pixel[(k + 1) % 3], options.uncertain_jump_factor);
         }
       }
 

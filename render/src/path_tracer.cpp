@@ -1,5 +1,6 @@
 #include "solo/render/path_tracer.h"
 
+#include "solo/render/ggx.h"
 #include "solo/render/ray_caster.h"
 
 #include <Eigen/Geometry>
@@ -8,6 +9,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <mutex>
 #include <unistd.h>
 
@@ -61,23 +63,41 @@ Eigen::Vector3f cosineSample(const Eigen::Vector3f& n, float u1, float u2) {
   return (t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z).normalized();
 }
 
-struct Shading {
-  Eigen::Vector3f albedo;
-  float roughness;
-  DiffuseModel model;
+Eigen::Vector3f skyRadiance(const RenderScene& scene, const Eigen::Vector3f& w) {
+  if (!scene.sky_zenith_radiance) return scene.sky_radiance;
+  const float elevation = std::max(0.f, w.dot(scene.sky_up));
+  return scene.sky_radiance + (*scene.sky_zenith_radiance - scene.sky_radiance) * std::sqrt(elevation);
+}
 
-  // BRDF value for outgoing wo and incoming wi about normal n (both unit, cosines > 0).
-  Eigen::Vector3f eval(const Eigen::Vector3f& n, const Eigen::Vector3f& wo, const Eigen::Vector3f& wi) const {
-    if (model == DiffuseModel::Lambert) return albedo / kPi;
-    const float cos_l = std::max(0.f, n.dot(wi)), cos_v = std::max(0.f, n.dot(wo));
-    const Eigen::Vector3f h = wi + wo;
-    const float h_norm = h.norm();
-    const float cos_d = h_norm > 1e-6f ? std::clamp(wi.dot(h / h_norm), 0.f, 1.f) : 0.f;
-    const float fd90 = 0.5f + 2.f * roughness * cos_d * cos_d;
-    const auto schlick = [fd90](float c) { const float m = 1.f - c; return 1.f + (fd90 - 1.f) * m * m * m * m * m; };
-    return albedo / kPi * (schlick(cos_l) * schlick(cos_v));
+// The sun's disc: uniform directions in a cone. 1 - cos(radius) is kept apart from cos
+// because at the sun's 4.65 mrad it is 1.1e-5, below what 1 - cos resolves in float.
+struct SunDisc {
+  bool on = false;
+  Eigen::Vector3f direction, t, b;
+  Eigen::Vector3f radiance;  // illuminance / (pi sin^2 r)
+  float one_minus_cos = 0;
+  float pdf = 0;  // 1 / (2 pi (1 - cos r)), per sr
+
+  explicit SunDisc(const SunLight& sun) {
+    const float r = std::clamp(sun.angular_radius_rad, 1e-5f, 0.5f);
+    on = sun.illuminance.maxCoeff() > 0.f && sun.direction.norm() > 0.f;
+    direction = sun.direction.normalized();
+    basis(direction, t, b);
+    const float half = std::sin(0.5f * r);
+    one_minus_cos = 2.f * half * half;
+    const float sin_r = std::sin(r);
+    radiance = sun.illuminance / (kPi * sin_r * sin_r);
+    pdf = 1.f / (2.f * kPi * one_minus_cos);
+  }
+  bool contains(const Eigen::Vector3f& w) const { return 1.f - w.dot(direction) <= one_minus_cos; }
+  Eigen::Vector3f sample(float u1, float u2) const {
+    const float m = u1 * one_minus_cos;  // 1 - cos(theta)
+    const float sin_theta = std::sqrt(std::max(0.f, m * (2.f - m))), phi = 2.f * kPi * u2;
+    return (t * (sin_theta * std::cos(phi)) + b * (sin_theta * std::sin(phi)) + direction * (1.f - m)).normalized();
   }
 };
+
+float powerHeuristic(float a, float b) { return a * a / (a * a + b * b); }
 
 float luminance(const Eigen::Vector3f& xyz) { return xyz.y(); }
 
@@ -89,6 +109,8 @@ struct Context {
   const std::vector<int>& face_to_emissive;
   const LightSampler& sampler;
   std::vector<Eigen::Vector3f> face_normals;  // unit geometric normals
+  SunDisc sun;
+  bool sky_on;  // a non-black sky: next-event estimation toward it
 };
 
 struct FirstHit {
@@ -115,7 +137,16 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, Firs
     const RayHit hit = c.caster.intersect(origin, direction);
     ++rays;
     if (!hit.hit) {
-      radiance += throughput.cwiseProduct(c.scene.sky_radiance);
+      // Sky and sun: MIS-weighted against their next-event estimation after the first bounce.
+      if (c.sky_on) {
+        const float sky_pdf = std::max(0.f, previous_normal.dot(direction)) / kPi;
+        const float weight = bounce == 0 ? 1.f : powerHeuristic(previous_bsdf_pdf, sky_pdf);
+        radiance += throughput.cwiseProduct(skyRadiance(c.scene, direction)) * weight;
+      }
+      if (c.sun.on && c.sun.contains(direction)) {
+        const float weight = bounce == 0 ? 1.f : powerHeuristic(previous_bsdf_pdf, c.sun.pdf);
+        radiance += throughput.cwiseProduct(c.sun.radiance) * weight;
+      }
       break;
     }
     const std::uint32_t face = hit.triangle;
@@ -138,22 +169,21 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, Firs
           const float select = c.sampler.pmf(previous_point, previous_normal, tri);
           const float light_pdf = select / c.emissive[static_cast<std::size_t>(tri)].area * hit.distance *
                                   hit.distance / abs_cos_hit;
-          weight = previous_bsdf_pdf * previous_bsdf_pdf /
-                   (previous_bsdf_pdf * previous_bsdf_pdf + light_pdf * light_pdf);
+          weight = powerHeuristic(previous_bsdf_pdf, light_pdf);
         }
         radiance += throughput.cwiseProduct(emitted) * weight;
       }
     }
-    const Shading shading{c.scene.face_reflectance[face],
-                          has_roughness ? c.scene.face_roughness[face] : 0.5f, c.options.diffuse};
+    const Eigen::Vector3f wo = -direction;
+    const SurfaceBsdf bsdf(n, wo, c.scene.face_reflectance[face], has_roughness ? c.scene.face_roughness[face] : 0.5f,
+                           c.options.diffuse, has_roughness);
     if (bounce == 0 && first) {
-      first->albedo = shading.albedo;
+      first->albedo = bsdf.albedo();
       first->normal = n;
       first->depth = hit.distance * z_per_distance;
       first->light_id = emitter_index >= 0 ? c.scene.emitters[static_cast<std::size_t>(emitter_index)].light_id : 0;
     }
     if (bounce == c.options.max_bounces) break;
-    const Eigen::Vector3f wo = -direction;
     const Eigen::Vector3f shadow_origin = point + n * offsetFor(hit.distance);
 
     // Next-event estimation: one emissive triangle, MIS-weighted against BSDF sampling.
@@ -176,10 +206,8 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, Firs
           const Emitter& e = c.scene.emitters[static_cast<std::size_t>(c.scene.face_emitter[t.face])];
           const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, cos_light);
           const float light_pdf = pick_pmf / t.area * distance2 / cos_light;
-          const float bsdf_pdf = cos_surface / kPi;
-          const float weight = light_pdf * light_pdf / (light_pdf * light_pdf + bsdf_pdf * bsdf_pdf);
-          radiance += throughput.cwiseProduct(shading.eval(n, wo, wi)).cwiseProduct(emitted) *
-                      (cos_surface * weight / light_pdf);
+          const float weight = powerHeuristic(light_pdf, bsdf.pdf(wi));
+          radiance += throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(emitted) * (cos_surface * weight / light_pdf);
         }
       }
     }
@@ -198,15 +226,45 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, Firs
       ++rays;
       if (c.caster.occluded(shadow_origin, wi, 0.f, distance * (1.f - 1e-4f))) continue;
       const float pdf = distance2 / (cos_light * area);
-      radiance += throughput.cwiseProduct(shading.eval(n, wo, wi)).cwiseProduct(light.radiance) * (cos_surface / pdf);
+      radiance += throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(light.radiance) * (cos_surface / pdf);
+    }
+    // Sky: a cosine-weighted direction, MIS-weighted against BSDF sampling.
+    constexpr float kInfinity = std::numeric_limits<float>::infinity();
+    if (c.sky_on) {
+      const Eigen::Vector3f wi = cosineSample(n, rng.uniform(), rng.uniform());
+      const float cos_surface = n.dot(wi);
+      if (cos_surface > 1e-7f) {
+        ++rays;
+        if (!c.caster.occluded(shadow_origin, wi, 0.f, kInfinity)) {
+          const float sky_pdf = cos_surface / kPi;
+          const float weight = powerHeuristic(sky_pdf, bsdf.pdf(wi));
+          radiance += throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(skyRadiance(c.scene, wi)) * (cos_surface * weight / sky_pdf);
+        }
+      }
+    }
+    // Sun: a direction in its disc, MIS-weighted against BSDF sampling.
+    if (c.sun.on) {
+      const Eigen::Vector3f wi = c.sun.sample(rng.uniform(), rng.uniform());
+      const float cos_surface = n.dot(wi);
+      if (cos_surface > 0.f) {
+        ++rays;
+        if (!c.caster.occluded(shadow_origin, wi, 0.f, kInfinity)) {
+          const float weight = powerHeuristic(c.sun.pdf, bsdf.pdf(wi));
+          radiance += throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(c.sun.radiance) *
+                      (cos_surface * weight / c.sun.pdf);
+        }
+      }
     }
 
-    // BSDF sampling: cosine-weighted hemisphere.
-    const Eigen::Vector3f wi = cosineSample(n, rng.uniform(), rng.uniform());
+    // BSDF sampling: the lobe mixture (cosine-weighted hemisphere without a specular lobe).
+    const float u_lobe = bsdf.specular() ? rng.uniform() : 0.f;
+    const float u1 = rng.uniform(), u2 = rng.uniform();
+    Eigen::Vector3f wi;
+    if (!bsdf.sample(u_lobe, u1, u2, &wi)) break;
     const float cos_surface = n.dot(wi);
-    if (cos_surface <= 1e-7f) break;
-    const float bsdf_pdf = cos_surface / kPi;
-    throughput = throughput.cwiseProduct(shading.eval(n, wo, wi)) * (cos_surface / bsdf_pdf);
+    const float bsdf_pdf = bsdf.pdf(wi);
+    if (!(bsdf_pdf > 0.f)) break;
+    throughput = throughput.cwiseProduct(bsdf.eval(wi)) * (cos_surface / bsdf_pdf);
     if (bounce + 1 >= c.options.russian_roulette_after) {
       const float survive = std::clamp(throughput.maxCoeff(), 0.05f, 1.f);
       if (rng.uniform() >= survive) break;
@@ -270,7 +328,10 @@ RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions&
   for (std::size_t i = 0; i < emissive.size(); ++i) face_to_emissive[emissive[i].face] = static_cast<int>(i);
   const std::unique_ptr<LightSampler> sampler = makeLightSampler(options.light_sampler, emissive);
 
-  Context context{scene, options, caster, emissive, face_to_emissive, *sampler, {}};
+  if (!scene.face_roughness.empty()) ggxAverageAlbedo(0.5f);  // builds the albedo table before the tiles start
+  const bool sky_on = scene.sky_radiance.maxCoeff() > 0.f ||
+                      (scene.sky_zenith_radiance && scene.sky_zenith_radiance->maxCoeff() > 0.f);
+  Context context{scene, options, caster, emissive, face_to_emissive, *sampler, {}, SunDisc(scene.sun), sky_on};
   context.face_normals.reserve(scene.faces.size());
   for (const auto& f : scene.faces) {
     const Eigen::Vector3f cross = (scene.vertices[f[1]] - scene.vertices[f[0]]).cross(scene.vertices[f[2]] - scene.vertices[f[0]]);
@@ -322,7 +383,9 @@ RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions&
           m2_y += delta * (luminance(value) - mean_y);
           if (n >= min_samples && (n - min_samples) % 8 == 0) {
             standard_error = std::sqrt(m2_y / (n - 1) / n);
-            if (standard_error <= std::max(options.relative_error * std::abs(mean_y), static_cast<double>(absolute))) break;
+            double target = std::max(options.relative_error * std::abs(mean_y), static_cast<double>(absolute));
+            if (options.noise_sigma) target = std::max(target, options.noise_factor * options.noise_sigma(mean_y));
+            if (standard_error <= target) break;
           }
         }
         if (n > 1) standard_error = std::sqrt(m2_y / (n - 1) / n);
@@ -367,10 +430,26 @@ RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions&
     std::nth_element(relative.begin(), relative.begin() + static_cast<std::ptrdiff_t>(relative.size() / 2), relative.end());
     r.add("relative_std_error_median", static_cast<double>(relative[relative.size() / 2]));
   }
+  if (options.noise_sigma) {
+    // The promise of the noise-matched target: the share of pixels whose render noise ended
+    // below noise_factor x the sensor noise they will get (the rest hit max_samples).
+    std::int64_t below = 0;
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        if (out.std_error.at<float>(y, x) <= options.noise_factor * options.noise_sigma(out.radiance.at<cv::Vec3f>(y, x)[1]) * (1 + 1e-6))
+          ++below;
+    r.add("noise_factor", options.noise_factor);
+    r.add("pixels_below_noise_target", static_cast<double>(below) / pixels);
+  }
+  if (context.sun.on) {
+    r.add("sun_illuminance_y", static_cast<double>(scene.sun.illuminance.y()));
+    r.add("sun_angular_radius", static_cast<double>(scene.sun.angular_radius_rad), "rad");
+  }
   r.add("seed", static_cast<std::int64_t>(options.seed));
   if (emissive.empty()) r.notes.push_back("no emitting triangle: no next-event estimation toward scene lights");
   if (scene.face_roughness.empty()) r.notes.push_back("no roughness map: diffuse only");
-  else r.notes.push_back("roughness map given: used by the Disney diffuse lobe; no specular lobe in this renderer yet");
+  else if (options.diffuse == DiffuseModel::Disney) r.notes.push_back("roughness map given: Disney diffuse + GGX specular");
+  else r.notes.push_back("roughness map given: Lambert diffuse + GGX specular");
   return out;
 }
 

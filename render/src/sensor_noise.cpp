@@ -79,6 +79,20 @@ cv::Mat noiseVarianceRenderUnits(const cv::Mat& render, double exposure_scale, c
   return variance;
 }
 
+std::function<double(double)> sensorNoiseSigma(double render_to_input, double exposure_scale,
+                                               const SensorNoiseOptions& options) {
+  validate(options);
+  if (!(render_to_input > 0 && std::isfinite(render_to_input) && exposure_scale > 0 && std::isfinite(exposure_scale)))
+    throw std::invalid_argument("noise sigma needs positive, finite render and exposure scales");
+  const NoiseCalibration c = noiseCalibrationAtIso(options.iso);
+  const double range = options.white_level - options.black_level;
+  const double per_count = 1.0 / (range * exposure_scale * render_to_input);
+  return [=](double y) {
+    const double counts = options.black_level + y * render_to_input * exposure_scale * range;
+    return std::sqrt(varianceWithoutRounding(counts, c, options)) * per_count;
+  };
+}
+
 StageReport applySensorNoise(cv::Mat& exposed_linear, const SensorNoiseOptions& options) {
   Stopwatch clock;
   CV_Assert(exposed_linear.type() == CV_32FC3);

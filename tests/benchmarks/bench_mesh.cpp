@@ -1,7 +1,8 @@
 // 1080p depth map to a clean watertight mesh (the mesh stage), time per step and total, face
 // counts and quality counts. Input: the exact depth and instances of a 1920x1080 synthetic street
-// (seed 1). Baseline: backprojection alone. Run: build/release/tests/benchmarks/bench_mesh
-// --benchmark_repetitions=1 (each pipeline run takes tens of seconds).
+// (seed 1). Baseline: backprojection alone; the stage also reports its time over its own
+// backprojection step (ratio_to_backprojection). Target: the stage in at most 5 s on 2 cores.
+// Run: build/release/tests/benchmarks/bench_mesh --benchmark_repetitions=1.
 
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/mesh_metrics.h>
@@ -55,6 +56,12 @@ void cleanWatertight(benchmark::State& state) {
     const solo::DepthMesh mesh = solo::meshFromScene(maps.depth_m, camera1080p(), maps.instances, {}, options, report);
     benchmark::DoNotOptimize(mesh.mesh.n_faces());
     copyMetrics(state, report);
+    // Same-run ratio: the whole stage over its own backprojection step (the baseline's work),
+    // so that the figure survives the shared machine's load.
+    const solo::MetricValue* backprojection = report.find("seconds_backprojection");
+    if (backprojection && std::get<double>(*backprojection) > 0)
+      state.counters["ratio_to_backprojection"] = report.seconds / std::get<double>(*backprojection);
+    state.counters["seconds_stage"] = report.seconds;
   }
 }
 

@@ -129,8 +129,23 @@ TEST(SpuriousFaces, OcclusionStepIsCutExactlyAlongItsEdge) {
   jumps_off.depth_jump_factor = 1e9;
   cv::Mat uncertain(depth.size(), CV_8U, cv::Scalar(0));
   uncertain(cv::Rect(9, 0, 2, kCamera.height)).setTo(1);
-  // Faces with a corner in columns 9..10: the quads starting at columns 8, 9 and 10.
-  EXPECT_EQ(solo::findSpuriousFaces(m, depth, {}, uncertain, jumps_off).by_uncertain, 6 * (kCamera.height - 1));
+  // Faces with a corner in columns 9..10 are the quads starting at columns 8, 9 and 10; only
+  // those of quad 9 also jump (10 m to 5 m, over the mask's 8 footprints): the mask alone
+  // removes nothing.
+  const solo::SpuriousFaceResult by_mask = solo::findSpuriousFaces(m, depth, {}, uncertain, jumps_off);
+  EXPECT_EQ(by_mask.by_uncertain, 2 * (kCamera.height - 1));
+  for (const auto f : m.mesh.faces()) {
+    int left = 0, right = 0;
+    for (const auto v : m.mesh.fv_range(f)) {
+      const int u = m.mesh.property(m.properties.pixel, v)[0];
+      left += u == 9;
+      right += u == 10;
+    }
+    EXPECT_EQ(by_mask.criteria[f.idx()] == solo::kUncertain, left > 0 && right > 0) << "face " << f.idx();
+  }
+  cv::Mat flat_mask(depth.size(), CV_8U, cv::Scalar(0));
+  flat_mask(cv::Rect(2, 0, 4, kCamera.height)).setTo(1);  // over the wall only
+  EXPECT_EQ(solo::findSpuriousFaces(m, depth, {}, flat_mask, jumps_off).by_uncertain, 0);
   cv::Mat ids(depth.size(), CV_32S, cv::Scalar(11));
   ids(cv::Rect(10, 0, 10, kCamera.height)).setTo(26001);
   const solo::SpuriousFaceResult by_ids = solo::findSpuriousFaces(m, depth, ids, {}, jumps_off);
@@ -191,6 +206,32 @@ TEST(DepthMeshCleanup, HoleBehindAnOccluderIsFilledAndTheOccluderClosed) {
     }
   }
   EXPECT_NEAR(deepest_back, 6.8, 1e-9);
+}
+
+TEST(DepthMeshCleanup, CarStandingOnTheRoadDoesNotPierceTheRoadBehindIt) {
+  // Camera 1.5 m above a road (y = 1.5, z = 75 / (v - 23.5)), a wall at 20 m above row 27, and
+  // a frontal car board at 8.8 m (instance 26001) whose bottom row stands on the road. The road
+  // patch behind the car's bottom row lies about 2 cm behind the board: a back pushed the full
+  // 1.8 m would go through it.
+  const solo::PinholeCamera camera{50.0, 50.0, 31.5, 23.5, 64, 48};
+  cv::Mat depth(48, 64, CV_32F), ids(48, 64, CV_32S);
+  for (int v = 0; v < 48; ++v)
+    for (int u = 0; u < 64; ++u) {
+      const bool road = v >= 28;
+      depth.at<float>(v, u) = road ? static_cast<float>(75.0 / (v - 23.5)) : 20.0f;
+      ids.at<int>(v, u) = road ? 7 : 11;
+    }
+  const cv::Rect car(20, 18, 21, 15);  // rows 18..32; the road is at 8.82 m at row 32
+  depth(car).setTo(8.8f);
+  ids(car).setTo(26001);
+  solo::DepthMesh m = solo::meshFromDepth(depth, camera, ids);
+  const solo::StageReport r = solo::cleanDepthMesh(m, depth, ids, {});
+  EXPECT_EQ(metricInt(r, "foreground_solids"), 1);
+  EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
+  EXPECT_GT(metricInt(r, "solid_back_vertices_clamped"), 0);
+  EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0);
+  EXPECT_EQ(metricInt(r, "after_degenerate_faces"), 0);
+  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
 }
 
 TEST(DepthMeshCleanup, HoleTouchingTheFrameIsClosedAlongTheFrame) {

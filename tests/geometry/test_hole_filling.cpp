@@ -125,6 +125,27 @@ TEST(HoleFilling, TwoHolesSharingAVertexAreBothFilled) {
   EXPECT_EQ(after.self_intersecting_pairs, 0);
 }
 
+TEST(HoleFilling, SmallHoleGetsTheTriangulationOnly) {
+  // One missing square of a flat grid: a 4-vertex hole is closed by two triangles, no new vertex
+  // (refinement and fairing are kept for holes over max_triangulation_only_vertices).
+  const TriangleMesh m = grid(4, {1 + 4 * 2}, flat);
+  solo::SurfaceMesh mesh = solo::toSurfaceMesh(m);
+  std::vector<solo::VertexLoop> holes;
+  for (const auto& loop : solo::findBoundaryLoops(mesh))
+    if (loop.size() == 4) holes.push_back(loop);
+  ASSERT_EQ(holes.size(), 1u);
+  const solo::HoleClosing closing = solo::closeHoles(mesh, holes, {});
+  EXPECT_EQ(closing.filled, 1);
+  EXPECT_EQ(closing.by_triangulation, 1);
+  EXPECT_EQ(closing.by_refine_fair, 0);
+  EXPECT_EQ(closing.faces_added, 2);
+  EXPECT_EQ(closing.vertices_added, 0);
+  mesh.garbage_collection();
+  const solo::MeshMetrics after = solo::evaluateMesh(solo::toTriangleMesh(mesh));
+  EXPECT_EQ(after.boundary_loops, 1);
+  EXPECT_EQ(after.self_intersecting_pairs, 0);
+}
+
 TEST(HoleFilling, StronglyNonPlanarBoundaryIsFilledSmoothly) {
   // A saddle z = 0.35 (x-3)(y-3) with a 2x2 hole at its centre: the boundary's corners rise and
   // fall by 0.35 while its edges stay flat.
@@ -135,7 +156,11 @@ TEST(HoleFilling, StronglyNonPlanarBoundaryIsFilledSmoothly) {
     if (loop.size() == 8) holes.push_back(loop);
   ASSERT_EQ(holes.size(), 1u);
   const solo::HoleClosing closing = solo::closeHoles(mesh, holes, {});
-  EXPECT_EQ(closing.by_refine_fair, 1);
+  // Refinement at the boundary's unit edge length adds no vertex to a 2x2 hole: the patch is its
+  // triangulation, and is counted as one.
+  EXPECT_EQ(closing.filled, 1);
+  EXPECT_EQ(closing.by_triangulation, 1);
+  EXPECT_EQ(closing.vertices_added, 0);
   mesh.garbage_collection();
   const TriangleMesh out = solo::toTriangleMesh(mesh);
   const solo::MeshMetrics after = solo::evaluateMesh(out);

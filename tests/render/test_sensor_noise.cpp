@@ -128,3 +128,18 @@ TEST(SensorNoise, AllBlackImageStaysAroundZeroAndClipsAtTheRawRange) {
   EXPECT_EQ(std::get<std::int64_t>(*saturated.find("clipped_at_white")), 16 * 16 * 3);
   EXPECT_NEAR(std::get<double>(*report.find("std_at_black_level")), 3 * std::sqrt(4.245 * 64 - 231), 1e-9);
 }
+
+TEST(SensorNoise, SigmaInRenderUnitsFollowsTheCalibrationThroughBothScales) {
+  // A render of luminance Y is multiplied by c = 0.01 before the post-process and by the
+  // exposure e = 9.5: raw counts 64 + Y c e 959; sigma in render units = sigma_counts / (959 e c).
+  const solo::SensorNoiseOptions options;
+  const double c = 0.01, e = 9.5;
+  const auto sigma = solo::sensorNoiseSigma(c, e, options);
+  for (double y : {0.0, 1.0, 5.0, 10.0}) {
+    const double counts = 64 + y * c * e * 959;
+    const double expected = 3 * std::sqrt(4.245 * counts - 231) / (959 * e * c);
+    EXPECT_NEAR(sigma(y), expected, 1e-9 * expected) << y;
+    EXPECT_NEAR(sigma(y), std::sqrt(solo::noiseVarianceRenderUnits(y * c, e, options)) / c, 1e-9 * expected);
+  }
+  EXPECT_THROW(solo::sensorNoiseSigma(0.0, e, options), std::invalid_argument);
+}

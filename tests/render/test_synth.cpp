@@ -262,3 +262,20 @@ TEST(SynthCli, SameSeedSameFilesDifferentSeedDifferentScene) {
   EXPECT_NE(bad.output.find("unknown scene variant"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(dir / "d"));
 }
+
+TEST(SynthCli, PathTracedDayImageIsDeterministicAndItsOptionChecked) {
+  TempDir dir;
+  for (const char* run : {"a", "b"}) {
+    const auto r = solo::test::runSolo("synth --size 64x36 --day-render path -o \"" + (dir / run).string() + "\"");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("day image path traced"), std::string::npos) << r.output;
+  }
+  EXPECT_TRUE(solo::test::readText(dir / "a/day.png") == solo::test::readText(dir / "b/day.png"));
+  ASSERT_EQ(solo::test::runSolo("synth --size 64x36 -o \"" + (dir / "r").string() + "\"").exit_code, 0);
+  EXPECT_FALSE(solo::test::readText(dir / "a/day.png") == solo::test::readText(dir / "r/day.png"));
+  EXPECT_TRUE(solo::test::readText(dir / "a/gt/depth.exr") == solo::test::readText(dir / "r/gt/depth.exr"));
+  const auto bad = solo::test::runSolo("synth --day-render cycles -o \"" + (dir / "d").string() + "\"");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.output.find("--day-render"), std::string::npos) << bad.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "d"));
+}

@@ -29,6 +29,10 @@ struct DepthMesh {
   PinholeCamera camera;              ///< scaled to the depth map
   /// Vertex handle index of each pixel (row-major, v * width + u), -1 = no vertex.
   std::vector<int> vertex_of_pixel;
+  /// Set by cleanDepthMesh (empty before): CV_8U of the depth map's size holding, at the pixel
+  /// of every vertex of a face removed as spurious, that face's SpuriousCriterion bits (ORed);
+  /// 0 elsewhere. For pictures of what was cut (the contact sheet).
+  cv::Mat removed_spurious;
 
   int vertexAt(int u, int v) const {
     return (u < 0 || v < 0 || u >= width || v >= height) ? -1 : vertex_of_pixel[static_cast<std::size_t>(v) * width + u];

@@ -5,7 +5,9 @@
 // its viewing ray by the class's thickness, back faces are the front faces reversed, and side
 // walls (two triangles per border edge) join front and back along every boundary loop. The
 // thickness is clamped so the back stays `clearance_m` in front of the surface behind it (the
-// hole patches rasterised in the depth map's pixels), never below `min_thickness_m`.
+// hole patches rasterised in the depth map's pixels, however close behind the front), never
+// below `min_thickness_m` unless the surface behind is nearer than clearance plus minimum: then
+// the back stays halfway to it (a thinner solid rather than one through the patch).
 // Each solid is closed and consistently oriented. Its back is not checked against other geometry
 // beyond the clamp: the final evaluation reports any self-intersection that remains.
 

@@ -28,7 +28,13 @@ struct HoleFillOptions {
   int fairing_continuity = 1;                 ///< 0: C0, 1: tangent (CGAL's default), 2: curvature
   double time_limit_s = 10.0;                 ///< per hole and method, checked between CGAL steps
   int max_cubic_boundary_vertices = 300;      ///< exhaustive search only for holes this small
-  int max_fair_vertices = 10000;              ///< larger refined patches are not faired (sparse LU cost)
+  /// Patches whose refinement would add more vertices than this (estimated from the
+  /// triangulation's area and the boundary's mean edge length) keep the triangulation alone:
+  /// the sparse LU of the fairing grows faster than linearly.
+  int max_fair_vertices = 10000;
+  /// Holes with at most this many boundary vertices (one or two missing pixel quads) get the
+  /// triangulation only: refining them adds next to nothing and costs a CGAL mesh per hole.
+  int max_triangulation_only_vertices = 6;
 };
 
 /// A patch: triangles over the boundary points (indices 0..n-1) and new points (index n + k is
@@ -40,6 +46,8 @@ struct HolePatch {
   bool filled = false;
   std::string failure;  ///< why nothing was produced
   bool faired = false;  ///< fairing ran and succeeded
+  /// The triangulation itself failed (so a triangulation-only retry would fail the same way).
+  bool triangulation_failed = false;
 };
 
 /// Fills the closed polyline `boundary` (first point not repeated) with `method`. Never throws
@@ -51,6 +59,10 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 /// other than in what they share by index (the rules of evaluateMesh: no shared vertex, any
 /// contact; a shared vertex, the opposite edge of one meets the other; a shared edge, coplanar
 /// and folded onto the same side). Faces index into `points`; degenerate faces are skipped.
+/// The same rule for one pair of faces (indices into `points`); false when either is degenerate.
+bool patchFacesIntersect(const std::vector<Eigen::Vector3d>& points, const std::array<int, 3>& a,
+                         const std::array<int, 3>& b);
+
 std::vector<std::uint8_t> findIntersectingFaces(const std::vector<Eigen::Vector3d>& points,
                                                 const std::vector<std::array<int, 3>>& candidates,
                                                 const std::vector<std::array<int, 3>>& others);

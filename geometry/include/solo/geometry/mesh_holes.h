@@ -30,11 +30,18 @@ struct PixelMapping {
   ImageVertexProperties properties;
   PinholeCamera camera;  ///< of the depth map; new vertices get the pixel they project to
   int width = 0, height = 0;
+  /// The depth mesh's vertex of each pixel (DepthMesh::vertex_of_pixel): patches are verified
+  /// only against the faces around the pixels they project onto (every mesh face lies within
+  /// its pixel quad, so one that meets a patch face has a corner within one pixel of the
+  /// patch face's projection).
+  const std::vector<int>* vertex_of_pixel = nullptr;
 };
 
-/// Fills the holes (loops in border half-edge direction, see findBoundaryLoops). When `pixels`
-/// is given, new vertices get their projected pixel (clamped to the map), origin hole_fill and
-/// the instance most boundary vertices carry.
+/// Fills the holes (loops in border half-edge direction, see findBoundaryLoops). Holes up to
+/// options.max_triangulation_only_vertices boundary vertices start at the triangulation (no
+/// refinement or fairing). Patches are computed in parallel. When `pixels` is given, new
+/// vertices get their projected pixel (clamped to the map), origin hole_fill and the instance
+/// most boundary vertices carry, and every face of the mesh must have its corners on pixels.
 HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, const HoleFillOptions& options,
                        const std::optional<PixelMapping>& pixels = std::nullopt);
 

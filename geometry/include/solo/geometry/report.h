@@ -40,6 +40,7 @@ struct RunReport {
   std::string command;  ///< "night", "depth", ...
   std::uint64_t seed = 0;
   std::string scene;
+  std::string preset;  ///< quality preset of the run ("draft", ...); empty: the command has none
   std::vector<std::pair<std::string, std::string>> versions;  ///< library -> version
   std::vector<StageReport> stages;
   std::vector<std::string> notes;

@@ -6,27 +6,32 @@
 
 #include "solo/render/light_sampler.h"
 #include "solo/render/render_scene.h"
+#include "solo/render/surface_bsdf.h"
 
 #include <solo/geometry/report.h>
 
 #include <opencv2/core.hpp>
 
 #include <cstdint>
+#include <functional>
 
 namespace solo {
-
-enum class DiffuseModel {
-  Disney,   ///< Burley's diffuse lobe (the paper's), roughness 0.5 where no map is given
-  Lambert,  ///< albedo / pi
-};
 
 struct PathTracerOptions {
   int min_samples = 16;   ///< per pixel before the error estimate is trusted; at least 2 are taken
   int max_samples = 256;  ///< per pixel
   /// Stop a pixel when the standard error of its mean luminance (Y) is below
-  /// max(relative_error * mean, absolute_error[pixel]).
+  /// max(relative_error * mean, absolute_error[pixel], noise_factor * noise_sigma(mean)).
   double relative_error = 0.02;
-  cv::Mat absolute_error;  ///< CV_32F per pixel, render units; empty = none (e.g. the sensor noise's sigma)
+  cv::Mat absolute_error;  ///< CV_32F per pixel, render units; empty = none
+  /// Standard deviation of the noise the output will receive afterwards (the sensor noise)
+  /// as a function of the pixel's mean luminance, render units; empty = none. Called from
+  /// every thread: it must be thread-safe. See sensorNoiseSigma (sensor_noise.h).
+  std::function<double(double mean_y)> noise_sigma;
+  /// Render noise is independent of the sensor's, so the variances add: a render standard
+  /// error of k sigma raises the final noise to sqrt(1 + k^2) sigma, +12 % at k = 0.5; below
+  /// that, more samples buy little that can be seen.
+  double noise_factor = 0.5;
   int max_bounces = 12;
   int russian_roulette_after = 3;  ///< bounces before roulette starts
   LightSamplerKind light_sampler = LightSamplerKind::Hierarchy;

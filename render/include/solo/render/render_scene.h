@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace solo {
@@ -34,6 +35,16 @@ struct RectangleLight {
   float spread_rad = 3.14159265f;  ///< full cone angle of emission; pi = a Lambertian hemisphere
 };
 
+/// A distant light: the sun as a disc of small angular radius and uniform radiance
+/// illuminance / (pi sin^2(radius)), so that a surface facing it receives `illuminance`.
+struct SunLight {
+  Eigen::Vector3f direction{0.f, -1.f, 0.f};  ///< unit, toward the sun, camera frame
+  /// XYZ irradiance on a surface facing the sun, render units times sr (lux when radiance is
+  /// in cd/m^2); 0 = no sun.
+  Eigen::Vector3f illuminance{0.f, 0.f, 0.f};
+  float angular_radius_rad = 0.00465f;  ///< the sun's, seen from the earth: 0.267 degrees
+};
+
 struct RenderScene {
   std::vector<Eigen::Vector3f> vertices;            ///< metres, camera frame
   std::vector<std::array<std::uint32_t, 3>> faces;
@@ -43,6 +54,11 @@ struct RenderScene {
   std::vector<Emitter> emitters;
   std::vector<RectangleLight> rectangle_lights;
   Eigen::Vector3f sky_radiance{0.f, 0.f, 0.f};      ///< seen by rays that leave the scene; 0 = black sky
+  /// Optional sky gradient: radiance sky_radiance at and below the horizon rising to this at
+  /// the zenith as sky_radiance + (zenith - sky_radiance) sqrt(max(0, w.sky_up)). Empty = uniform.
+  std::optional<Eigen::Vector3f> sky_zenith_radiance;
+  Eigen::Vector3f sky_up{0.f, -1.f, 0.f};           ///< unit, camera frame (OpenCV: y down)
+  SunLight sun;                                     ///< daytime mode; zero illuminance = none
   PinholeCamera camera;                             ///< for the image resolution
 };
 

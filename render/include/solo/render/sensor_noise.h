@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace solo {
@@ -50,6 +51,15 @@ double noiseVarianceCounts(double raw_counts, const SensorNoiseOptions& options)
 double noiseVarianceRenderUnits(double render_value, double exposure_scale, const SensorNoiseOptions& options);
 /// The same for every pixel and channel of a CV_32FC3 render: CV_32FC3 variances.
 cv::Mat noiseVarianceRenderUnits(const cv::Mat& render, double exposure_scale, const SensorNoiseOptions& options);
+
+/// The noise's standard deviation in the renderer's units as a function of a pixel's
+/// luminance Y, for a render that is multiplied by `render_to_input` before the
+/// post-process and by `exposure_scale` in it: sqrt(noiseVarianceRenderUnits(Y
+/// render_to_input, exposure_scale)) / render_to_input. For the path tracer's noise-matched
+/// stopping rule (PathTracerOptions::noise_sigma). Throws std::invalid_argument for invalid
+/// options or scales <= 0.
+std::function<double(double)> sensorNoiseSigma(double render_to_input, double exposure_scale,
+                                               const SensorNoiseOptions& options);
 
 /// Adds the noise in place to an exposed linear CV_32FC3 image (1 = sensor white).
 /// Seeded per row, so the result depends on the seed only, not on the thread count.

@@ -1,0 +1,79 @@
+// `solo night --noise-target`: the exposure is metered on a preview before the render, the
+// render stops at the sensor-noise target and reports how many pixels reached it, and the
+// post-process uses the exposure the target was set for.
+
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <string>
+
+#include "test_support.h"
+
+using solo::test::readText;
+using solo::test::runSolo;
+using solo::test::TempDir;
+
+namespace {
+
+std::string q(const std::filesystem::path& p) { return "\"" + p.string() + "\""; }
+
+const nlohmann::json& stage(const nlohmann::json& report, const std::string& name) {
+  for (const auto& s : report["stages"])
+    if (s["name"] == name) return s;
+  throw std::runtime_error("no stage " + name);
+}
+
+std::string noteStartingWith(const nlohmann::json& s, const std::string& prefix) {
+  for (const auto& n : s["notes"])
+    if (n.get<std::string>().rfind(prefix, 0) == 0) return n.get<std::string>();
+  return {};
+}
+
+double metric(const nlohmann::json& s, const std::string& name) {
+  const auto& m = s["metrics"][name];
+  return m.is_object() ? m["value"].get<double>() : m.get<double>();
+}
+
+}  // namespace
+
+TEST(NightNoiseTarget, MetersAPreviewStopsAtTheSensorNoiseAndReportsTheShareReached) {
+  TempDir dir;
+  const auto synth = runSolo("synth -o " + q(dir / "street") + " --size 128x72 --seed 3");
+  ASSERT_EQ(synth.exit_code, 0) << synth.output;
+  const std::string base =
+      "night " + q(dir / "street" / "scene.json") + " --no-optimize --no-solids --min-spp 4 --max-spp 8";
+
+  const auto r = runSolo(base + " --noise-target -o " + q(dir / "n.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto report = nlohmann::json::parse(readText(dir / "n.report.json"));
+  const auto& render = stage(report, "render");
+  EXPECT_EQ(metric(render, "noise_factor"), 0.5);
+  const double below = metric(render, "pixels_below_noise_target");
+  EXPECT_GT(below, 0.0);
+  EXPECT_LE(below, 1.0);
+  // The note names the preview (a quarter of 128x72, at min-spp) and the sensor white it
+  // metered, which is the one the post-process used.
+  const std::string note =
+      noteStartingWith(render, "noise-matched target: standard error <= 0.50 x sensor noise sigma");
+  ASSERT_FALSE(note.empty()) << render.dump(2);
+  EXPECT_NE(note.find("preview at 4 spp"), std::string::npos) << note;
+  EXPECT_NE(note.find("32x18"), std::string::npos) << note;
+  const auto at = note.find("sensor white ");
+  ASSERT_NE(at, std::string::npos);
+  const double metered = std::strtod(note.c_str() + at + 13, nullptr);
+  EXPECT_NEAR(metric(stage(report, "post"), "sensor_white"), metered, 1e-5 * metered);
+
+  // A given sensor white needs no preview; with the sensor noise off the target cannot apply.
+  const auto given = runSolo(base + " --noise-target --sensor-white 5 -o " + q(dir / "g.png"));
+  ASSERT_EQ(given.exit_code, 0) << given.output;
+  const auto given_report = nlohmann::json::parse(readText(dir / "g.report.json"));
+  EXPECT_FALSE(noteStartingWith(stage(given_report, "render"), "noise-matched target").empty());
+  EXPECT_NE(noteStartingWith(stage(given_report, "render"), "noise-matched target").find("sensor white given, 5 cd/m2"),
+            std::string::npos);
+  EXPECT_EQ(metric(stage(given_report, "post"), "sensor_white"), 5.0);
+  const auto quiet = runSolo(base + " --noise-target --no-noise -o " + q(dir / "q.png"));
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.output;
+  const auto quiet_report = nlohmann::json::parse(readText(dir / "q.report.json"));
+  EXPECT_FALSE(noteStartingWith(stage(quiet_report, "render"), "--noise-target ignored").empty());
+  EXPECT_FALSE(stage(quiet_report, "render")["metrics"].contains("pixels_below_noise_target"));
+}

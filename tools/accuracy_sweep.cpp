@@ -1,0 +1,635 @@
+// The sweeps of `solo bench accuracy` (accuracy_sweep.h, docs/accuracy.md). Every point runs
+// the library functions `solo night` runs, with one knob changed, and measures the result
+// against the synthetic scene's exact ground truth.
+
+#include "accuracy_sweep.h"
+#include "night_presets.h"
+
+#include <solo/geometry/depth_metrics.h>
+#include <solo/geometry/depth_refinement.h>
+#include <solo/geometry/mesh_cleanup.h>
+#include <solo/geometry/mesh_metrics.h>
+#include <solo/geometry/normal_metrics.h>
+#include <solo/geometry/normals_from_depth.h>
+#include <solo/geometry/report.h>
+#include <solo/geometry/surface_mesh.h>
+#include <solo/lighting/light_stage.h>
+#include <solo/render/night_scene.h>
+#include <solo/render/path_tracer.h>
+#include <solo/render/post_process.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+
+namespace solo::tools {
+
+double loadAverage1Min() {
+  double load[1] = {-1};
+  return ::getloadavg(load, 1) == 1 ? load[0] : -1;
+}
+
+std::size_t SweepTable::column(const std::string& name) const {
+  const auto it = std::find(columns.begin(), columns.end(), name);
+  if (it == columns.end()) throw std::out_of_range("table " + stage + " has no column " + name);
+  return static_cast<std::size_t>(it - columns.begin());
+}
+
+std::string SweepTable::csv() const {
+  std::ostringstream out;
+  const auto line = [&](const std::vector<std::string>& cells) {
+    for (std::size_t i = 0; i < cells.size(); ++i) out << (i ? "," : "") << cells[i];
+    out << "\n";
+  };
+  line(columns);
+  for (const auto& row : rows) line(row);
+  return out.str();
+}
+
+namespace {
+
+std::string num(double v) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.6g", v);
+  return buffer;
+}
+std::string seconds(double v) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.4f", v);
+  return buffer;
+}
+std::string integer(std::int64_t v) { return std::to_string(v); }
+std::string boolean(bool v) { return v ? "true" : "false"; }
+
+std::int64_t metricInt(const StageReport& report, const std::string& name) {
+  const MetricValue* v = report.find(name);
+  if (!v) return 0;
+  if (const auto* i = std::get_if<std::int64_t>(v)) return *i;
+  if (const auto* d = std::get_if<double>(v)) return static_cast<std::int64_t>(*d);
+  return 0;
+}
+double metricDouble(const StageReport& report, const std::string& name) {
+  const MetricValue* v = report.find(name);
+  if (!v) return 0;
+  if (const auto* d = std::get_if<double>(v)) return *d;
+  if (const auto* i = std::get_if<std::int64_t>(v)) return static_cast<double>(*i);
+  return 0;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// Runs `run` once, and again (up to `repeats` runs in all) while one run is cheaper than
+/// `cheap_s`: the median wall time and the number of runs. The runs are deterministic, so the
+/// result of the last one stands for all.
+template <class Run>
+std::pair<double, int> timed(Run&& run, int repeats, double cheap_s) {
+  std::vector<double> times;
+  do {
+    Stopwatch clock;
+    run();
+    times.push_back(clock.seconds());
+  } while (static_cast<int>(times.size()) < repeats && times.front() < cheap_s);
+  return {median(times), static_cast<int>(times.size())};
+}
+
+// Auto exposure as `solo night` does it (cmd_night.cpp): the 95th percentile of the lit,
+// non-emitting pixels' luminance at 80 % of sensor white.
+double sensorWhite(const cv::Mat& radiance, const cv::Mat& light_id) {
+  std::vector<float> y;
+  for (int r = 0; r < radiance.rows; ++r)
+    for (int c = 0; c < radiance.cols; ++c) {
+      const float v = radiance.at<cv::Vec3f>(r, c)[1];
+      if (light_id.at<int>(r, c) == 0 && v > 0.f) y.push_back(v);
+    }
+  if (y.empty()) return 1.0;
+  const auto k = static_cast<std::ptrdiff_t>(0.95 * static_cast<double>(y.size() - 1));
+  std::nth_element(y.begin(), y.begin() + k, y.end());
+  return std::max(1e-6, static_cast<double>(y[static_cast<std::size_t>(k)]) / 0.8);
+}
+
+/// Error of a render's luminance Y against a reference over the pixels that show no emitter in
+/// either image (lamps are exact in both and would flatter the figure). The main figure clips
+/// both at the reference's sensor white (what `solo night`'s auto exposure maps to white), as
+/// the final image does: without clipping, one firefly (a rare path to a lamp of 10^3 cd/m^2)
+/// in either image outweighs every other pixel and the error stays near 1 whatever the samples.
+struct RadianceError {
+  double white = 0;                    ///< the clipping level, render units (cd/m^2)
+  double relative_rmse = 0;            ///< sqrt(sum (y' - r')^2 / sum r'^2), y' = min(y, white)
+  double reference_noise = 0;          ///< sqrt(sum se_ref^2 / sum r'^2) over the reference's unclipped pixels
+  double noise_corrected = 0;          ///< sqrt(max(0, sum (y' - r')^2 - sum se_ref^2) / sum r'^2)
+  double relative_rmse_unclipped = 0;  ///< sqrt(sum (y - r)^2 / sum r^2)
+  double luminance_ratio = 0;          ///< sum y' / sum r': a bias (brighter > 1, darker < 1)
+  std::int64_t pixels = 0;
+};
+
+RadianceError radianceError(const RenderOutput& image, const RenderOutput& reference) {
+  CV_Assert(image.radiance.size() == reference.radiance.size());
+  RadianceError e;
+  e.white = sensorWhite(reference.radiance, reference.light_id);
+  double squared = 0, norm = 0, variance = 0, squared_raw = 0, norm_raw = 0, sum = 0, sum_ref = 0;
+  for (int y = 0; y < reference.radiance.rows; ++y)
+    for (int x = 0; x < reference.radiance.cols; ++x) {
+      if (reference.light_id.at<int>(y, x) != 0 || image.light_id.at<int>(y, x) != 0) continue;
+      const double r = reference.radiance.at<cv::Vec3f>(y, x)[1], v = image.radiance.at<cv::Vec3f>(y, x)[1];
+      const double rc = std::min(r, e.white), vc = std::min(v, e.white);
+      const double se = reference.std_error.at<float>(y, x);
+      squared += (vc - rc) * (vc - rc);
+      sum += vc, sum_ref += rc;
+      norm += rc * rc;
+      if (r < e.white) variance += se * se;
+      squared_raw += (v - r) * (v - r);
+      norm_raw += r * r;
+      ++e.pixels;
+    }
+  if (norm > 0) {
+    e.relative_rmse = std::sqrt(squared / norm);
+    e.reference_noise = std::sqrt(variance / norm);
+    e.noise_corrected = std::sqrt(std::max(0.0, squared - variance) / norm);
+  }
+  if (sum_ref > 0) e.luminance_ratio = sum / sum_ref;
+  if (norm_raw > 0) e.relative_rmse_unclipped = std::sqrt(squared_raw / norm_raw);
+  return e;
+}
+
+/// One setting of the whole pipeline (the knobs of `solo night` the sweep varies).
+struct PipelineSetting {
+  std::string name;
+  bool refine = true;          ///< filter and uncertain regions (upsampling always runs)
+  int refine_iterations = 10;  ///< Ceres L-BFGS iterations; 0 = no optimisation
+  double refine_tolerance = NormalGuidedOptimizationOptions{}.function_tolerance;
+  bool fill_holes = true;
+  int max_fair_vertices = HoleFillOptions{}.max_fair_vertices;
+  bool solids = true;
+  LightSamplerKind sampler = LightSamplerKind::Power;
+  int min_spp = 4, max_spp = 16;
+  double relative_error = 0.1;
+  bool glare = true, noise = true;  ///< post-process (its time only)
+};
+
+/// A quality preset of `solo night` (night_presets.h) as a pipeline setting.
+PipelineSetting presetSetting(const std::string& preset) {
+  NightOptions n;
+  n.preset = preset;
+  applyNightPreset(n, [](const std::string&) { return false; });
+  PipelineSetting s;
+  s.name = preset;
+  s.refine = n.refine;
+  s.refine_iterations = n.optimize ? n.optimize_iterations : 0;
+  s.refine_tolerance = n.optimize_tolerance;
+  s.solids = n.solids;
+  s.sampler = lightSamplerFromName(n.light_sampler);
+  s.min_spp = n.min_samples, s.max_spp = n.max_samples, s.relative_error = n.relative_error;
+  s.glare = n.glare, s.noise = n.noise;
+  return s;
+}
+
+}  // namespace
+
+struct AccuracySweep::Impl {
+  Scene scene, truth;
+  TriangleMesh truth_mesh;
+  AccuracySweepOptions o;
+
+  // Shared products, made on first use.
+  std::optional<DepthRefinementResult> prefix;  ///< upsample + filter + uncertain, no optimisation
+  double prefix_seconds = 0;
+  int prefix_repeats = 0;
+  std::optional<DepthRefinementResult> refined;  ///< the default refinement
+  std::optional<DepthMesh> mesh;                 ///< the default mesh of the default refinement
+  std::optional<NightScene> night;               ///< with the default lights
+
+  void say(const std::string& line) const {
+    if (o.progress) o.progress(line);
+  }
+
+  std::vector<std::string> head() const {
+    return {integer(static_cast<std::int64_t>(o.seed)), integer(scene.width()), integer(scene.height())};
+  }
+
+  const DepthRefinementResult& refinementPrefix() {
+    if (!prefix) {
+      DepthRefinementOptions options;
+      options.optimize = false;
+      const auto [s, n] = timed([&] { prefix = refineDepth(scene, options); }, o.repeats, o.cheap_seconds);
+      prefix_seconds = s, prefix_repeats = n;
+    }
+    return *prefix;
+  }
+
+  const DepthRefinementResult& defaultRefinement() {
+    if (!refined) {
+      say("default refinement (for the mesh and render sweeps) ...");
+      refined = refineDepth(scene, DepthRefinementOptions{});
+    }
+    return *refined;
+  }
+
+  DepthMeshCleanupOptions meshOptions(bool fill_holes, int max_fair_vertices, bool solids) const {
+    DepthMeshCleanupOptions m;
+    m.fill_holes = fill_holes;
+    m.hole_filling.max_fair_vertices = max_fair_vertices;
+    m.close_solids = solids;
+    m.evaluate = false;  // as `solo night`: the quality counts cost more than the stage
+    return m;
+  }
+
+  const DepthMesh& defaultMesh() {
+    if (!mesh) {
+      const DepthRefinementResult& r = defaultRefinement();
+      say("default mesh (for the render sweep) ...");
+      StageReport report;
+      mesh = meshFromScene(r.depth_m, scene.camera, r.maps.instances, r.uncertain,
+                           meshOptions(true, HoleFillOptions{}.max_fair_vertices, true), report);
+    }
+    return *mesh;
+  }
+
+  LightStageOptions lightOptions() const {
+    LightStageOptions l;
+    l.instantiation.seed = o.seed;
+    l.illuminant_table = o.illuminant_table;
+    return l;
+  }
+
+  const NightScene& defaultNight() {
+    if (!night) {
+      const DepthRefinementResult& r = defaultRefinement();
+      const DepthMesh& m = defaultMesh();
+      const LightStageResult lights = runLightStage(scene, r.depth_m, lightOptions());
+      night = buildNightScene(m, r.maps.albedo, r.maps.roughness, scene.image, lights.record);
+    }
+    return *night;
+  }
+
+  RenderOutput reference(const RenderScene& render_scene, double& seconds_out) {
+    PathTracerOptions t;
+    t.min_samples = t.max_samples = o.reference_spp;
+    t.light_sampler = LightSamplerKind::Power;
+    t.seed = o.seed + kReferenceSeedOffset;
+    t.progress = false;
+    Stopwatch clock;
+    RenderOutput out = renderPathTraced(render_scene, t);
+    seconds_out = clock.seconds();
+    return out;
+  }
+
+  // ---- refine -------------------------------------------------------------------------------
+
+  struct DepthAccuracy {
+    double abs_rel = 0, rmse_m = 0, normal_mean_deg = 0, normal_median_deg = 0;
+  };
+  DepthAccuracy depthAccuracy(const cv::Mat& depth_m) const {
+    DepthEvaluationInput d;
+    d.prediction_m = depth_m;
+    d.ground_truth_m = truth.depth_m;
+    const DepthMetrics dm = evaluateDepth(d);
+    NormalEvaluationInput n;
+    n.prediction = normalsFromDepth(depth_m, scene.camera);
+    n.ground_truth = truth.normals;
+    const NormalMetrics nm = evaluateNormals(n);
+    return {dm.abs_rel, dm.rmse_m, nm.mean_deg, nm.median_deg};
+  }
+
+  SweepTable refineSweep() {
+    SweepTable t;
+    t.stage = "refine";
+    t.columns = {"seed", "width", "height", "method", "max_iterations", "function_tolerance", "iterations_run",
+                 "repeats", "seconds", "optimize_seconds", "objective", "abs_rel", "rmse_m", "normal_mean_deg",
+                 "normal_median_deg", "load_1min"};
+    const auto add = [&](const std::string& method, const std::string& max_iterations, const std::string& tolerance,
+                         const std::string& iterations_run, int repeats, double total_s, const std::string& optimize_s,
+                         const std::string& objective, const cv::Mat& depth_m) {
+      const DepthAccuracy a = depthAccuracy(depth_m);
+      std::vector<std::string> row = head();
+      row.insert(row.end(), {method, max_iterations, tolerance, iterations_run, integer(repeats), seconds(total_s),
+                             optimize_s, objective, num(a.abs_rel), num(a.rmse_m), num(a.normal_mean_deg),
+                             num(a.normal_median_deg), num(loadAverage1Min())});
+      t.rows.push_back(row);
+      say("[refine] " + method + (max_iterations.empty() ? "" : " " + max_iterations + " it") +
+          (tolerance.empty() ? "" : " tol " + tolerance) + ": " + seconds(total_s) + " s, AbsRel " + num(a.abs_rel) +
+          ", normals " + num(a.normal_mean_deg) + " deg mean");
+    };
+
+    {  // upsampling alone: `solo night --no-refine`
+      DepthRefinementOptions options;
+      options.filter = options.uncertain_regions = options.optimize = false;
+      DepthRefinementResult r;
+      const auto [s, n] = timed([&] { r = refineDepth(scene, options); }, o.repeats, o.cheap_seconds);
+      add("upsample_only", "", "", "", n, s, "", "", r.depth_m);
+    }
+    const DepthRefinementResult& p = refinementPrefix();
+    add("filter_only", "0", "", "0", prefix_repeats, prefix_seconds, "0", "", p.depth_m);
+
+    const auto ceres = [&](const std::string& method, int max_iterations, double tolerance) {
+      NormalGuidedOptimizationOptions options;
+      options.max_iterations = max_iterations;
+      options.function_tolerance = tolerance;
+      NormalGuidedOptimizationResult r;
+      const auto [s, n] = timed(
+          [&] { r = optimizeDepthWithNormals(p.filtered_depth_m, p.normals, p.uncertain, p.maps.instances, scene.camera,
+                                             options); },
+          o.repeats, o.cheap_seconds);
+      add(method, integer(max_iterations), num(tolerance), integer(metricInt(r.report, "iterations")), n,
+          prefix_seconds + s, seconds(s), num(r.final.total), r.depth_m);
+    };
+    const std::vector<int> iterations = o.quick ? std::vector<int>{1, 3, 10} : std::vector<int>{1, 2, 3, 5, 10, 20, 40};
+    for (int k : iterations) ceres("ceres_lbfgs", k, NormalGuidedOptimizationOptions{}.function_tolerance);
+    const std::vector<double> tolerances = o.quick ? std::vector<double>{1e-2} : std::vector<double>{1e-2, 1e-3, 1e-4};
+    for (double tol : tolerances) ceres("ceres_lbfgs_tolerance", o.quick ? 30 : 100, tol);
+
+    const std::vector<int> adam_iterations = o.quick ? std::vector<int>{10} : std::vector<int>{10, 100};
+    for (int k : adam_iterations) {
+      AdamOptions options;
+      options.iterations = k;
+      NormalGuidedOptimizationResult r;
+      const auto [s, n] = timed(
+          [&] { r = optimizeDepthWithAdam(p.filtered_depth_m, p.normals, p.uncertain, p.maps.instances, scene.camera,
+                                          options); },
+          o.repeats, o.cheap_seconds);
+      add("adam", integer(k), "", integer(k), n, prefix_seconds + s, seconds(s), num(r.final.total), r.depth_m);
+    }
+    t.notes.push_back("seconds = upsample + filter + uncertain regions (" + seconds(prefix_seconds) +
+                      " s, median of " + integer(prefix_repeats) +
+                      ") + the optimisation; normals are those of each depth (normalsFromDepth) against the true normals");
+    return t;
+  }
+
+  // ---- mesh ---------------------------------------------------------------------------------
+
+  SweepTable meshSweep() {
+    SweepTable t;
+    t.stage = "mesh";
+    t.columns = {"seed", "width", "height", "setting", "fill_holes", "max_fair_vertices", "close_solids", "repeats",
+                 "seconds", "hole_filling_seconds", "faces", "holes_filled", "holes_left_open", "solids",
+                 "mean_to_ref_m", "hausdorff_to_ref_m", "mean_from_ref_m", "chamfer_m", "load_1min"};
+    const DepthRefinementResult& r = defaultRefinement();
+    struct Point {
+      std::string name;
+      bool fill;
+      int max_fair;
+      bool solids;
+    };
+    const int fair = HoleFillOptions{}.max_fair_vertices;
+    const std::vector<Point> points =
+        o.quick ? std::vector<Point>{{"default", true, fair, true}, {"no_fairing", true, 0, true},
+                                     {"no_fill_no_solids", false, fair, false}}
+                : std::vector<Point>{{"default", true, fair, true},        {"fair_up_to_1000", true, 1000, true},
+                                     {"no_fairing", true, 0, true},        {"no_solids", true, fair, false},
+                                     {"no_fill", false, fair, true},       {"no_fill_no_solids", false, fair, false}};
+    MeshDistanceOptions distance_options;
+    distance_options.samples = o.distance_samples;
+    distance_options.seed = o.seed;
+    for (const Point& pt : points) {
+      StageReport report;
+      std::optional<DepthMesh> m;
+      const auto [s, n] = timed(
+          [&] {
+            report = StageReport{};
+            m = meshFromScene(r.depth_m, scene.camera, r.maps.instances, r.uncertain,
+                              meshOptions(pt.fill, pt.max_fair, pt.solids), report);
+          },
+          o.repeats, o.cheap_seconds);
+      const TriangleMesh soup = toTriangleMesh(m->mesh);
+      std::vector<std::string> row = head();
+      row.insert(row.end(), {pt.name, boolean(pt.fill), integer(pt.max_fair), boolean(pt.solids), integer(n),
+                             seconds(s), seconds(metricDouble(report, "seconds_hole_filling")),
+                             integer(static_cast<std::int64_t>(soup.faces.size())),
+                             pt.fill ? integer(metricInt(report, "holes_filled")) : "0",
+                             pt.fill ? integer(metricInt(report, "holes_left_open"))
+                                     : integer(metricInt(report, "found_inner_holes") +
+                                               metricInt(report, "found_frame_holes")),
+                             integer(metricInt(report, "foreground_solids"))});
+      std::string distance_text;
+      if (!truth_mesh.faces.empty()) {
+        const MeshDistances d = measureMeshDistances(soup, truth_mesh, distance_options);
+        row.insert(row.end(), {num(d.mean_to_reference), num(d.hausdorff_to_reference), num(d.mean_from_reference),
+                               num(d.chamfer)});
+        distance_text = ", " + num(d.mean_to_reference) + " m mean to the true surfaces";
+      } else {
+        row.insert(row.end(), {"", "", "", ""});
+      }
+      row.push_back(num(loadAverage1Min()));
+      t.rows.push_back(row);
+      say("[mesh] " + pt.name + ": " + seconds(s) + " s, " + row[t.column("holes_left_open")] + " holes open" +
+          distance_text);
+    }
+    if (truth_mesh.faces.empty()) t.notes.push_back("no true mesh (gt/mesh.ply): no distances measured");
+    t.notes.push_back("the mesh of the default refined depth; distances: " + integer(o.distance_samples) +
+                      " random surface points per direction (seed " + integer(static_cast<std::int64_t>(o.seed)) +
+                      "), mean_to_ref and hausdorff_to_ref are the meaningful ones (the true mesh also has the "
+                      "surfaces the camera does not see, which the from_ref and Chamfer distances count)");
+    t.notes.push_back("holes_left_open: holes the filling could not close, or every hole found when filling is off");
+    return t;
+  }
+
+  // ---- render -------------------------------------------------------------------------------
+
+  SweepTable renderSweep() {
+    SweepTable t;
+    t.stage = "render";
+    t.columns = {"seed", "width", "height", "mode", "light_sampler", "min_spp", "max_spp", "relative_error_target",
+                 "mean_spp", "repeats", "seconds", "relative_rmse", "relative_rmse_noise_corrected",
+                 "relative_rmse_unclipped", "luminance_ratio", "white_cd_m2", "reference_spp", "reference_relative_noise", "load_1min"};
+    const NightScene& n = defaultNight();
+    say("[render] reference: " + integer(o.reference_spp) + " spp, power sampler ...");
+    double reference_s = 0;
+    const RenderOutput ref = reference(n.scene, reference_s);
+    const RadianceError self = radianceError(ref, ref);
+    say("[render] reference: " + seconds(reference_s) + " s");
+
+    const auto point = [&](const std::string& mode, LightSamplerKind kind, int min_spp, int max_spp, double target) {
+      PathTracerOptions options;
+      options.light_sampler = kind;
+      options.min_samples = min_spp;
+      options.max_samples = max_spp;
+      if (target > 0) options.relative_error = target;
+      options.seed = o.seed;
+      options.progress = false;
+      RenderOutput out;
+      const auto [s, repeats] = timed([&] { out = renderPathTraced(n.scene, options); }, o.repeats, o.cheap_seconds);
+      const RadianceError e = radianceError(out, ref);
+      std::vector<std::string> row = head();
+      row.insert(row.end(), {mode, lightSamplerName(kind), integer(min_spp), integer(max_spp),
+                             target > 0 ? num(target) : "", num(metricDouble(out.report, "samples_per_pixel_mean")),
+                             integer(repeats), seconds(s), num(e.relative_rmse), num(e.noise_corrected),
+                             num(e.relative_rmse_unclipped), num(e.luminance_ratio), num(e.white), integer(o.reference_spp),
+                             num(self.reference_noise), num(loadAverage1Min())});
+      t.rows.push_back(row);
+      say("[render] " + mode + " " + lightSamplerName(kind) + " " + integer(min_spp) + "-" + integer(max_spp) +
+          " spp" + (target > 0 ? " target " + num(target) : "") + ": " + seconds(s) + " s, relative RMSE " +
+          num(e.relative_rmse));
+    };
+    const std::vector<int> power_spp = o.quick ? std::vector<int>{1, 4, 16} : std::vector<int>{1, 2, 4, 8, 16};
+    for (int spp : power_spp) point("fixed", LightSamplerKind::Power, spp, spp, 0);
+    const std::vector<int> other_spp = o.quick ? std::vector<int>{4} : std::vector<int>{4, 16};
+    for (LightSamplerKind kind : {LightSamplerKind::Uniform, LightSamplerKind::Hierarchy})
+      for (int spp : other_spp) point("fixed", kind, spp, spp, 0);
+    struct Adaptive {
+      int min_spp, max_spp;
+      double target;
+    };
+    const std::vector<Adaptive> adaptive = o.quick ? std::vector<Adaptive>{{4, 16, 0.1}}
+                                                   : std::vector<Adaptive>{{2, 8, 0.2}, {4, 16, 0.1}, {8, 32, 0.05}};
+    for (const Adaptive& a : adaptive) point("adaptive", LightSamplerKind::Power, a.min_spp, a.max_spp, a.target);
+    t.notes.push_back("the night scene of the default refinement, mesh and lights (seed " +
+                      integer(static_cast<std::int64_t>(o.seed)) + "); reference: " + integer(o.reference_spp) +
+                      " spp, power sampler, seed " + integer(static_cast<std::int64_t>(o.seed + kReferenceSeedOffset)) +
+                      ", " + seconds(reference_s) + " s, its own relative noise " + num(self.reference_noise));
+    t.notes.push_back("relative_rmse: of the luminance Y over the " + integer(self.pixels) +
+                      " non-emitting pixels, both images clipped at the reference's auto-exposure white (" +
+                      num(self.white) + " cd/m2, what the final image maps to white); relative_rmse_noise_corrected "
+                      "removes the reference's own variance (its per-pixel standard error squared, unclipped pixels) "
+                      "from the squared error; relative_rmse_unclipped is dominated by fireflies");
+    return t;
+  }
+
+  // ---- end to end ---------------------------------------------------------------------------
+
+  SweepTable endToEndSweep() {
+    SweepTable t;
+    t.stage = "end_to_end";
+    t.columns = {"seed",           "width",           "height",          "setting",
+                 "refine",         "refine_iterations", "refine_tolerance", "fill_holes",
+                 "max_fair_vertices", "close_solids",  "light_sampler",   "min_spp",
+                 "max_spp",        "relative_error_target", "seconds", "input_seconds",
+                 "refine_seconds", "mesh_seconds",    "lights_seconds",  "scene_seconds",
+                 "render_seconds", "post_seconds",    "mean_spp",        "depth_abs_rel",
+                 "relative_rmse",  "relative_rmse_noise_corrected", "relative_rmse_unclipped", "luminance_ratio",
+                 "white_cd_m2",    "reference_spp",   "reference_relative_noise", "load_1min"};
+
+    // The reference: the exact depth and instances for the mesh and the lights' geometry, the
+    // same material maps and light draws as the pipeline (so that the error is what geometry and
+    // rendering settings cause), rendered to convergence.
+    say("[end_to_end] reference from the exact depth ...");
+    const DepthRefinementResult& p = refinementPrefix();
+    StageReport ignored;
+    const DepthMesh truth_depth_mesh = meshFromScene(truth.depth_m, truth.camera, truth.instances, cv::Mat(),
+                                                     meshOptions(true, HoleFillOptions{}.max_fair_vertices, true), ignored);
+    const LightStageResult truth_lights = runLightStage(scene, truth.depth_m, lightOptions());
+    const NightScene truth_night =
+        buildNightScene(truth_depth_mesh, p.maps.albedo, p.maps.roughness, scene.image, truth_lights.record);
+    double reference_s = 0;
+    const RenderOutput ref = reference(truth_night.scene, reference_s);
+    const RadianceError self = radianceError(ref, ref);
+    say("[end_to_end] reference: " + seconds(reference_s) + " s (" + integer(o.reference_spp) + " spp)");
+
+    // The presets of `solo night` (draft, default, final), then default with one stage off.
+    std::vector<PipelineSetting> settings;
+    for (const std::string& preset : nightPresetNames())
+      if (!o.quick || preset != "final") settings.push_back(presetSetting(preset));
+    const PipelineSetting standard = presetSetting("default");
+    if (!o.quick) {
+      PipelineSetting no_refine = standard;
+      no_refine.name = "default_no_refine";
+      no_refine.refine = false;
+      no_refine.refine_iterations = 0;
+      settings.push_back(no_refine);
+      PipelineSetting no_solids = standard;
+      no_solids.name = "default_no_solids";
+      no_solids.solids = false;
+      settings.push_back(no_solids);
+    }
+
+    for (const PipelineSetting& s : settings) {
+      say("[end_to_end] " + s.name + " ...");
+      Stopwatch clock;
+      DepthRefinementOptions refine_options;
+      refine_options.filter = refine_options.uncertain_regions = s.refine;
+      refine_options.optimize = s.refine && s.refine_iterations > 0;
+      refine_options.optimization.max_iterations = std::max(1, s.refine_iterations);
+      refine_options.optimization.function_tolerance = s.refine_tolerance;
+      const DepthRefinementResult r = refineDepth(scene, refine_options);
+      const double refine_s = clock.seconds();
+
+      clock = Stopwatch();
+      StageReport mesh_report;
+      const DepthMesh m = meshFromScene(r.depth_m, scene.camera, r.maps.instances, r.uncertain,
+                                        meshOptions(s.fill_holes, s.max_fair_vertices, s.solids), mesh_report);
+      const double mesh_s = clock.seconds();
+
+      clock = Stopwatch();
+      const LightStageResult lights = runLightStage(scene, r.depth_m, lightOptions());
+      const double lights_s = clock.seconds();
+
+      clock = Stopwatch();
+      const NightScene n = buildNightScene(m, r.maps.albedo, r.maps.roughness, scene.image, lights.record);
+      const double scene_s = clock.seconds();
+
+      clock = Stopwatch();
+      PathTracerOptions tracer;
+      tracer.seed = o.seed;
+      tracer.light_sampler = s.sampler;
+      tracer.min_samples = s.min_spp;
+      tracer.max_samples = s.max_spp;
+      tracer.relative_error = s.relative_error;
+      tracer.progress = false;
+      const RenderOutput out = renderPathTraced(n.scene, tracer);
+      const double render_s = clock.seconds();
+
+      // The post-process runs for its time only: the error is measured on the linear render.
+      clock = Stopwatch();
+      PostProcessOptions post;
+      post.glare = s.glare;
+      post.noise = s.noise;
+      post.noise_options.seed = o.seed;
+      const double calibration = 1.0 / (sensorWhite(out.radiance, out.light_id) * exposureScale(post.exposure_options));
+      post.glare_options.threshold = 1.0 / exposureScale(post.exposure_options);
+      const cv::Mat xyz = out.radiance * calibration;
+      const PostProcessResult developed = postProcess(xyz, post);
+      const double post_s = clock.seconds();
+
+      const double total_s = o.input_seconds + refine_s + mesh_s + lights_s + scene_s + render_s + post_s;
+      const RadianceError e = radianceError(out, ref);
+      DepthEvaluationInput d;
+      d.prediction_m = r.depth_m;
+      d.ground_truth_m = truth.depth_m;
+      const DepthMetrics dm = evaluateDepth(d);
+
+      std::vector<std::string> row = head();
+      row.insert(row.end(),
+                 {s.name, boolean(s.refine), integer(s.refine_iterations), num(s.refine_tolerance), boolean(s.fill_holes),
+                  integer(s.max_fair_vertices), boolean(s.solids), lightSamplerName(s.sampler), integer(s.min_spp),
+                  integer(s.max_spp), num(s.relative_error), seconds(total_s), seconds(o.input_seconds),
+                  seconds(refine_s), seconds(mesh_s), seconds(lights_s), seconds(scene_s), seconds(render_s),
+                  seconds(post_s), num(metricDouble(out.report, "samples_per_pixel_mean")), num(dm.abs_rel),
+                  num(e.relative_rmse), num(e.noise_corrected), num(e.relative_rmse_unclipped), num(e.luminance_ratio), num(e.white),
+                  integer(o.reference_spp), num(self.reference_noise), num(loadAverage1Min())});
+      t.rows.push_back(row);
+      say("[end_to_end] " + s.name + ": " + seconds(total_s) + " s (refine " + seconds(refine_s) + ", mesh " +
+          seconds(mesh_s) + ", render " + seconds(render_s) + "), relative RMSE " + num(e.relative_rmse));
+    }
+    t.notes.push_back(
+        "each setting runs refine -> mesh -> lights -> night scene -> render -> post once, as solo night does "
+        "(the scene read once, its time added as input_seconds); the error is the relative RMSE of the linear render's "
+        "luminance over the pixels that show no emitter, against a reference made from the exact depth and instances "
+        "(mesh and light geometry) with the same material maps and light draws, rendered at " +
+        integer(o.reference_spp) + " spp (power sampler, seed " +
+        integer(static_cast<std::int64_t>(o.seed + kReferenceSeedOffset)) + ", " + seconds(reference_s) +
+        " s, its own relative noise " + num(self.reference_noise) + ")");
+    return t;
+  }
+};
+
+AccuracySweep::AccuracySweep(Scene scene, Scene truth, TriangleMesh truth_mesh, AccuracySweepOptions options)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->scene = std::move(scene);
+  impl_->truth = std::move(truth);
+  impl_->truth_mesh = std::move(truth_mesh);
+  impl_->o = std::move(options);
+}
+AccuracySweep::~AccuracySweep() = default;
+
+SweepTable AccuracySweep::refine() { return impl_->refineSweep(); }
+SweepTable AccuracySweep::mesh() { return impl_->meshSweep(); }
+SweepTable AccuracySweep::render() { return impl_->renderSweep(); }
+SweepTable AccuracySweep::endToEnd() { return impl_->endToEndSweep(); }
+
+}  // namespace solo::tools
