@@ -1,0 +1,288 @@
+// Exports a scene solo renders to files Blender's Cycles can render (render_cycles.py), renders it
+// with solo (a converged reference and the runs to compare), and compares any render with the
+// reference. Benchmark tool only: neither the tests nor `solo night` need it or Blender.
+//
+//   export_blender_scene export SCENE OUT_DIR [WIDTHxHEIGHT] [REFERENCE_SPP]
+//       SCENE: night (the bench_render street: ~300 lights, 2 headlights), plane-area (a grey
+//       plane under one rectangle light), plane-emitter (a grey plane under an emitting quad).
+//       Writes OUT_DIR/scene.json + *.f32/*.u32 arrays (camera frame = OpenCV, metres; colours
+//       are XYZ relative to E, rendered channel by channel, so Cycles receives them as "RGB"
+//       and no colour transform may touch them), solo_reference.exr, emitter_mask.exr (1 where an
+//       emitter is seen directly), solo_runs.csv (fixed sample counts and the default adaptive
+//       settings: seconds and relative RMSE).
+//   export_blender_scene runs SCENE OUT_DIR [WIDTHxHEIGHT]
+//       The solo runs again against the reference already in OUT_DIR (solo_runs_again.csv).
+//   export_blender_scene compare OUT_DIR IMAGE.exr
+//       Relative RMSE of IMAGE's Y (second channel) against the reference on the pixels where no
+//       emitter is seen, and the ratio of their means there.
+//
+// Differences from the production scene, so both renderers solve the same problem: every emitter
+// is uniform (Cycles has no g(v, n) profile), the headlights emit over the full hemisphere (solo
+// cuts at its spread angle, Cycles' spread falls off smoothly), Lambertian diffuse (Cycles'
+// Diffuse BSDF at roughness 0), black sky.
+
+#include <solo/geometry/image_io.h>
+#include <solo/geometry/report.h>
+#include <solo/lighting/light_category.h>
+#include <solo/render/path_tracer.h>
+#include <solo/render/street_scene.h>
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Emitted luminance per category, as bench_render (render units).
+float luminanceOf(int category) {
+  switch (static_cast<solo::LightCategory>(category)) {
+    case solo::LightCategory::WindowBuilding: return 8.f;
+    case solo::LightCategory::WindowParked: return 2.f;
+    case solo::LightCategory::WindowTransport: return 9.f;
+    case solo::LightCategory::StreetLightHighCct:
+    case solo::LightCategory::StreetLightLowCct: return 900.f;
+    case solo::LightCategory::ParkedFront:
+    case solo::LightCategory::MovingFront: return 800.f;
+    case solo::LightCategory::ParkedRear:
+    case solo::LightCategory::MovingRear: return 70.f;
+    default: return 150.f;
+  }
+}
+
+solo::RenderScene nightStreet(int width, int height) {
+  solo::StreetSceneOptions options;
+  options.width = width;
+  options.height = height;
+  const solo::StreetScene street = solo::buildStreetScene(options);
+  const solo::TriangleMesh mesh = solo::streetSceneMesh(street);
+  solo::RenderScene scene;
+  scene.camera = street.camera;
+  for (const auto& v : mesh.vertices) scene.vertices.push_back(v.cast<float>());
+  scene.faces = mesh.faces;
+  std::map<int, int> emitter_of_light;
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const solo::ScenePart& part = street.parts[f / 12];
+    scene.face_reflectance.push_back(solo::reflectanceFromLinearSrgb(part.albedo));
+    int emitter = -1;
+    if (part.light_id > 0) {
+      auto it = emitter_of_light.find(part.light_id);
+      if (it == emitter_of_light.end()) {
+        const int category = solo::lightCategoryOfId(part.light_id);
+        scene.emitters.push_back({Eigen::Vector3f(0.95f, 1.f, 0.8f) * luminanceOf(category), false, part.light_id});
+        it = emitter_of_light.emplace(part.light_id, static_cast<int>(scene.emitters.size()) - 1).first;
+      }
+      emitter = it->second;
+    }
+    scene.face_emitter.push_back(emitter);
+  }
+  scene.rectangle_lights = solo::egoHeadlights(2000.f);
+  for (auto& light : scene.rectangle_lights) light.spread_rad = 3.14159265f;
+  return scene;
+}
+
+// Adds the quad centre +- u/2 +- v/2 (two triangles, normal along u x v) to the scene.
+void addQuad(solo::RenderScene& scene, const Eigen::Vector3f& centre, const Eigen::Vector3f& u,
+             const Eigen::Vector3f& v, const Eigen::Vector3f& reflectance, int emitter) {
+  const auto base = static_cast<std::uint32_t>(scene.vertices.size());
+  scene.vertices.push_back(centre - 0.5f * u - 0.5f * v);
+  scene.vertices.push_back(centre + 0.5f * u - 0.5f * v);
+  scene.vertices.push_back(centre + 0.5f * u + 0.5f * v);
+  scene.vertices.push_back(centre - 0.5f * u + 0.5f * v);
+  scene.faces.push_back({base, base + 1, base + 2});
+  scene.faces.push_back({base, base + 2, base + 3});
+  for (int i = 0; i < 2; ++i) {
+    scene.face_reflectance.push_back(reflectance);
+    scene.face_emitter.push_back(emitter);
+  }
+}
+
+// A grey plane 4 m ahead of the camera filling the view, facing it, lit from the upper left by a
+// 1 m x 0.5 m rectangle light (plane-area) or an emitting quad of the same size (plane-emitter)
+// 1.5 m in front of the plane.
+solo::RenderScene litPlane(int width, int height, bool mesh_emitter) {
+  solo::RenderScene scene;
+  scene.camera = solo::PinholeCamera::acdc().scaledTo(width, height);
+  addQuad(scene, {0.f, 0.f, 4.f}, {-12.f, 0.f, 0.f}, {0.f, 8.f, 0.f}, Eigen::Vector3f(0.5f, 0.5f, 0.5f), -1);
+  const Eigen::Vector3f centre(-0.8f, -0.6f, 2.5f);
+  const Eigen::Vector3f normal = (Eigen::Vector3f(0.f, 0.f, 4.f) - centre).normalized();
+  const Eigen::Vector3f u = Eigen::Vector3f::UnitY().cross(normal).normalized();
+  const Eigen::Vector3f v = normal.cross(u).normalized();
+  const Eigen::Vector3f radiance(9.f, 10.f, 7.f);
+  if (mesh_emitter) {
+    scene.emitters.push_back({radiance, false, 1});
+    // Seen edge-on from the camera? No: it faces the plane, the camera sees its back (both sides emit).
+    addQuad(scene, centre, v * 0.5f, u * 1.0f, Eigen::Vector3f(0.f, 0.f, 0.f), 0);
+  } else {
+    solo::RectangleLight light;
+    light.centre = centre;
+    light.normal = normal;
+    light.edge_u = u * 1.0f;
+    light.edge_v = v * 0.5f;
+    light.radiance = radiance;
+    light.spread_rad = 3.14159265f;
+    scene.rectangle_lights.push_back(light);
+  }
+  return scene;
+}
+
+template <typename T>
+void writeArray(const fs::path& file, const std::vector<T>& values) {
+  std::ofstream out(file, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(values.size() * sizeof(T)));
+  if (!out) throw std::runtime_error(file.string() + ": cannot write");
+}
+
+nlohmann::json vec(const Eigen::Vector3f& v) { return {v.x(), v.y(), v.z()}; }
+
+void writeScene(const solo::RenderScene& scene, const solo::PathTracerOptions& options, const fs::path& dir) {
+  std::vector<float> vertices, reflectance, emission;
+  std::vector<std::uint32_t> faces;
+  for (const auto& v : scene.vertices) vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
+  for (std::size_t f = 0; f < scene.faces.size(); ++f) {
+    faces.insert(faces.end(), scene.faces[f].begin(), scene.faces[f].end());
+    const Eigen::Vector3f& r = scene.face_reflectance[f];
+    reflectance.insert(reflectance.end(), {r.x(), r.y(), r.z()});
+    const int e = scene.face_emitter.empty() ? -1 : scene.face_emitter[f];
+    const Eigen::Vector3f l = e >= 0 ? scene.emitters[e].radiance : Eigen::Vector3f::Zero();
+    emission.insert(emission.end(), {l.x(), l.y(), l.z()});
+  }
+  writeArray(dir / "vertices.f32", vertices);
+  writeArray(dir / "faces.u32", faces);
+  writeArray(dir / "face_reflectance.f32", reflectance);
+  writeArray(dir / "face_emission.f32", emission);
+  nlohmann::json j;
+  j["format"] = "solo-blender-scene/1";
+  j["frame"] = "OpenCV camera frame (x right, y down, z forward), metres; camera at the origin";
+  j["colour"] = "XYZ relative to E, rendered per channel: give it to Cycles as linear RGB, untouched";
+  j["camera"] = {{"fx", scene.camera.fx}, {"fy", scene.camera.fy}, {"cx", scene.camera.cx},
+                 {"cy", scene.camera.cy}, {"width", scene.camera.width}, {"height", scene.camera.height}};
+  j["mesh"] = {{"vertices", "vertices.f32"}, {"faces", "faces.u32"}, {"face_reflectance", "face_reflectance.f32"},
+               {"face_emission", "face_emission.f32"}, {"vertex_count", scene.vertices.size()},
+               {"face_count", scene.faces.size()}};
+  j["rectangle_lights"] = nlohmann::json::array();
+  for (const auto& light : scene.rectangle_lights)
+    j["rectangle_lights"].push_back({{"centre", vec(light.centre)}, {"normal", vec(light.normal)},
+                                     {"edge_u", vec(light.edge_u)}, {"edge_v", vec(light.edge_v)},
+                                     {"radiance", vec(light.radiance)}, {"spread_rad", light.spread_rad}});
+  j["emitters"] = scene.emitters.size();
+  j["max_bounces"] = options.max_bounces;
+  std::ofstream(dir / "scene.json") << j.dump(2) << "\n";
+}
+
+double relativeRmse(const cv::Mat& image, const cv::Mat& reference, const cv::Mat& mask, double* mean_ratio) {
+  double sum = 0, norm = 0, image_sum = 0, reference_sum = 0;
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x) {
+      if (mask.at<float>(y, x) != 0) continue;  // emitter seen directly
+      const double r = reference.ptr<float>(y)[x * reference.channels() + 1];
+      const double v = image.ptr<float>(y)[x * image.channels() + 1];
+      sum += (v - r) * (v - r);
+      norm += r * r;
+      image_sum += v;
+      reference_sum += r;
+    }
+  if (mean_ratio) *mean_ratio = reference_sum > 0 ? image_sum / reference_sum : 0;
+  return norm > 0 ? std::sqrt(sum / norm) : 0;
+}
+
+int exportScene(int argc, char** argv, bool reuse_reference) {
+  if (argc < 4) throw std::runtime_error("usage: export_blender_scene export|runs SCENE OUT_DIR [WxH] [REFERENCE_SPP]");
+  const std::string name = argv[2];
+  const fs::path dir = argv[3];
+  int width = 480, height = 270, reference_spp = 4096;
+  if (argc > 4 && std::sscanf(argv[4], "%dx%d", &width, &height) != 2) throw std::runtime_error("bad size");
+  if (argc > 5) reference_spp = std::atoi(argv[5]);
+  solo::RenderScene scene;
+  if (name == "night") scene = nightStreet(width, height);
+  else if (name == "plane-area") scene = litPlane(width, height, false);
+  else if (name == "plane-emitter") scene = litPlane(width, height, true);
+  else throw std::runtime_error("unknown scene " + name + " (night, plane-area, plane-emitter)");
+  fs::create_directories(dir);
+  solo::PathTracerOptions o;
+  o.progress = false;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  writeScene(scene, o, dir);
+  std::printf("%s %dx%d: %zu triangles, %zu emitters, %zu rectangle lights\n", name.c_str(), width, height,
+              scene.faces.size(), scene.emitters.size(), scene.rectangle_lights.size());
+
+  cv::Mat reference, mask;
+  if (reuse_reference) {
+    reference = solo::readImageRaw(dir / "solo_reference.exr");
+    mask = solo::readImageRaw(dir / "emitter_mask.exr");
+  } else {
+    o.min_samples = o.max_samples = reference_spp;
+    o.seed = 1000;
+    solo::Stopwatch reference_clock;
+    const solo::RenderOutput out = solo::renderPathTraced(scene, o);
+    std::printf("reference: %d spp, seed 1000, %.1f s\n", reference_spp, reference_clock.seconds());
+    std::fflush(stdout);
+    reference = out.radiance;
+    solo::writeImage(dir / "solo_reference.exr", reference);
+    out.light_id.convertTo(mask, CV_32F);
+    mask = cv::min(mask, 1.0);
+    solo::writeImage(dir / "emitter_mask.exr", mask);
+  }
+
+  std::ofstream csv(dir / (reuse_reference ? "solo_runs_again.csv" : "solo_runs.csv"));
+  csv << "settings,spp_mean,seconds,relative_rmse,mean_ratio\n";
+  std::printf("%-22s %8s %9s %14s %10s\n", "solo settings", "spp", "seconds", "relative_rmse", "mean_ratio");
+  const auto run = [&](const std::string& label, solo::PathTracerOptions options) {
+    options.seed = 7;
+    solo::Stopwatch clock;
+    const solo::RenderOutput out = solo::renderPathTraced(scene, options);
+    const double seconds = clock.seconds();
+    double ratio = 0;
+    const double error = relativeRmse(out.radiance, reference, mask, &ratio);
+    const double spp = cv::mean(out.samples)[0];
+    std::printf("%-22s %8.1f %9.3f %14.4f %10.4f\n", label.c_str(), spp, seconds, error, ratio);
+    csv << label << "," << spp << "," << seconds << "," << error << "," << ratio << "\n";
+    std::fflush(stdout);
+  };
+  for (int spp : {1, 4, 16, 64}) {
+    solo::PathTracerOptions fixed = o;
+    fixed.min_samples = fixed.max_samples = spp;
+    run("fixed " + std::to_string(spp), fixed);
+  }
+  solo::PathTracerOptions defaults;
+  defaults.progress = false;
+  defaults.diffuse = solo::DiffuseModel::Lambert;
+  run("default adaptive", defaults);
+  return 0;
+}
+
+int compare(int argc, char** argv) {
+  if (argc < 4) throw std::runtime_error("usage: export_blender_scene compare OUT_DIR IMAGE.exr");
+  const fs::path dir = argv[2];
+  const cv::Mat reference = solo::readImageRaw(dir / "solo_reference.exr");
+  const cv::Mat mask = solo::readImageRaw(dir / "emitter_mask.exr");
+  const cv::Mat image = solo::readImageRaw(argv[3]);
+  if (image.rows != reference.rows || image.cols != reference.cols || image.channels() < 3)
+    throw std::runtime_error(std::string(argv[3]) + ": not the reference's size or fewer than 3 channels");
+  double ratio = 0;
+  const double error = relativeRmse(image, reference, mask, &ratio);
+  std::printf("relative_rmse %.5f mean_ratio %.5f\n", error, ratio);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    if (argc > 1 && std::string(argv[1]) == "export") return exportScene(argc, argv, false);
+    if (argc > 1 && std::string(argv[1]) == "runs") return exportScene(argc, argv, true);
+    if (argc > 1 && std::string(argv[1]) == "compare") return compare(argc, argv);
+    std::fprintf(stderr, "usage: export_blender_scene export|compare ...\n");
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "export_blender_scene: %s\n", e.what());
+    return 2;
+  }
+}
