@@ -16,6 +16,7 @@
 #include <solo/geometry/spurious_faces.h>
 #include <solo/geometry/triangle_mesh.h>
 #include <solo/geometry/upsample_maps.h>
+#include <solo/geometry/view_mesh_distances.h>
 
 #include <opencv2/imgproc.hpp>
 
@@ -285,6 +286,36 @@ std::vector<Field> meshFields(const MeshMetrics& m, const MeshReadStats& read_st
       {"mesh_vertices_checked", "mesh vertices checked", distance(&MeshDistances::mesh_vertices_checked), ""},
       {"ref_vertices_checked", "ref vertices checked", distance(&MeshDistances::reference_vertices_checked), ""}};
   for (Field& f : fields) f = prefixed(key_prefix, label_prefix, f);
+  return fields;
+}
+
+/// The view-based split of a depth mesh's distance to the true surfaces (view_mesh_distances.h):
+/// relative distance, area and distance per depth band, and the true visible surface covered.
+std::vector<Field> viewMeshFields(const std::optional<ViewMeshDistances>& d) {
+  const std::vector<double> edges = ViewMeshDistanceOptions{}.depth_band_edges_m;
+  auto value = [&](auto get) -> FieldValue { return d ? FieldValue(get(*d)) : FieldValue(std::monostate{}); };
+  std::vector<Field> fields = {
+      {"mesh_area_m2", "mesh area", value([](const ViewMeshDistances& v) { return v.area_m2; }), "m^2"},
+      {"mesh_mean_relative_to_ref", "mesh mean distance mesh -> ref / depth",
+       value([](const ViewMeshDistances& v) { return v.mean_relative_to_truth; }), ""},
+      {"mesh_truth_mean_relative_to_mesh", "mesh mean distance true pixel -> mesh / depth",
+       value([](const ViewMeshDistances& v) { return v.truth_mean_relative_to_mesh; }), ""},
+      {"mesh_truth_covered", "mesh true pixels covered (within 5 % of depth)",
+       value([](const ViewMeshDistances& v) { return v.truth_covered; }), ""}};
+  for (std::size_t b = 0; b <= edges.size(); ++b) {
+    const std::string lo = b == 0 ? "0" : std::to_string(static_cast<int>(edges[b - 1]));
+    const std::string hi = b == edges.size() ? "up" : std::to_string(static_cast<int>(edges[b]));
+    const std::string key = "mesh_z_" + lo + "_" + hi + "_";
+    const std::string label = "  depth " + lo + (b == edges.size() ? " m and beyond" : "-" + hi + " m") + ": ";
+    fields.push_back({key + "area_share", label + "mesh area share",
+                      value([b](const ViewMeshDistances& v) { return v.by_depth[b].area_share; }), ""});
+    fields.push_back({key + "mean_to_ref", label + "mean distance mesh -> ref",
+                      value([b](const ViewMeshDistances& v) { return v.by_depth[b].mean_m; }), ""});
+    fields.push_back({key + "contribution_to_mean", label + "share of the mean distance",
+                      value([b](const ViewMeshDistances& v) { return v.by_depth[b].contribution_m; }), ""});
+    fields.push_back({key + "truth_covered", label + "true pixels covered",
+                      value([b](const ViewMeshDistances& v) { return v.truth_covered_by_depth[b]; }), ""});
+  }
   return fields;
 }
 
@@ -606,6 +637,7 @@ int runEvalScene(const EvalSceneOptions& o) {
   // (d) the mesh written into the folder, and its distances to the scene's exact mesh.
   r.metrics.push_back({"mesh_skipped", "mesh skipped", reasonValue(mesh_reason), ""});
   r.metrics.push_back({"mesh_distances_skipped", "mesh distances skipped", reasonValue(distance_reason), ""});
+  std::optional<ViewMeshDistances> view;
   if (mesh_file) {
     MeshReadStats read_stats;
     const TriangleMesh mesh = readMesh(*mesh_file, &read_stats);
@@ -614,12 +646,18 @@ int runEvalScene(const EvalSceneOptions& o) {
       MeshDistanceOptions options;
       options.samples = o.samples;
       options.seed = o.seed;
-      d = measureMeshDistances(mesh, readMesh(reference_file), options, *mesh_file, reference_file);
+      const TriangleMesh reference = readMesh(reference_file);
+      d = measureMeshDistances(mesh, reference, options, *mesh_file, reference_file);
+      ViewMeshDistanceOptions view_options;
+      view_options.samples = o.samples;
+      view_options.seed = o.seed;
+      view = measureViewMeshDistances(mesh, {}, reference, truth.depth_m, truth.camera, view_options);
     }
     append(r.metrics, meshFields(evaluateMesh(mesh), read_stats, d, "mesh_", "mesh "));
   } else {
     append(r.metrics, blanked(meshFields(MeshMetrics{}, MeshReadStats{}, std::nullopt, "mesh_", "mesh ")));
   }
+  append(r.metrics, viewMeshFields(view));
   r.seconds = clock.seconds();
   return emit(r, o.output);
 }

@@ -97,6 +97,12 @@ int runNight(const NightOptions& o) {
   } catch (const std::invalid_argument& e) {
     throw InputError("--light-sampler", e.what());
   }
+  SamplerKind sample_kind;
+  try {
+    sample_kind = parseSamplerKind(o.sampler);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("--sampler", e.what());
+  }
 
   RunReport report;
   report.command = "night";
@@ -171,6 +177,7 @@ int runNight(const NightOptions& o) {
   PathTracerOptions tracer;
   tracer.seed = o.seed;
   tracer.light_sampler = sampler_kind;
+  tracer.sampler = sample_kind;
   tracer.min_samples = o.min_samples;
   tracer.max_samples = o.max_samples;
   tracer.relative_error = o.relative_error;
@@ -213,7 +220,8 @@ int runNight(const NightOptions& o) {
   report.stages.push_back(rendered.report);
   if (!noise_target_note.empty()) report.stages.back().notes.push_back(noise_target_note);
   if (o.noise_target && !o.noise)
-    report.stages.back().notes.push_back("--noise-target ignored: sensor noise is off, the relative-error target applies");
+    report.stages.back().notes.push_back(
+        "noise-matched target skipped: sensor noise is off (--no-noise), the relative-error target applies");
 
   // post: radiance in cd/m^2 scaled so that the reference exposure (+3.25 stops) puts
   // sensor_white at 1. Only what will clip glows (the reference lets every pixel glow).

@@ -46,11 +46,12 @@ struct NightOptions {
   bool headlights = true;
   double headlight_flux_lm = 1200;
   std::string light_sampler = "power";
+  std::string sampler = "sobol";  ///< per-sample numbers: sobol (scrambled, stratified) or independent
   int min_samples = 4, max_samples = 16;  ///< per pixel
   double relative_error = 0.1;            ///< adaptive sampling target on each pixel's luminance
   /// Stop sampling a pixel once its standard error is below noise_factor x the sensor noise's
   /// sigma there (instead of the relative error); docs/rendering.md.
-  bool noise_target = false;
+  bool noise_target = true;
   double noise_factor = 0.5;
   bool glare = true, noise = true;
   double glare_threshold = -1;  ///< Y before exposure; < 0: what will clip (the reference uses 0)

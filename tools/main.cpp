@@ -45,12 +45,14 @@ int main(int argc, char** argv) {
   night_cmd->add_flag("--headlights,!--no-headlights", night.headlights, "Ego-vehicle headlights (default on)");
   night_cmd->add_option("--headlight-flux", night.headlight_flux_lm, "Flux of each headlight, lm")->capture_default_str();
   night_cmd->add_option("--light-sampler", night.light_sampler, "uniform, power or hierarchy")->capture_default_str();
+  night_cmd->add_option("--sampler", night.sampler, "Per-sample numbers: sobol (scrambled Sobol points) or independent (PCG32)")
+      ->capture_default_str();
   night_cmd->add_option("--min-spp", night.min_samples, "Samples per pixel before adaptive stopping")->capture_default_str();
   night_cmd->add_option("--max-spp", night.max_samples, "Samples per pixel at most")->capture_default_str();
   night_cmd->add_option("--relative-error", night.relative_error, "Adaptive sampling target (relative standard error)")
       ->capture_default_str();
-  night_cmd->add_flag("--noise-target", night.noise_target,
-                      "Adaptive sampling to the sensor noise: stop at noise-factor x its sigma (replaces --relative-error)");
+  night_cmd->add_flag("--noise-target,!--no-noise-target", night.noise_target,
+                      "Adaptive sampling to the sensor noise: stop at noise-factor x its sigma (replaces --relative-error; preset)");
   night_cmd->add_option("--noise-factor", night.noise_factor, "Render noise allowed, as a fraction of the sensor noise")
       ->capture_default_str();
   night_cmd->add_flag("--glare,!--no-glare", night.glare, "Fog glare (preset)");

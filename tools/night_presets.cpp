@@ -24,12 +24,14 @@ struct PresetValues {
   double optimize_tolerance;
   bool evaluate_mesh;            // self-intersection and manifoldness counts
   bool glare, noise;
+  bool noise_target;    // adaptive sampling to the sensor noise instead of relative_error
+  double noise_factor;  // render noise allowed, fraction of the sensor noise sigma
 };
 
-//                                        spp      rel.err sampler  opt   iter  tol    eval   glare noise
-constexpr PresetValues kDraft = {1, 2, 0.3, "power", true, 3, 1e-6, false, true, true};
-constexpr PresetValues kDefault = {4, 16, 0.1, "power", true, 10, 1e-9, false, true, true};
-constexpr PresetValues kFinal = {8, 64, 0.03, "power", true, 10, 1e-9, true, true, true};
+//                                spp     rel.err sampler  opt   iter  tol   eval   glare noise  n.target factor
+constexpr PresetValues kDraft = {1, 2, 0.3, "power", true, 3, 1e-6, false, true, true, false, 0.5};
+constexpr PresetValues kDefault = {4, 16, 0.1, "power", true, 10, 1e-9, false, true, true, true, 0.5};
+constexpr PresetValues kFinal = {8, 64, 0.03, "power", true, 10, 1e-9, true, true, true, true, 0.25};
 
 struct Knob {
   const char* flag;
@@ -37,7 +39,7 @@ struct Knob {
 };
 
 // Every knob names its command-line flag: a knob the user gave keeps the user's value.
-const std::array<Knob, 10> kKnobs = {{
+const std::array<Knob, 12> kKnobs = {{
     {"--min-spp", [](NightOptions& o, const PresetValues& p) { o.min_samples = p.min_spp; }},
     {"--max-spp", [](NightOptions& o, const PresetValues& p) { o.max_samples = p.max_spp; }},
     {"--relative-error", [](NightOptions& o, const PresetValues& p) { o.relative_error = p.relative_error; }},
@@ -50,6 +52,8 @@ const std::array<Knob, 10> kKnobs = {{
     {"--evaluate-mesh", [](NightOptions& o, const PresetValues& p) { o.evaluate_mesh = p.evaluate_mesh; }},
     {"--glare", [](NightOptions& o, const PresetValues& p) { o.glare = p.glare; }},
     {"--noise", [](NightOptions& o, const PresetValues& p) { o.noise = p.noise; }},
+    {"--noise-target", [](NightOptions& o, const PresetValues& p) { o.noise_target = p.noise_target; }},
+    {"--noise-factor", [](NightOptions& o, const PresetValues& p) { o.noise_factor = p.noise_factor; }},
 }};
 
 const PresetValues& presetValues(const std::string& name) {
@@ -114,6 +118,7 @@ std::string nightConfigText(const NightOptions& o) {
   flag("headlights", o.headlights);
   line("headlight-flux", number(o.headlight_flux_lm));
   line("light-sampler", quoted("light-sampler", o.light_sampler));
+  line("sampler", quoted("sampler", o.sampler));
   line("min-spp", std::to_string(o.min_samples));
   line("max-spp", std::to_string(o.max_samples));
   line("relative-error", number(o.relative_error));

@@ -5,17 +5,26 @@
 #include "solo/geometry/report.h"
 
 #include <CGAL/Box_intersection_d/Box_with_info_d.h>
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_2_algorithms.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/Polygon_mesh_processing/fair.h>
 #include <CGAL/Polygon_mesh_processing/refine.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/box_intersection_d.h>
 
+#include <Eigen/Sparse>
+#include <opencv2/imgproc.hpp>
+
 #include <algorithm>
 #include <exception>
+#include <functional>
 #include <iterator>
 #include <set>
+#include <unordered_map>
 #include <utility>
 
 namespace solo {
@@ -27,6 +36,14 @@ using Triangle = Kernel::Triangle_3;
 using Segment = Kernel::Segment_3;
 using PatchMesh = CGAL::Surface_mesh<Point>;
 namespace PMP = CGAL::Polygon_mesh_processing;
+
+// Image-space hole filling: vertex info = index into the patch's points (boundary first), face
+// info = how many constraints separate the face from the infinite face (1: inside the polygon).
+using Point2 = Kernel::Point_2;
+using CdtVertexBase = CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>;
+using CdtFaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel, CGAL::Triangulation_face_base_with_info_2<int, Kernel>>;
+using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, CGAL::Triangulation_data_structure_2<CdtVertexBase, CdtFaceBase>,
+                                                       CGAL::No_constraint_intersection_tag>;
 
 struct DeadlineExceeded {};
 
@@ -160,10 +177,72 @@ bool facesIntersect(const std::vector<Point>& points, const std::array<int, 3>& 
   return CGAL::coplanar(p, q, ra, rb) && CGAL::coplanar_orientation(p, q, ra, rb) == CGAL::POSITIVE;
 }
 
+
+/// Face info = constraints crossed from the infinite face (flood fill, one level at a time).
+void markNesting(Cdt& cdt) {
+  for (const auto f : cdt.all_face_handles()) f->info() = -1;
+  std::vector<Cdt::Face_handle> current{cdt.infinite_face()}, next;
+  for (int level = 0; !current.empty(); ++level) {
+    while (!current.empty()) {
+      const Cdt::Face_handle f = current.back();
+      current.pop_back();
+      if (f->info() != -1) continue;
+      f->info() = level;
+      for (int i = 0; i < 3; ++i) {
+        const Cdt::Face_handle g = f->neighbor(i);
+        if (g->info() != -1) continue;
+        (cdt.is_constrained(Cdt::Edge(f, i)) ? next : current).push_back(g);
+      }
+    }
+    std::swap(current, next);
+  }
+}
+
+/// Pixel centres inside the polygon and about 2 pixels or more from its edges (a band of width
+/// 2 along the edges is cleared), every `step`-th in both axes (step grows until at most
+/// max_points are left).
+std::vector<Point2> interiorPixelCentres(const std::vector<Point2>& uv, const Cdt& cdt, int max_points) {
+  double u0 = 1e300, v0 = 1e300, u1 = -1e300, v1 = -1e300;
+  for (const auto& p : uv) u0 = std::min(u0, p.x()), v0 = std::min(v0, p.y()), u1 = std::max(u1, p.x()), v1 = std::max(v1, p.y());
+  const int x0 = static_cast<int>(std::floor(u0)), y0 = static_cast<int>(std::floor(v0));
+  const int width = static_cast<int>(std::ceil(u1)) - x0 + 1, height = static_cast<int>(std::ceil(v1)) - y0 + 1;
+  if (max_points <= 0 || double(width) * height > 64e6) return {};
+  cv::Mat mask(height, width, CV_8U, cv::Scalar(0));
+  std::vector<std::vector<cv::Point>> polygon(1);
+  constexpr int kShift = 8;  // sub-pixel vertices: hole-fill vertices and chords are off the grid
+  for (const auto& p : uv)
+    polygon[0].emplace_back(static_cast<int>(std::lround((p.x() - x0) * (1 << kShift))),
+                            static_cast<int>(std::lround((p.y() - y0) * (1 << kShift))));
+  cv::fillPoly(mask, polygon, cv::Scalar(255), cv::LINE_8, kShift);
+  cv::polylines(mask, polygon, true, cv::Scalar(0), 2, cv::LINE_8, kShift);
+  const int inside = cv::countNonZero(mask);
+  int step = 1;
+  while (inside / (double(step) * step) > max_points) ++step;
+  std::vector<Point2> points;
+  Cdt::Face_handle hint;
+  for (int y = 0; y < height; ++y) {
+    if ((y + y0) % step != 0) continue;
+    const auto* row = mask.ptr<std::uint8_t>(y);
+    for (int x = 0; x < width; ++x) {
+      if (!row[x] || (x + x0) % step != 0) continue;
+      const Point2 p(x + x0, y + y0);
+      Cdt::Locate_type type;
+      int li = 0;
+      hint = cdt.locate(p, type, li, hint);
+      // The raster is approximate: the triangulation decides what is inside (a centre on an
+      // unconstrained edge, e.g. a diagonal through grid points, is inside with its faces).
+      const bool on_free_edge = type == Cdt::EDGE && !cdt.is_constrained(Cdt::Edge(hint, li));
+      if ((type == Cdt::FACE || on_free_edge) && !cdt.is_infinite(hint) && hint->info() % 2 == 1) points.push_back(p);
+    }
+  }
+  return points;
+}
+
 }  // namespace
 
 const char* holeFillMethodName(HoleFillMethod method) {
   switch (method) {
+    case HoleFillMethod::image_space: return "image_space";
     case HoleFillMethod::triangulate_refine_fair: return "triangulate_refine_fair";
     case HoleFillMethod::triangulate: return "triangulate";
     case HoleFillMethod::centroid_fan: return "centroid_fan";
@@ -235,6 +314,147 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
   } catch (const std::exception& e) {
     patch = HolePatch{};
     patch.failure = std::string("CGAL failed: ") + e.what();
+  }
+  return patch;
+}
+
+HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const PinholeCamera& camera,
+                          const HoleFillOptions& options, const std::function<double(int, int)>& obstacle_depth_m) {
+  HolePatch patch;
+  const int n = static_cast<int>(boundary.size());
+  if (n < 3) {
+    patch.failure = "boundary has fewer than 3 vertices";
+    return patch;
+  }
+  std::vector<Point2> uv;
+  uv.reserve(n);
+  for (const auto& p : boundary) {
+    if (!p.allFinite() || !(p.z() > 0)) {
+      patch.failure = "a boundary point is not in front of the camera";
+      return patch;
+    }
+    const Eigen::Vector2d q = camera.project(p);
+    uv.emplace_back(q.x(), q.y());
+  }
+  double twice_area = 0;
+  for (int i = 0; i < n; ++i) twice_area += uv[i].x() * uv[(i + 1) % n].y() - uv[(i + 1) % n].x() * uv[i].y();
+  if (!(std::abs(twice_area) > 0)) {
+    patch.failure = "the hole's image polygon has no area";
+    return patch;
+  }
+  const CGAL::Orientation orientation = twice_area > 0 ? CGAL::LEFT_TURN : CGAL::RIGHT_TURN;
+  const Stopwatch clock;
+  try {
+    // A polygon that touches itself (two vertices on one pixel position, a vertex on an edge)
+    // has no triangulation in the image without a degenerate triangle, and one that crosses
+    // itself none without overlap: both are left to the 3D methods.
+    if (!CGAL::is_simple_2(uv.begin(), uv.end(), Kernel())) {
+      patch.failure = "the hole's image polygon touches or crosses itself";
+      return patch;
+    }
+    Cdt cdt;
+    std::vector<Cdt::Vertex_handle> handles(n);
+    for (int i = 0; i < n; ++i) {
+      handles[i] = cdt.insert(uv[i], i == 0 ? Cdt::Face_handle() : handles[i - 1]->face());
+      handles[i]->info() = i;
+    }
+    for (int i = 0; i < n; ++i) cdt.insert_constraint(handles[i], handles[(i + 1) % n]);
+    markNesting(cdt);
+    const std::vector<Point2> interior = interiorPixelCentres(uv, cdt, options.max_image_interior_vertices);
+    const int m = static_cast<int>(interior.size());
+    Cdt::Vertex_handle last = handles[n - 1];
+    for (int k = 0; k < m; ++k) {
+      last = cdt.insert(interior[k], last->face());
+      last->info() = n + k;
+    }
+    if (m > 0) markNesting(cdt);
+    if (clock.seconds() > options.time_limit_s) {
+      patch.failure = "image-space triangulation exceeded its time limit";
+      return patch;
+    }
+    std::vector<std::array<int, 3>> faces;
+    for (const auto f : cdt.finite_face_handles()) {
+      if (f->info() % 2 != 1) continue;
+      std::array<int, 3> t{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
+      if (orientation == CGAL::RIGHT_TURN) std::swap(t[1], t[2]);  // CGAL's faces turn left
+      faces.push_back(t);
+    }
+    if (static_cast<int>(cdt.number_of_vertices()) != n + m || static_cast<int>(faces.size()) != n - 2 + 2 * m) {
+      patch.failure = "image-space triangulation is incomplete (" + std::to_string(faces.size()) + " of " +
+                      std::to_string(n - 2 + 2 * m) + " triangles)";
+      return patch;
+    }
+
+    // Inverse depth of the interior vertices: harmonic in the image (cotangent weights, which
+    // are non-negative across the unconstrained edges of a constrained Delaunay triangulation).
+    std::vector<Point2> position(uv);
+    position.insert(position.end(), interior.begin(), interior.end());
+    std::unordered_map<std::uint64_t, double> weight;
+    for (const auto& t : faces)
+      for (int k = 0; k < 3; ++k) {
+        const int i = t[(k + 1) % 3], j = t[(k + 2) % 3];
+        if (i < n && j < n) continue;
+        const auto e1 = position[i] - position[t[k]], e2 = position[j] - position[t[k]];
+        const double cross = std::abs(e1.x() * e2.y() - e1.y() * e2.x());
+        const std::uint64_t key = (std::uint64_t(std::min(i, j)) << 32) | std::uint32_t(std::max(i, j));
+        weight[key] += 0.5 * (e1 * e2) / std::max(cross, 1e-300);
+      }
+    if (m > 0) {
+      // Where an obstacle (a nearer surface of the mesh) covers a vertex's pixel and the
+      // harmonic surface comes in front of it, that vertex is pinned behind the obstacle and
+      // the others are solved again (a few rounds: pinning can push neighbours forward).
+      std::vector<double> pinned(m, 0.0);  // inverse depth, 0: free
+      Eigen::VectorXd inverse_depth(m);
+      for (int round = 0; round < 4; ++round) {
+        std::vector<int> unknown(m, -1);
+        int free_count = 0;
+        for (int k = 0; k < m; ++k)
+          if (pinned[k] == 0) unknown[k] = free_count++;
+        const auto known = [&](int i) { return i < n ? 1.0 / boundary[i].z() : pinned[i - n]; };
+        std::vector<Eigen::Triplet<double>> entries;
+        Eigen::VectorXd rhs = Eigen::VectorXd::Zero(free_count);
+        for (const auto& [key, w_raw] : weight) {
+          const int i = static_cast<int>(key >> 32), j = static_cast<int>(key & 0xffffffffu);
+          const double w = std::max(w_raw, 0.0) + 1e-6;  // keeps the system definite on flat fans
+          for (const auto& [a, b] : {std::pair(i, j), std::pair(j, i)}) {
+            if (a < n || unknown[a - n] < 0) continue;
+            entries.emplace_back(unknown[a - n], unknown[a - n], w);
+            if (b >= n && unknown[b - n] >= 0) entries.emplace_back(unknown[a - n], unknown[b - n], -w);
+            else rhs[unknown[a - n]] += w * known(b);
+          }
+        }
+        Eigen::VectorXd solved;
+        if (free_count > 0) {
+          Eigen::SparseMatrix<double> laplacian(free_count, free_count);
+          laplacian.setFromTriplets(entries.begin(), entries.end());
+          Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(laplacian);
+          solved = solver.solve(rhs);
+          if (solver.info() != Eigen::Success || !solved.allFinite() || (solved.size() > 0 && solved.minCoeff() <= 0)) {
+            patch.failure = "harmonic inverse depth could not be solved";
+            return patch;
+          }
+        }
+        bool changed = false;
+        for (int k = 0; k < m; ++k) {
+          inverse_depth[k] = unknown[k] >= 0 ? solved[unknown[k]] : pinned[k];
+          if (unknown[k] < 0 || !obstacle_depth_m) continue;
+          const double z = obstacle_depth_m(static_cast<int>(std::lround(interior[k].x())),
+                                            static_cast<int>(std::lround(interior[k].y())));
+          if (z > 0 && 1.0 / inverse_depth[k] < z) {
+            pinned[k] = 1.0 / z;
+            changed = true;
+          }
+        }
+        if (!changed) break;
+      }
+      for (int k = 0; k < m; ++k)
+        patch.new_points.push_back(camera.backproject(interior[k].x(), interior[k].y(), 1.0 / inverse_depth[k]));
+    }
+    patch.faces = std::move(faces);
+    patch.filled = true;
+  } catch (const std::exception& e) {
+    patch = HolePatch{};
+    patch.failure = std::string("image-space triangulation failed: ") + e.what();
   }
   return patch;
 }

@@ -50,6 +50,7 @@ void addHoleCounts(StageReport& report, const HoleClosing& holes) {
   report.add("holes_filled_refine_fair", holes.by_refine_fair);
   report.add("holes_filled_triangulation_only", holes.by_triangulation);
   report.add("holes_filled_centroid_fan", holes.by_centroid_fan);
+  report.add("holes_filled_image_space", holes.by_image_space);
   report.add("hole_patches_rejected_intersecting", holes.patches_rejected_for_intersection);
   report.add("hole_faces_added", holes.faces_added);
   report.add("hole_vertices_added", holes.vertices_added);

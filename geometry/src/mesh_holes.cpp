@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 
 #include <opencv2/core.hpp>
@@ -39,9 +40,15 @@ int majorityInstance(const SurfaceMesh& mesh, const ImageVertexProperties& p, co
       ->first;
 }
 
-/// The method tried after `method` failed or was rejected; false when none is left.
-bool nextMethod(HoleFillMethod& method) {
+/// The method tried after `method` failed or was rejected; false when none is left. After the
+/// image-space fill come the 3D methods, starting where a hole of `hole_vertices` would start.
+bool nextMethod(HoleFillMethod& method, std::size_t hole_vertices, const HoleFillOptions& options) {
   switch (method) {
+    case HoleFillMethod::image_space:
+      method = static_cast<int>(hole_vertices) <= options.max_triangulation_only_vertices
+                   ? HoleFillMethod::triangulate
+                   : HoleFillMethod::triangulate_refine_fair;
+      return true;
     case HoleFillMethod::triangulate_refine_fair: method = HoleFillMethod::triangulate; return true;
     case HoleFillMethod::triangulate: method = HoleFillMethod::centroid_fan; return true;
     case HoleFillMethod::centroid_fan: return false;
@@ -143,9 +150,24 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
     result.largest_hole_vertices = std::max<std::int64_t>(result.largest_hole_vertices, holes[i].size());
     if (static_cast<int>(holes[i].size()) <= options.max_triangulation_only_vertices)
       method_of[i] = HoleFillMethod::triangulate;
+    // A depth mesh's hole is first closed in the image, where the mesh has no face.
+    if (by_pixels && options.image_space_first) method_of[i] = HoleFillMethod::image_space;
   }
   std::vector<Attempt> accepted;
   std::vector<std::size_t> given_up;
+
+  // Inside a hole's image region the only mesh vertices are those of an occluder in front of
+  // it: an image-space patch stays kObstacleClearance_m behind them, leaving room for the
+  // occluder's solid back (foreground_solids.cpp clamps it in front of the patch).
+  constexpr double kObstacleClearance_m = 0.10;
+  const std::function<double(int, int)> obstacleDepth = [&](int u, int v) {
+    if (u < 0 || v < 0 || u >= pixels->width || v >= pixels->height) return 0.0;
+    const int vi = (*pixels->vertex_of_pixel)[static_cast<std::size_t>(v) * pixels->width + u];
+    if (vi < 0) return 0.0;
+    const OpenMesh::VertexHandle vh(vi);
+    if (mesh.status(vh).deleted() || mesh.is_isolated(vh)) return 0.0;
+    return points[vi].z() + kObstacleClearance_m;
+  };
 
   while (!pending.empty()) {
     // Patches of independent holes: computed in parallel, each into its own slot.
@@ -157,14 +179,16 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
         for (const auto v : holes[hole]) boundary.push_back(points[v.idx()]);
         tries[i].hole = hole;
         tries[i].method = method_of[hole];
-        tries[i].patch = fillHolePolyline(boundary, method_of[hole], options);
+        tries[i].patch = method_of[hole] == HoleFillMethod::image_space
+                             ? fillHoleInImage(boundary, pixels->camera, options, obstacleDepth)
+                             : fillHolePolyline(boundary, method_of[hole], options);
       }
     });
     std::vector<Attempt> attempts;
     std::vector<std::size_t> still_pending;
     const auto retry = [&](std::size_t hole, const std::string& why) {
       last_failure[hole] = std::string(holeFillMethodName(method_of[hole])) + ": " + why;
-      if (nextMethod(method_of[hole])) still_pending.push_back(hole);
+      if (nextMethod(method_of[hole], holes[hole].size(), options)) still_pending.push_back(hole);
       else given_up.push_back(hole);
     };
     std::vector<Eigen::Vector3d> round_points = points;
@@ -228,6 +252,7 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
         others.push_back(g);
       }
       switch (attempt.method) {  // a patch too large to fair came back as its triangulation
+        case HoleFillMethod::image_space: ++result.by_image_space; break;
         case HoleFillMethod::triangulate_refine_fair:
           ++(attempt.patch.new_points.empty() ? result.by_triangulation : result.by_refine_fair);
           break;

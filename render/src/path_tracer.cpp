@@ -2,6 +2,7 @@
 
 #include "solo/render/ggx.h"
 #include "solo/render/ray_caster.h"
+#include "solo/render/sampler.h"
 
 #include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
@@ -17,30 +18,6 @@ namespace solo {
 namespace {
 
 constexpr float kPi = 3.14159265358979f;
-
-// PCG32 (O'Neill 2014): small, fast, and seedable per pixel, so a pixel's samples do not
-// depend on which thread renders it.
-class Pcg32 {
- public:
-  Pcg32(std::uint64_t seed, std::uint64_t stream) : increment_((stream << 1u) | 1u) {
-    next();
-    state_ += seed;
-    next();
-  }
-  std::uint32_t next() {
-    const std::uint64_t old = state_;
-    state_ = old * 6364136223846793005ULL + increment_;
-    const auto xorshifted = static_cast<std::uint32_t>(((old >> 18u) ^ old) >> 27u);
-    const auto rotation = static_cast<std::uint32_t>(old >> 59u);
-    return (xorshifted >> rotation) | (xorshifted << ((32u - rotation) & 31u));
-  }
-  /// Uniform in [0, 1).
-  float uniform() { return static_cast<float>(next() >> 8) * (1.f / 16777216.f); }
-
- private:
-  std::uint64_t state_ = 0;
-  std::uint64_t increment_;
-};
 
 float profile(bool directional, float abs_cosine) {
   return directional ? std::cos(kPi * (abs_cosine - 1.f) * 0.5f) : 1.f;
@@ -122,7 +99,7 @@ struct FirstHit {
 float offsetFor(float distance) { return 1e-4f * std::max(1.f, distance); }
 
 // One path sample from the camera through (px, py). Returns XYZ radiance.
-Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, FirstHit* first, std::int64_t& rays) {
+Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, FirstHit* first, std::int64_t& rays) {
   const PinholeCamera& cam = c.scene.camera;
   Eigen::Vector3f direction(static_cast<float>((px - cam.cx) / cam.fx), static_cast<float>((py - cam.cy) / cam.fy), 1.f);
   const float z_per_distance = 1.f / direction.norm();
@@ -188,8 +165,8 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, Firs
 
     // Next-event estimation: one emissive triangle, MIS-weighted against BSDF sampling.
     float pick_pmf = 0.f;
-    const int tri = c.sampler.pick(point, n, rng.uniform(), &pick_pmf);
-    const float su = rng.uniform(), sv = rng.uniform();
+    const int tri = c.sampler.pick(point, n, rng.get1D(), &pick_pmf);
+    const auto [su, sv] = rng.get2D();
     if (tri >= 0 && pick_pmf > 0.f) {
       const EmissiveTriangle& t = c.emissive[static_cast<std::size_t>(tri)];
       const float root = std::sqrt(su);
@@ -214,7 +191,8 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, Firs
     // Rectangle lights (headlights) are not geometry: light sampling only, weight 1.
     for (const RectangleLight& light : c.scene.rectangle_lights) {
       const float area = light.edge_u.cross(light.edge_v).norm();
-      const Eigen::Vector3f q = light.centre + light.edge_u * (rng.uniform() - 0.5f) + light.edge_v * (rng.uniform() - 0.5f);
+      const auto [lu, lv] = rng.get2D();
+      const Eigen::Vector3f q = light.centre + light.edge_u * (lu - 0.5f) + light.edge_v * (lv - 0.5f);
       Eigen::Vector3f wi = q - shadow_origin;
       const float distance2 = wi.squaredNorm();
       const float distance = std::sqrt(distance2);
@@ -231,7 +209,8 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, Firs
     // Sky: a cosine-weighted direction, MIS-weighted against BSDF sampling.
     constexpr float kInfinity = std::numeric_limits<float>::infinity();
     if (c.sky_on) {
-      const Eigen::Vector3f wi = cosineSample(n, rng.uniform(), rng.uniform());
+      const auto [u1, u2] = rng.get2D();
+      const Eigen::Vector3f wi = cosineSample(n, u1, u2);
       const float cos_surface = n.dot(wi);
       if (cos_surface > 1e-7f) {
         ++rays;
@@ -244,7 +223,8 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, Firs
     }
     // Sun: a direction in its disc, MIS-weighted against BSDF sampling.
     if (c.sun.on) {
-      const Eigen::Vector3f wi = c.sun.sample(rng.uniform(), rng.uniform());
+      const auto [u1, u2] = rng.get2D();
+      const Eigen::Vector3f wi = c.sun.sample(u1, u2);
       const float cos_surface = n.dot(wi);
       if (cos_surface > 0.f) {
         ++rays;
@@ -257,8 +237,8 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, Firs
     }
 
     // BSDF sampling: the lobe mixture (cosine-weighted hemisphere without a specular lobe).
-    const float u_lobe = bsdf.specular() ? rng.uniform() : 0.f;
-    const float u1 = rng.uniform(), u2 = rng.uniform();
+    const float u_lobe = bsdf.specular() ? rng.get1D() : 0.f;
+    const auto [u1, u2] = rng.get2D();
     Eigen::Vector3f wi;
     if (!bsdf.sample(u_lobe, u1, u2, &wi)) break;
     const float cos_surface = n.dot(wi);
@@ -267,7 +247,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Pcg32& rng, Firs
     throughput = throughput.cwiseProduct(bsdf.eval(wi)) * (cos_surface / bsdf_pdf);
     if (bounce + 1 >= c.options.russian_roulette_after) {
       const float survive = std::clamp(throughput.maxCoeff(), 0.05f, 1.f);
-      if (rng.uniform() >= survive) break;
+      if (rng.get1D() >= survive) break;
       throughput /= survive;
     }
     if (!(throughput.maxCoeff() > 0.f)) break;
@@ -360,7 +340,7 @@ RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions&
     const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
     for (int y = y0; y < std::min(y0 + kTile, height); ++y)
       for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
-        Pcg32 rng(options.seed, static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(width) + static_cast<std::uint64_t>(x));
+        Sampler rng(options.sampler, options.seed, static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(width) + static_cast<std::uint64_t>(x));
         FirstHit first;
         Eigen::Vector3d sum = Eigen::Vector3d::Zero();
         double mean_y = 0, m2_y = 0;
@@ -368,9 +348,10 @@ RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions&
         const float absolute = options.absolute_error.empty() ? 0.f : options.absolute_error.at<float>(y, x);
         double standard_error = 0;
         while (taken < max_samples) {
-          const float jx = rng.uniform() - 0.5f, jy = rng.uniform() - 0.5f;
-          const Eigen::Vector3f value =
-              tracePath(context, static_cast<float>(x) + jx, static_cast<float>(y) + jy, rng, taken == 0 ? &first : nullptr, rays);
+          rng.startSample(static_cast<std::uint32_t>(taken));
+          const auto [jx, jy] = rng.get2D();
+          const Eigen::Vector3f value = tracePath(context, static_cast<float>(x) + jx - 0.5f, static_cast<float>(y) + jy - 0.5f, rng,
+                                                  taken == 0 ? &first : nullptr, rays);
           ++taken;
           if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
             ++nonfinite;  // never reaches the image
@@ -418,6 +399,7 @@ RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions&
   r.add("bvh_build", build_seconds, "s");
   r.add("emissive_triangles", static_cast<std::int64_t>(emissive.size()));
   r.add("light_sampler", std::string(lightSamplerName(options.light_sampler)));
+  r.add("sampler", std::string(samplerKindName(options.sampler)));
   r.add("nonfinite_samples_dropped", dropped.load());
   // Noise estimate: median relative standard error over pixels that received light.
   std::vector<float> relative;

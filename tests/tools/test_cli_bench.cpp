@@ -94,11 +94,21 @@ TEST(CliBench, AccuracyQuickWritesEveryStageAndTheRenderErrorFallsWithSamples) {
                                                     "hole_filling_seconds", "faces", "holes_filled",
                                                     "holes_left_open", "solids", "mean_to_ref_m",
                                                     "hausdorff_to_ref_m", "mean_from_ref_m", "chamfer_m",
-                                                    "load_1min"}));
+                                                    "depth_surface_mean_to_ref_m", "hole_fill_mean_to_ref_m",
+                                                    "solid_mean_to_ref_m", "beyond_80m_area_share",
+                                                    "beyond_80m_contribution_m", "mean_relative_to_ref",
+                                                    "truth_covered", "load_1min"}));
   ASSERT_EQ(mesh.rows.size(), 3u);
   expectFiniteNonNegative(mesh, {"seconds", "faces", "holes_left_open", "mean_to_ref_m", "hausdorff_to_ref_m",
-                                 "chamfer_m"},
+                                 "chamfer_m", "depth_surface_mean_to_ref_m", "beyond_80m_area_share",
+                                 "beyond_80m_contribution_m", "mean_relative_to_ref", "truth_covered"},
                           "mesh");
+  for (const auto& row : mesh.rows) {
+    // The split adds up: the far faces' share of the mean is at most the mean; fractions are fractions.
+    EXPECT_LE(number(row, "beyond_80m_contribution_m"), number(row, "mean_to_ref_m") * (1 + 1e-9));
+    EXPECT_LE(number(row, "beyond_80m_area_share"), 1.0 + 1e-9);
+    EXPECT_LE(number(row, "truth_covered"), 1.0);
+  }
   // Without hole filling and solids the mesh has fewer faces than the default one.
   EXPECT_EQ(mesh.rows[2].at("setting"), "no_fill_no_solids");
   EXPECT_LT(number(mesh.rows[2], "faces"), number(mesh.rows[0], "faces"));

@@ -387,11 +387,23 @@ TEST(CliEvalScene, RefinedDepthAndMeshOneCsvRowPerRun) {
   EXPECT_GT(m["mesh_faces"].get<std::int64_t>(), 1000);
   EXPECT_TRUE(m["mesh_skipped"].is_null());
   EXPECT_TRUE(m["mesh_distances_skipped"].is_null());
-  // Distances to the exact box mesh: hole patches behind occluders and blended edge depths lie
-  // off every true surface, so the mean is metres at this size, far below the scene's extent.
+  // Distances to the exact box mesh: metres at this size (measured 9.9 m), far below the scene's
+  // extent. The depth-band split says why: the faces beyond 80 m (90 % of the mesh's area: a
+  // pixel's area grows as depth squared) carry nearly all of the mean (measured 9.8 m), each a few
+  // percent of its depth off (docs/accuracy.md).
   EXPECT_GT(m["mesh_mean_to_ref"].get<double>(), 0.0);
   EXPECT_LE(m["mesh_mean_to_ref"].get<double>(), m["mesh_hausdorff_to_ref"].get<double>());
   EXPECT_LT(m["mesh_mean_to_ref"].get<double>(), 0.1 * m["mesh_ref_bbox_diagonal"].get<double>());
+  double area_share = 0;
+  for (const char* band : {"0_10", "10_20", "20_40", "40_80", "80_160", "160_up"})
+    area_share += m[std::string("mesh_z_") + band + "_area_share"].get<double>();
+  EXPECT_NEAR(area_share, 1.0, 1e-9);
+  const double far_m = m["mesh_z_80_160_contribution_to_mean"].get<double>() +
+                       m["mesh_z_160_up_contribution_to_mean"].get<double>();
+  EXPECT_GT(far_m, 0.5 * m["mesh_mean_to_ref"].get<double>());
+  EXPECT_LT(m["mesh_mean_relative_to_ref"].get<double>(), 0.2);  // measured 0.05
+  EXPECT_GT(m["mesh_truth_covered"].get<double>(), 0.5);         // measured 0.86
+  EXPECT_LE(m["mesh_truth_covered"].get<double>(), 1.0);
 
   const auto rows = readCsv(dir / "scene.csv");
   ASSERT_EQ(rows.size(), 2u);

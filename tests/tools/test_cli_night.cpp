@@ -262,6 +262,22 @@ TEST_F(NightCli, ContactSheetTilesHoldTheStagesPictures) {
   }
 }
 
+TEST_F(NightCli, SamplerOptionReachesTheRendererAndUnknownSamplersAreRefused) {
+  auto r = runSolo("night " + q(scene()) + " -o " + q(dir / "n.png") + " --preset draft");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(stage(readJson(dir / "n.report.json"), "render")["metrics"]["sampler"], "sobol") << "the default";
+  r = runSolo("night " + q(scene()) + " -o " + q(dir / "i.png") + " --preset draft --sampler independent");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(stage(readJson(dir / "i.report.json"), "render")["metrics"]["sampler"], "independent");
+  const auto out = dir / "out";
+  std::filesystem::create_directory(out);
+  r = runSolo("night " + q(scene()) + " -o " + q(out / "h.png") + " --preset draft --sampler halton");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--sampler"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("halton"), std::string::npos) << r.output;
+  EXPECT_TRUE(solo::test::listFolder(out).empty());
+}
+
 TEST_F(NightCli, ContactSheetWithAnUnsupportedFormatFailsBeforeAnyWork) {
   const auto r = runSolo("night " + q(scene()) + " -o " + q(dir / "n.png") + " --preset draft --contact-sheet " +
                          q(dir / "sheet.bmp"));

@@ -74,6 +74,17 @@ TEST(NightNoiseTarget, MetersAPreviewStopsAtTheSensorNoiseAndReportsTheShareReac
   const auto quiet = runSolo(base + " --noise-target --no-noise -o " + q(dir / "q.png"));
   ASSERT_EQ(quiet.exit_code, 0) << quiet.output;
   const auto quiet_report = nlohmann::json::parse(readText(dir / "q.report.json"));
-  EXPECT_FALSE(noteStartingWith(stage(quiet_report, "render"), "--noise-target ignored").empty());
+  EXPECT_FALSE(noteStartingWith(stage(quiet_report, "render"), "noise-matched target skipped").empty());
   EXPECT_FALSE(stage(quiet_report, "render")["metrics"].contains("pixels_below_noise_target"));
+
+  // The default preset matches the sensor noise; --no-noise-target goes back to the relative error.
+  const auto plain = runSolo(base + " --no-noise-target -o " + q(dir / "p.png"));
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  const auto plain_report = nlohmann::json::parse(readText(dir / "p.report.json"));
+  EXPECT_TRUE(noteStartingWith(stage(plain_report, "render"), "noise-matched target").empty());
+  EXPECT_FALSE(stage(plain_report, "render")["metrics"].contains("pixels_below_noise_target"));
+  const auto by_default = runSolo(base + " -o " + q(dir / "d.png"));
+  ASSERT_EQ(by_default.exit_code, 0) << by_default.output;
+  const auto default_report = nlohmann::json::parse(readText(dir / "d.report.json"));
+  EXPECT_FALSE(noteStartingWith(stage(default_report, "render"), "noise-matched target: standard error <= 0.50").empty());
 }

@@ -246,15 +246,21 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     csv << label << "," << spp << "," << seconds << "," << error << "," << ratio << "\n";
     std::fflush(stdout);
   };
-  for (int spp : {1, 4, 16, 64}) {
-    solo::PathTracerOptions fixed = o;
-    fixed.min_samples = fixed.max_samples = spp;
-    run("fixed " + std::to_string(spp), fixed);
+  // Both per-sample samplers (sobol is the default); the reference above uses the default.
+  for (const solo::SamplerKind kind : {solo::SamplerKind::Sobol, solo::SamplerKind::Independent}) {
+    const std::string suffix = std::string(" ") + solo::samplerKindName(kind);
+    for (int spp : {1, 4, 16, 64}) {
+      solo::PathTracerOptions fixed = o;
+      fixed.min_samples = fixed.max_samples = spp;
+      fixed.sampler = kind;
+      run("fixed " + std::to_string(spp) + suffix, fixed);
+    }
+    solo::PathTracerOptions defaults;
+    defaults.progress = false;
+    defaults.diffuse = solo::DiffuseModel::Lambert;
+    defaults.sampler = kind;
+    run("default adaptive" + suffix, defaults);
   }
-  solo::PathTracerOptions defaults;
-  defaults.progress = false;
-  defaults.diffuse = solo::DiffuseModel::Lambert;
-  run("default adaptive", defaults);
   return 0;
 }
 

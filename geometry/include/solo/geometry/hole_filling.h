@@ -6,17 +6,22 @@
 // vertices (boundary fixed). Every call is guarded: a deadline checked by a CGAL visitor, CGAL
 // exceptions caught, the result checked for completeness. The caller verifies the patch against
 // the mesh (findIntersectingFaces) and falls back to a simpler method. Units: those of the points.
+// For depth meshes, fillHoleInImage triangulates the hole in image space instead (see there).
+
+#include "solo/geometry/camera.h"
 
 #include <Eigen/Core>
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 namespace solo {
 
 enum class HoleFillMethod {
+  image_space,              ///< depth meshes: triangulated in pixel space, lifted (fillHoleInImage)
   triangulate_refine_fair,  ///< the full CGAL pipeline
   triangulate,              ///< the triangulation only (no new vertex): the first fallback
   centroid_fan,             ///< one new vertex at the boundary's centroid: the last fallback
@@ -35,6 +40,10 @@ struct HoleFillOptions {
   /// Holes with at most this many boundary vertices (one or two missing pixel quads) get the
   /// triangulation only: refining them adds next to nothing and costs a CGAL mesh per hole.
   int max_triangulation_only_vertices = 6;
+  /// Depth meshes: try fillHoleInImage before the 3D methods.
+  bool image_space_first = true;
+  /// fillHoleInImage: at most this many interior vertices (the pixel grid is thinned to fit).
+  int max_image_interior_vertices = 20000;
 };
 
 /// A patch: triangles over the boundary points (indices 0..n-1) and new points (index n + k is
@@ -54,6 +63,27 @@ struct HolePatch {
 /// for geometric reasons: a failure leaves `filled` false with the reason.
 HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFillMethod method,
                            const HoleFillOptions& options = {});
+
+/// Fills a hole of a depth mesh in image space. `boundary`: camera-frame points (metres, z > 0)
+/// of the hole's loop in border half-edge order; their projections through `camera` form the
+/// hole's polygon (pixels). A simple polygon is triangulated by a constrained Delaunay
+/// triangulation with interior vertices at the pixel centres inside it that are about 2 pixels
+/// or more from its edges (every k-th pixel in both axes, k the smallest that keeps at most
+/// options.max_image_interior_vertices); their inverse depth is the discrete harmonic
+/// (cotangent-weight) interpolation of the boundary's inverse depth, which reproduces any plane
+/// exactly. Each triangle's 3D corners project onto its 2D
+/// corners, so the patch covers exactly the hole's image region, where the depth mesh has no face.
+/// `obstacle_depth_m(u, v)` (optional): the depth (metres) behind which the patch must stay at
+/// pixel (u, v), 0 for none (the occluder in front of the hole); an interior vertex whose
+/// harmonic depth comes in front of it is pinned there and the others are solved again.
+/// Fails (filled false, with the reason) when a point is behind the camera or the polygon is
+/// not simple: touching itself (two vertices at one position, a vertex on an edge) it has no
+/// triangulation in the image without a degenerate triangle; crossing itself, none without
+/// overlap. Loops through one vertex twice are split by findBoundaryLoops, so pinched holes of
+/// a depth mesh arrive here as separate simple polygons.
+HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const PinholeCamera& camera,
+                          const HoleFillOptions& options = {},
+                          const std::function<double(int, int)>& obstacle_depth_m = {});
 
 /// For each face of `candidates`, whether it intersects a face of `candidates` or of `others`
 /// other than in what they share by index (the rules of evaluateMesh: no shared vertex, any

@@ -1,6 +1,7 @@
 #pragma once
-// Closing holes of a SurfaceMesh: each hole (a closed loop of existing vertices) is filled by
-// fillHolePolyline with the full CGAL pipeline; every patch is then checked for intersections
+// Closing holes of a SurfaceMesh: each hole (a closed loop of existing vertices) is filled in
+// image space on a depth mesh (fillHoleInImage), else or failing that by fillHolePolyline with
+// the full CGAL pipeline; every patch is then checked for intersections
 // with the other patches and with the mesh (findIntersectingFaces). A patch that intersects, or
 // that OpenMesh cannot attach, is replaced by the next simpler method (triangulation only, then
 // a centroid fan); a hole no method can close safely is left open with a warning.
@@ -18,7 +19,7 @@ namespace solo {
 
 struct HoleClosing {
   std::int64_t holes = 0, filled = 0, left_open = 0;
-  std::int64_t by_refine_fair = 0, by_triangulation = 0, by_centroid_fan = 0;
+  std::int64_t by_image_space = 0, by_refine_fair = 0, by_triangulation = 0, by_centroid_fan = 0;
   std::int64_t patches_rejected_for_intersection = 0;  ///< attempts that intersected and were replaced
   std::int64_t faces_added = 0, vertices_added = 0;
   std::int64_t largest_hole_vertices = 0;
@@ -37,7 +38,9 @@ struct PixelMapping {
   const std::vector<int>* vertex_of_pixel = nullptr;
 };
 
-/// Fills the holes (loops in border half-edge direction, see findBoundaryLoops). Holes up to
+/// Fills the holes (loops in border half-edge direction, see findBoundaryLoops). With `pixels`
+/// (and options.image_space_first) every hole is first filled in image space (fillHoleInImage);
+/// the 3D methods below are its fallbacks. Holes up to
 /// options.max_triangulation_only_vertices boundary vertices start at the triangulation (no
 /// refinement or fairing). Patches are computed in parallel. When `pixels` is given, new
 /// vertices get their projected pixel (clamped to the map), origin hole_fill and the instance

@@ -2,10 +2,11 @@
 // A CPU path tracer for a RenderScene: next-event estimation with multiple importance
 // sampling (power heuristic) against BSDF sampling, Russian roulette, a bounce limit,
 // per-pixel adaptive sampling, TBB over tiles. Deterministic for a seed whatever the
-// thread count: every pixel draws from its own counter-based random stream.
+// thread count: every pixel draws from its own sample stream (sampler.h).
 
 #include "solo/render/light_sampler.h"
 #include "solo/render/render_scene.h"
+#include "solo/render/sampler.h"
 #include "solo/render/surface_bsdf.h"
 
 #include <solo/geometry/report.h>
@@ -35,6 +36,9 @@ struct PathTracerOptions {
   int max_bounces = 12;
   int russian_roulette_after = 3;  ///< bounces before roulette starts
   LightSamplerKind light_sampler = LightSamplerKind::Hierarchy;
+  /// Where the per-sample random numbers come from (sampler.h): scrambled Sobol points,
+  /// stratified per pixel and dimension, or independent PCG32 values.
+  SamplerKind sampler = SamplerKind::Sobol;
   DiffuseModel diffuse = DiffuseModel::Disney;
   std::uint64_t seed = 1;
   bool progress = true;  ///< a progress bar on stderr when it is a terminal
