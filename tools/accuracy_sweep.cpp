@@ -15,6 +15,7 @@
 #include <solo/geometry/surface_mesh.h>
 #include <solo/geometry/view_mesh_distances.h>
 #include <solo/lighting/light_stage.h>
+#include <solo/render/exposure.h>
 #include <solo/render/night_scene.h>
 #include <solo/render/path_tracer.h>
 #include <solo/render/post_process.h>
@@ -101,20 +102,6 @@ std::pair<double, int> timed(Run&& run, int repeats, double cheap_s) {
   return {median(times), static_cast<int>(times.size())};
 }
 
-// Auto exposure as `solo night` does it (cmd_night.cpp): the 95th percentile of the lit,
-// non-emitting pixels' luminance at 80 % of sensor white.
-double sensorWhite(const cv::Mat& radiance, const cv::Mat& light_id) {
-  std::vector<float> y;
-  for (int r = 0; r < radiance.rows; ++r)
-    for (int c = 0; c < radiance.cols; ++c) {
-      const float v = radiance.at<cv::Vec3f>(r, c)[1];
-      if (light_id.at<int>(r, c) == 0 && v > 0.f) y.push_back(v);
-    }
-  if (y.empty()) return 1.0;
-  const auto k = static_cast<std::ptrdiff_t>(0.95 * static_cast<double>(y.size() - 1));
-  std::nth_element(y.begin(), y.begin() + k, y.end());
-  return std::max(1e-6, static_cast<double>(y[static_cast<std::size_t>(k)]) / 0.8);
-}
 
 /// Error of a render's luminance Y against a reference over the pixels that show no emitter in
 /// either image (lamps are exact in both and would flatter the figure). The main figure clips
@@ -134,7 +121,7 @@ struct RadianceError {
 RadianceError radianceError(const RenderOutput& image, const RenderOutput& reference) {
   CV_Assert(image.radiance.size() == reference.radiance.size());
   RadianceError e;
-  e.white = sensorWhite(reference.radiance, reference.light_id);
+  e.white = meteredSensorWhite(reference.radiance, reference.light_id);
   double squared = 0, norm = 0, variance = 0, squared_raw = 0, norm_raw = 0, sum = 0, sum_ref = 0;
   for (int y = 0; y < reference.radiance.rows; ++y)
     for (int x = 0; x < reference.radiance.cols; ++x) {
@@ -609,7 +596,7 @@ struct AccuracySweep::Impl {
       post.glare = s.glare;
       post.noise = s.noise;
       post.noise_options.seed = o.seed;
-      const double calibration = 1.0 / (sensorWhite(out.radiance, out.light_id) * exposureScale(post.exposure_options));
+      const double calibration = 1.0 / (meteredSensorWhite(out.radiance, out.light_id) * exposureScale(post.exposure_options));
       post.glare_options.threshold = 1.0 / exposureScale(post.exposure_options);
       const cv::Mat xyz = out.radiance * calibration;
       const PostProcessResult developed = postProcess(xyz, post);

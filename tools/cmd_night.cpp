@@ -15,6 +15,7 @@
 #include <solo/lighting/light_stage.h>
 #include <solo/render/colour_encoding.h>
 #include <solo/render/contact_sheet.h>
+#include <solo/render/exposure.h>
 #include <solo/render/night_scene.h>
 #include <solo/render/path_tracer.h>
 #include <solo/render/post_process.h>
@@ -32,22 +33,6 @@ StageReport inputStage(const Scene& scene, double seconds);
 namespace {
 
 void say(const std::string& line) { std::cerr << line << std::flush; }
-
-// Auto exposure: the luminance that the 95th percentile of the lit, non-emitting pixels
-// reaches at 80 % of sensor white, like a camera metering the street rather than the lamps.
-double autoSensorWhite(const cv::Mat& radiance, const cv::Mat& light_id) {
-  std::vector<float> y;
-  y.reserve(radiance.total());
-  for (int r = 0; r < radiance.rows; ++r)
-    for (int c = 0; c < radiance.cols; ++c) {
-      const float v = radiance.at<cv::Vec3f>(r, c)[1];
-      if (light_id.at<int>(r, c) == 0 && v > 0.f) y.push_back(v);
-    }
-  if (y.empty()) return 1.0;
-  const auto k = static_cast<std::ptrdiff_t>(0.95 * static_cast<double>(y.size() - 1));
-  std::nth_element(y.begin(), y.begin() + k, y.end());
-  return std::max(1e-6, static_cast<double>(y[static_cast<std::size_t>(k)]) / 0.8);
-}
 
 // The contact sheet: day, raw and refined depth on one colour scale, the faces the mesh stage
 // cut, the lights on and off, the night image.
@@ -197,7 +182,7 @@ int runNight(const NightOptions& o) {
       preview.progress = false;
       const RenderOutput metered = renderPathTraced(night.scene, preview);
       night.scene.camera = full_camera;
-      preview_white = autoSensorWhite(metered.radiance, metered.light_id);
+      preview_white = meteredSensorWhite(metered.radiance, metered.light_id);
     }
     const double exposure = exposureScale(PostProcessOptions{}.exposure_options);
     tracer.noise_sigma = sensorNoiseSigma(1.0 / (preview_white * exposure), exposure, PostProcessOptions{}.noise_options);
@@ -231,7 +216,7 @@ int runNight(const NightOptions& o) {
   post.noise_options.seed = o.seed;
   const bool auto_white = !(o.sensor_white_cd_m2 > 0);
   const double sensor_white = preview_white > 0 ? preview_white  // the exposure the noise target was set for
-                              : auto_white      ? autoSensorWhite(rendered.radiance, rendered.light_id)
+                              : auto_white      ? meteredSensorWhite(rendered.radiance, rendered.light_id)
                                                 : o.sensor_white_cd_m2;
   const double calibration = 1.0 / (sensor_white * exposureScale(post.exposure_options));
   post.glare_options.threshold = o.glare_threshold >= 0 ? o.glare_threshold : 1.0 / exposureScale(post.exposure_options);

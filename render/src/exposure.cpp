@@ -1,7 +1,9 @@
 #include <solo/render/exposure.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace solo {
 
@@ -48,6 +50,20 @@ StageReport applyExposure(cv::Mat& linear_image, const ExposureOptions& options)
   }
   report.seconds = clock.seconds();
   return report;
+}
+
+double meteredSensorWhite(const cv::Mat& radiance_xyz, const cv::Mat& light_id, double percentile, double level) {
+  std::vector<float> y;
+  y.reserve(radiance_xyz.total());
+  for (int r = 0; r < radiance_xyz.rows; ++r)
+    for (int c = 0; c < radiance_xyz.cols; ++c) {
+      const float v = radiance_xyz.at<cv::Vec3f>(r, c)[1];
+      if (light_id.at<int>(r, c) == 0 && v > 0.f) y.push_back(v);
+    }
+  if (y.empty()) return 1.0;
+  const auto k = static_cast<std::ptrdiff_t>(percentile * static_cast<double>(y.size() - 1));
+  std::nth_element(y.begin(), y.begin() + k, y.end());
+  return std::max(1e-6, static_cast<double>(y[static_cast<std::size_t>(k)]) / level);
 }
 
 }  // namespace solo

@@ -37,3 +37,19 @@ TEST(Exposure, ZeroStopsIsSkippedAndLeavesTheImage) {
   EXPECT_NE(report.skip_reason.find("0 stops"), std::string::npos);
   EXPECT_EQ(image.at<cv::Vec3f>(0, 0)[0], 0.3f);
 }
+
+TEST(Exposure, MeteringPutsThe95thPercentileOfTheStreetAt80PercentOfWhite) {
+  // 100 street pixels with Y = 1..100, one lamp far brighter and one unlit pixel: the lamp and
+  // the unlit pixel are ignored; the 95th percentile is element floor(0.95 * 99) = 94 of the
+  // sorted luminances, Y = 95, so sensor white is 95 / 0.8.
+  cv::Mat radiance(1, 102, CV_32FC3, cv::Scalar(0, 0, 0));
+  cv::Mat light_id(1, 102, CV_32S, cv::Scalar(0));
+  for (int i = 0; i < 100; ++i) radiance.at<cv::Vec3f>(0, (i * 37) % 100) = cv::Vec3f(0, static_cast<float>(i + 1), 0);
+  radiance.at<cv::Vec3f>(0, 100) = cv::Vec3f(0, 1e6f, 0);
+  light_id.at<int>(0, 100) = 7;
+  EXPECT_DOUBLE_EQ(solo::meteredSensorWhite(radiance, light_id), 95.0 / 0.8);
+  EXPECT_DOUBLE_EQ(solo::meteredSensorWhite(radiance, light_id, 0.5, 1.0), 50.0);
+  // Nothing lit: white stays 1 rather than dividing by zero.
+  EXPECT_EQ(solo::meteredSensorWhite(cv::Mat(2, 2, CV_32FC3, cv::Scalar(0, 0, 0)), cv::Mat(2, 2, CV_32S, cv::Scalar(0))),
+            1.0);
+}

@@ -21,6 +21,8 @@
 // cuts at its spread angle, Cycles' spread falls off smoothly), Lambertian diffuse (Cycles'
 // Diffuse BSDF at roughness 0), black sky.
 
+#include "../night_street.h"
+
 #include <solo/geometry/image_io.h>
 #include <solo/geometry/report.h>
 #include <solo/lighting/light_category.h>
@@ -41,51 +43,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Emitted luminance per category, as bench_render (render units).
-float luminanceOf(int category) {
-  switch (static_cast<solo::LightCategory>(category)) {
-    case solo::LightCategory::WindowBuilding: return 8.f;
-    case solo::LightCategory::WindowParked: return 2.f;
-    case solo::LightCategory::WindowTransport: return 9.f;
-    case solo::LightCategory::StreetLightHighCct:
-    case solo::LightCategory::StreetLightLowCct: return 900.f;
-    case solo::LightCategory::ParkedFront:
-    case solo::LightCategory::MovingFront: return 800.f;
-    case solo::LightCategory::ParkedRear:
-    case solo::LightCategory::MovingRear: return 70.f;
-    default: return 150.f;
-  }
-}
-
+// Uniform emitters (Cycles has no g profile) and headlights over the whole hemisphere (Cycles
+// fades a spot light's edge where solo cuts a hard cone).
 solo::RenderScene nightStreet(int width, int height) {
-  solo::StreetSceneOptions options;
-  options.width = width;
-  options.height = height;
-  const solo::StreetScene street = solo::buildStreetScene(options);
-  const solo::TriangleMesh mesh = solo::streetSceneMesh(street);
-  solo::RenderScene scene;
-  scene.camera = street.camera;
-  for (const auto& v : mesh.vertices) scene.vertices.push_back(v.cast<float>());
-  scene.faces = mesh.faces;
-  std::map<int, int> emitter_of_light;
-  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
-    const solo::ScenePart& part = street.parts[f / 12];
-    scene.face_reflectance.push_back(solo::reflectanceFromLinearSrgb(part.albedo));
-    int emitter = -1;
-    if (part.light_id > 0) {
-      auto it = emitter_of_light.find(part.light_id);
-      if (it == emitter_of_light.end()) {
-        const int category = solo::lightCategoryOfId(part.light_id);
-        scene.emitters.push_back({Eigen::Vector3f(0.95f, 1.f, 0.8f) * luminanceOf(category), false, part.light_id});
-        it = emitter_of_light.emplace(part.light_id, static_cast<int>(scene.emitters.size()) - 1).first;
-      }
-      emitter = it->second;
-    }
-    scene.face_emitter.push_back(emitter);
-  }
-  scene.rectangle_lights = solo::egoHeadlights(2000.f);
-  for (auto& light : scene.rectangle_lights) light.spread_rad = 3.14159265f;
-  return scene;
+  return solo::bench::nightStreet({width, height, /*profiled_emitters=*/false, /*headlight_spread_rad=*/3.14159265f});
 }
 
 // Adds the quad centre +- u/2 +- v/2 (two triangles, normal along u x v) to the scene.

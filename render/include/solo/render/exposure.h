@@ -30,6 +30,13 @@ double exposureStops(const ExposureOptions& options);
 /// The linear factor 2^exposureStops(options).
 double exposureScale(const ExposureOptions& options);
 
+/// Auto exposure, metering the street rather than the lamps: the luminance (cd/m^2, the Y of a
+/// CV_32FC3 XYZ render) that puts the `percentile` of the lit pixels that show no emitter
+/// (light_id, CV_32S, 0) at `level` of sensor white; 1 when no such pixel is lit.
+/// `solo night` uses 0.95 at 0.8.
+double meteredSensorWhite(const cv::Mat& radiance_xyz, const cv::Mat& light_id, double percentile = 0.95,
+                          double level = 0.8);
+
 /// Multiplies every channel of a linear CV_32FC3 image by exposureScale(options) in place.
 /// Report "exposure": stops, scale; skipped (image untouched) when the stops are 0.
 StageReport applyExposure(cv::Mat& linear_image, const ExposureOptions& options);
