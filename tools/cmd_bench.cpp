@@ -9,15 +9,13 @@
 #include <solo/geometry/atomic_file.h>
 #include <solo/geometry/error.h>
 #include <solo/geometry/report.h>
+#include <solo/geometry/scene.h>
 #include <solo/geometry/triangle_mesh.h>
 #include <solo/geometry/version.h>
-
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cstdlib>
 #include <ctime>
-#include <fstream>
 #include <iostream>
 #include <sstream>
 #include <thread>
@@ -31,22 +29,6 @@ const std::vector<std::string> kStages = {"refine", "mesh", "render", "end_to_en
 
 void say(const std::string& line) { std::cerr << line << "\n" << std::flush; }
 
-/// The "ground_truth" entry of a scene manifest, resolved against the manifest's folder.
-fs::path groundTruthOf(const fs::path& manifest) {
-  std::ifstream in(manifest);
-  if (!in) throw InputError(manifest, "cannot be read");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(manifest, std::string("not valid JSON: ") + e.what());
-  }
-  if (!j.is_object() || !j.contains("ground_truth") || !j.at("ground_truth").is_string() ||
-      j.at("ground_truth").get<std::string>().empty())
-    throw InputError(manifest, "has no \"ground_truth\" entry: not a synthetic scene (`solo synth` writes one)");
-  const fs::path p(j.at("ground_truth").get<std::string>());
-  return p.is_absolute() ? p : manifest.parent_path() / p;
-}
 
 std::string shellQuoted(const std::string& s) {
   std::string out = "'";
@@ -210,7 +192,7 @@ int runBenchAccuracy(const BenchAccuracyOptions& o) {
   if (o.scene) {
     manifest = fs::is_directory(*o.scene, ec) ? *o.scene / "scene.json" : *o.scene;
     if (!fs::exists(manifest, ec)) throw InputError(manifest, "not found (a `solo synth` folder or its scene.json)");
-    const fs::path truth_manifest = groundTruthOf(manifest);
+    const fs::path truth_manifest = groundTruthManifest(manifest);
     if (!fs::exists(truth_manifest, ec)) throw InputError(truth_manifest, "not found (the scene's ground truth)");
   }
   fs::create_directories(o.output);
@@ -226,7 +208,7 @@ int runBenchAccuracy(const BenchAccuracyOptions& o) {
     runSynth(synth);
     manifest = synth.output / "scene.json";
   }
-  const fs::path truth_manifest = groundTruthOf(manifest);
+  const fs::path truth_manifest = groundTruthManifest(manifest);
   Stopwatch clock;
   Scene scene = loadScene(manifest);
   const double input_seconds = clock.seconds();

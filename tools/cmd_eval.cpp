@@ -408,24 +408,6 @@ int runEvalMesh(const EvalMeshOptions& o) {
 
 namespace {
 
-/// The "ground_truth" entry of a scene manifest, resolved against the manifest's folder.
-fs::path groundTruthManifest(const fs::path& manifest) {
-  std::ifstream in(manifest);
-  if (!in) throw InputError(manifest, "cannot be read");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(manifest, std::string("not valid JSON: ") + e.what());
-  }
-  if (!j.is_object() || !j.contains("ground_truth"))
-    throw InputError(manifest, "has no \"ground_truth\" entry: not a synthetic scene (`solo synth` writes one)");
-  const nlohmann::json& v = j.at("ground_truth");
-  if (!v.is_string() || v.get<std::string>().empty())
-    throw InputError(manifest, "\"ground_truth\" must be a non-empty path string");
-  const fs::path p(v.get<std::string>());
-  return p.is_absolute() ? p : manifest.parent_path() / p;
-}
 
 /// <folder>/<stem>.<what><extension>: the files `solo depth` writes beside its output.
 fs::path besideOutput(const fs::path& output, const std::string& what, const std::string& extension) {

@@ -16,6 +16,7 @@
 
 #include <solo/geometry/atomic_file.h>
 #include <solo/geometry/error.h>
+#include <solo/geometry/scene.h>
 
 #include <nlohmann/json.hpp>
 
@@ -186,11 +187,12 @@ std::vector<Found> searchFolder(const fs::path& folder, std::size_t& ground_trut
   }
   std::set<fs::path> ground_truths;
   for (const Found& f : found) {
-    std::ifstream in(f.manifest);
-    const nlohmann::json j = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-    if (j.is_object() && j.contains("ground_truth") && j["ground_truth"].is_string())
-      ground_truths.insert(
-          fs::weakly_canonical(f.manifest.parent_path() / j["ground_truth"].get<std::string>(), ec));
+    try {
+      if (const auto truth = readSceneManifest(f.manifest).ground_truth)
+        ground_truths.insert(fs::weakly_canonical(*truth, ec));
+    } catch (const InputError&) {
+      // A broken manifest is still a scene of the batch: it fails, with its reason, when run.
+    }
   }
   const auto before = found.size();
   found.erase(std::remove_if(found.begin(), found.end(),

@@ -109,6 +109,7 @@ SceneManifest readSceneManifest(const fs::path& manifest_file) {
   optionalPath("labels", m.labels);
   optionalPath("lights", m.lights);
   optionalPath("light_groups", m.light_groups);
+  optionalPath("ground_truth", m.ground_truth);
   for (const char* text_key : {"name", "comment"})
     if (j.contains(text_key) && !j.at(text_key).is_string())
       throw InputError(manifest_file, std::string("\"") + text_key + "\" must be a string");
@@ -284,6 +285,13 @@ StageReport describeScene(const Scene& s) {
   }
   for (const std::string& w : s.warnings) r.notes.push_back(w);
   return r;
+}
+
+fs::path groundTruthManifest(const fs::path& manifest_file) {
+  const SceneManifest m = readSceneManifest(manifest_file);
+  if (!m.ground_truth)
+    throw InputError(manifest_file, "has no \"ground_truth\" entry: not a synthetic scene (`solo synth` writes one)");
+  return *m.ground_truth;
 }
 
 }  // namespace solo

@@ -186,3 +186,21 @@ TEST(Scene, RealSampleWithSparseLidarDepth) {
   EXPECT_NEAR(s.depth_stats.max_m, 226.086, 1e-3);
   EXPECT_DOUBLE_EQ(s.camera.fx, 2167.6926048451924);
 }
+
+TEST(Scene, GroundTruthManifestIsResolvedAgainstTheManifestFolder) {
+  TempDir dir;
+  writeText(dir / "scene.json", R"({"image": "day.png", "depth": "d.exr", "ground_truth": "gt/scene.json"})");
+  EXPECT_EQ(solo::readSceneManifest(dir / "scene.json").ground_truth, dir / "gt/scene.json");
+  EXPECT_EQ(solo::groundTruthManifest(dir / "scene.json"), dir / "gt/scene.json");
+
+  writeText(dir / "plain.json", R"({"image": "day.png", "depth": "d.exr"})");
+  EXPECT_FALSE(solo::readSceneManifest(dir / "plain.json").ground_truth);
+  try {
+    solo::groundTruthManifest(dir / "plain.json");
+    FAIL() << "a manifest without ground truth was accepted";
+  } catch (const solo::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("plain.json: has no \"ground_truth\" entry"), std::string::npos) << e.what();
+  }
+  writeText(dir / "wrong.json", R"({"image": "day.png", "depth": "d.exr", "ground_truth": 3})");
+  EXPECT_THROW(solo::readSceneManifest(dir / "wrong.json"), solo::InputError);
+}

@@ -30,6 +30,7 @@ struct SceneManifest {
   std::optional<std::filesystem::path> labels;        ///< Cityscapes labelIds
   std::optional<std::filesystem::path> lights;        ///< light-source instance ids
   std::optional<std::filesystem::path> light_groups;  ///< building-floor window groups
+  std::optional<std::filesystem::path> ground_truth;  ///< the exact scene's manifest (`solo synth`)
 
   /// Camera: inline intrinsics (resolution 0 = "the image's"), or a Cityscapes camera JSON.
   std::optional<PinholeCamera> camera;
@@ -42,6 +43,10 @@ struct SceneManifest {
 /// the manifest for malformed JSON, a missing required key or a key of the wrong type;
 /// unknown keys are kept as warnings.
 SceneManifest readSceneManifest(const std::filesystem::path& manifest_file);
+
+/// The "ground_truth" manifest a synthetic scene names, resolved against its folder. Throws
+/// InputError naming the manifest when it cannot be read or names none (not a synthetic scene).
+std::filesystem::path groundTruthManifest(const std::filesystem::path& manifest_file);
 
 /// Size and encoding of one loaded map, for the report.
 struct MapRecord {
