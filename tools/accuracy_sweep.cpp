@@ -3,6 +3,7 @@
 // against the synthetic scene's exact ground truth.
 
 #include "accuracy_sweep.h"
+#include "night_pipeline.h"
 #include "night_presets.h"
 
 #include <solo/geometry/depth_metrics.h>
@@ -147,35 +148,21 @@ RadianceError radianceError(const RenderOutput& image, const RenderOutput& refer
   return e;
 }
 
-/// One setting of the whole pipeline (the knobs of `solo night` the sweep varies).
+/// One setting of the whole pipeline: `solo night`'s options (a preset applied) and the
+/// pipeline's extras.
 struct PipelineSetting {
   std::string name;
-  bool refine = true;          ///< filter and uncertain regions (upsampling always runs)
-  int refine_iterations = 10;  ///< Ceres L-BFGS iterations; 0 = no optimisation
-  double refine_tolerance = NormalGuidedOptimizationOptions{}.function_tolerance;
-  bool fill_holes = true;
-  int max_fair_vertices = HoleFillOptions{}.max_fair_vertices;
-  bool solids = true;
-  LightSamplerKind sampler = LightSamplerKind::Power;
-  int min_spp = 4, max_spp = 16;
-  double relative_error = 0.1;
-  bool glare = true, noise = true;  ///< post-process (its time only)
+  NightOptions night;
+  NightPipelineExtras extras;
 };
 
 /// A quality preset of `solo night` (night_presets.h) as a pipeline setting.
 PipelineSetting presetSetting(const std::string& preset) {
-  NightOptions n;
-  n.preset = preset;
-  applyNightPreset(n, [](const std::string&) { return false; });
   PipelineSetting s;
   s.name = preset;
-  s.refine = n.refine;
-  s.refine_iterations = n.optimize ? n.optimize_iterations : 0;
-  s.refine_tolerance = n.optimize_tolerance;
-  s.solids = n.solids;
-  s.sampler = lightSamplerFromName(n.light_sampler);
-  s.min_spp = n.min_samples, s.max_spp = n.max_samples, s.relative_error = n.relative_error;
-  s.glare = n.glare, s.noise = n.noise;
+  s.night.preset = preset;
+  applyNightPreset(s.night, [](const std::string&) { return false; });
+  s.extras.progress = false;
   return s;
 }
 
@@ -515,7 +502,8 @@ struct AccuracySweep::Impl {
     t.columns = {"seed",           "width",           "height",          "setting",
                  "refine",         "refine_iterations", "refine_tolerance", "fill_holes",
                  "max_fair_vertices", "close_solids",  "light_sampler",   "min_spp",
-                 "max_spp",        "relative_error_target", "seconds", "input_seconds",
+                 "max_spp",        "relative_error_target", "noise_target", "noise_factor",
+                 "mesh_downsample", "render_downsample", "seconds", "input_seconds",
                  "refine_seconds", "mesh_seconds",    "lights_seconds",  "scene_seconds",
                  "render_seconds", "post_seconds",    "mean_spp",        "depth_abs_rel",
                  "relative_rmse",  "relative_rmse_noise_corrected", "relative_rmse_unclipped", "luminance_ratio",
@@ -545,78 +533,49 @@ struct AccuracySweep::Impl {
     if (!o.quick) {
       PipelineSetting no_refine = standard;
       no_refine.name = "default_no_refine";
-      no_refine.refine = false;
-      no_refine.refine_iterations = 0;
+      no_refine.night.refine = false;
       settings.push_back(no_refine);
       PipelineSetting no_solids = standard;
       no_solids.name = "default_no_solids";
-      no_solids.solids = false;
+      no_solids.night.solids = false;
       settings.push_back(no_solids);
     }
 
-    for (const PipelineSetting& s : settings) {
+    for (PipelineSetting& s : settings) {
       say("[end_to_end] " + s.name + " ...");
+      s.night.seed = o.seed;
+      s.extras.illuminant_table = o.illuminant_table;
       Stopwatch clock;
-      DepthRefinementOptions refine_options;
-      refine_options.filter = refine_options.uncertain_regions = s.refine;
-      refine_options.optimize = s.refine && s.refine_iterations > 0;
-      refine_options.optimization.max_iterations = std::max(1, s.refine_iterations);
-      refine_options.optimization.function_tolerance = s.refine_tolerance;
-      const DepthRefinementResult r = refineDepth(scene, refine_options);
-      const double refine_s = clock.seconds();
-
-      clock = Stopwatch();
-      StageReport mesh_report;
-      const DepthMesh m = meshFromScene(r.depth_m, scene.camera, r.maps.instances, r.uncertain,
-                                        meshOptions(s.fill_holes, s.max_fair_vertices, s.solids), mesh_report);
-      const double mesh_s = clock.seconds();
-
-      clock = Stopwatch();
-      const LightStageResult lights = runLightStage(scene, r.depth_m, lightOptions());
-      const double lights_s = clock.seconds();
-
-      clock = Stopwatch();
-      const NightScene n = buildNightScene(m, r.maps.albedo, r.maps.roughness, scene.image, lights.record);
-      const double scene_s = clock.seconds();
-
-      clock = Stopwatch();
-      PathTracerOptions tracer;
-      tracer.seed = o.seed;
-      tracer.light_sampler = s.sampler;
-      tracer.min_samples = s.min_spp;
-      tracer.max_samples = s.max_spp;
-      tracer.relative_error = s.relative_error;
-      tracer.progress = false;
-      const RenderOutput out = renderPathTraced(n.scene, tracer);
-      const double render_s = clock.seconds();
-
-      // The post-process runs for its time only: the error is measured on the linear render.
-      clock = Stopwatch();
-      PostProcessOptions post;
-      post.glare = s.glare;
-      post.noise = s.noise;
-      post.noise_options.seed = o.seed;
-      const double calibration = 1.0 / (meteredSensorWhite(out.radiance, out.light_id) * exposureScale(post.exposure_options));
-      post.glare_options.threshold = 1.0 / exposureScale(post.exposure_options);
-      const cv::Mat xyz = out.radiance * calibration;
-      const PostProcessResult developed = postProcess(xyz, post);
-      const double post_s = clock.seconds();
-
-      const double total_s = o.input_seconds + refine_s + mesh_s + lights_s + scene_s + render_s + post_s;
-      const RadianceError e = radianceError(out, ref);
+      const NightPipelineResult r = runNightPipeline(scene, s.night, s.extras);
+      const double pipeline_s = clock.seconds();
+      double refine_s = 0, mesh_s = 0, lights_s = 0, scene_s = 0, post_s = 0;
+      for (const StageReport& step : r.refined.steps) refine_s += step.seconds;
+      for (const StageReport& stage : r.stages) {
+        if (stage.name == "mesh") mesh_s = stage.seconds;
+        if (stage.name == "lights") lights_s = stage.seconds;
+        if (stage.name == "scene") scene_s = stage.seconds;
+        if (stage.name == "post") post_s = stage.seconds;
+      }
+      // The render's time includes the exposure preview of the noise-matched target.
+      const double render_s = std::max(0.0, pipeline_s - refine_s - mesh_s - lights_s - scene_s - post_s);
+      const double total_s = o.input_seconds + pipeline_s;
+      const RadianceError e = radianceError(r.rendered, ref);
       DepthEvaluationInput d;
-      d.prediction_m = r.depth_m;
+      d.prediction_m = r.refined.depth_m;
       d.ground_truth_m = truth.depth_m;
       const DepthMetrics dm = evaluateDepth(d);
 
+      const NightOptions& n = s.night;
       std::vector<std::string> row = head();
       row.insert(row.end(),
-                 {s.name, boolean(s.refine), integer(s.refine_iterations), num(s.refine_tolerance), boolean(s.fill_holes),
-                  integer(s.max_fair_vertices), boolean(s.solids), lightSamplerName(s.sampler), integer(s.min_spp),
-                  integer(s.max_spp), num(s.relative_error), seconds(total_s), seconds(o.input_seconds),
-                  seconds(refine_s), seconds(mesh_s), seconds(lights_s), seconds(scene_s), seconds(render_s),
-                  seconds(post_s), num(metricDouble(out.report, "samples_per_pixel_mean")), num(dm.abs_rel),
-                  num(e.relative_rmse), num(e.noise_corrected), num(e.relative_rmse_unclipped), num(e.luminance_ratio), num(e.white),
+                 {s.name, boolean(n.refine), integer(n.refine && n.optimize ? n.optimize_iterations : 0),
+                  num(n.optimize_tolerance), boolean(s.extras.fill_holes), integer(s.extras.max_fair_vertices),
+                  boolean(n.solids), n.light_sampler, integer(n.min_samples), integer(n.max_samples),
+                  num(n.relative_error), boolean(n.noise_target), num(n.noise_factor), integer(n.mesh_downsample),
+                  integer(n.render_downsample), seconds(total_s), seconds(o.input_seconds), seconds(refine_s),
+                  seconds(mesh_s), seconds(lights_s), seconds(scene_s), seconds(render_s), seconds(post_s),
+                  num(metricDouble(r.rendered.report, "samples_per_pixel_mean")), num(dm.abs_rel), num(e.relative_rmse),
+                  num(e.noise_corrected), num(e.relative_rmse_unclipped), num(e.luminance_ratio), num(e.white),
                   integer(o.reference_spp), num(self.reference_noise), num(loadAverage1Min())});
       t.rows.push_back(row);
       say("[end_to_end] " + s.name + ": " + seconds(total_s) + " s (refine " + seconds(refine_s) + ", mesh " +

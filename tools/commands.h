@@ -62,6 +62,13 @@ struct NightOptions {
   std::string preset = "default";
   int optimize_iterations = 10;      ///< Ceres iterations of the normal-guided optimisation
   double optimize_tolerance = 1e-9;  ///< relative decrease of the objective that stops it
+  /// The mesh is made from the refined depth downsampled by this factor (1: every pixel a
+  /// vertex); geometry/downsample_depth.h. The draft preset's mesh simplification.
+  int mesh_downsample = 1;
+  /// The path tracer renders at the image size divided by this factor; the render is upsampled
+  /// (bilinear; light ids and depth nearest) before post-processing. Draft's cheaper render.
+  int render_downsample = 1;
+  int max_bounces = 12;  ///< path length limit of the tracer (Russian roulette after 3)
   std::optional<std::filesystem::path> contact_sheet;  ///< PNG grid of the stages' pictures
   std::optional<std::filesystem::path> write_config;   ///< the effective configuration (TOML)
 };

@@ -55,6 +55,14 @@ int main(int argc, char** argv) {
                       "Adaptive sampling to the sensor noise: stop at noise-factor x its sigma (replaces --relative-error; preset)");
   night_cmd->add_option("--noise-factor", night.noise_factor, "Render noise allowed, as a fraction of the sensor noise")
       ->capture_default_str();
+  night_cmd->add_option("--max-bounces", night.max_bounces, "Path length limit of the tracer (preset)")
+      ->capture_default_str()->check(CLI::Range(1, 64));
+  night_cmd->add_option("--mesh-downsample", night.mesh_downsample,
+                        "Make the mesh from the depth downsampled by this factor (preset)")
+      ->capture_default_str()->check(CLI::Range(1, 8));
+  night_cmd->add_option("--render-downsample", night.render_downsample,
+                        "Render at the image size divided by this factor, then upsample (preset)")
+      ->capture_default_str()->check(CLI::Range(1, 8));
   night_cmd->add_flag("--glare,!--no-glare", night.glare, "Fog glare (preset)");
   night_cmd->add_flag("--noise,!--no-noise", night.noise, "Sensor noise (preset)");
   night_cmd->add_option("--sensor-white", night.sensor_white_cd_m2,

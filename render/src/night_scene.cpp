@@ -23,8 +23,18 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   RenderScene& scene = out.scene;
   StageReport& report = out.report;
   report.name = "scene";
-  const int width = depth_mesh.width, height = depth_mesh.height;
-  scene.camera = depth_mesh.camera;
+  // The maps' (and the render's) resolution: the albedo's, else the light record's, else the
+  // mesh's. A mesh made from a downsampled depth map (--mesh-downsample) is coarser than the maps.
+  int width = depth_mesh.width, height = depth_mesh.height;
+  if (!albedo.empty()) {
+    width = albedo.cols;
+    height = albedo.rows;
+  } else if (record.tree.width > 0 && record.tree.height > 0) {
+    width = record.tree.width;
+    height = record.tree.height;
+  }
+  scene.camera = (width == depth_mesh.width && height == depth_mesh.height) ? depth_mesh.camera
+                                                                              : depth_mesh.camera.scaledTo(width, height);
 
   cv::Mat reflectance_map = albedo;
   if (reflectance_map.empty() && !day_image.empty()) {
@@ -37,6 +47,7 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     report.notes.push_back("no albedo map: the linearised day image stands in for the reflectance");
   }
   CV_Assert(reflectance_map.empty() || reflectance_map.size() == cv::Size(width, height));
+  CV_Assert(roughness.empty() || roughness.size() == cv::Size(width, height));
 
   // Light index per pixel (into record.tree.lights), -1 = none.
   cv::Mat light_index(height, width, CV_32S, cv::Scalar(-1));
@@ -75,6 +86,9 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   const std::optional<ImageVertexProperties> props = ImageVertexProperties::find(mesh);
   std::vector<int> index_of_vertex(mesh.n_vertices(), -1);
   std::int64_t emitting_faces = 0, faces_without_pixel = 0;
+  // Pixel coordinates on the mesh are of its own grid; pixel centres map by the camera's rule.
+  const double scale_x = depth_mesh.width > 0 ? static_cast<double>(width) / depth_mesh.width : 1.0;
+  const double scale_y = depth_mesh.height > 0 ? static_cast<double>(height) / depth_mesh.height : 1.0;
   for (const auto f : mesh.faces()) {
     if (mesh.status(f).deleted()) continue;
     std::array<std::uint32_t, 3> face{};
@@ -103,8 +117,10 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     float rough = 0.5f;
     int emitter = -1;
     if (with_pixel > 0) {
-      const int x = std::clamp(static_cast<int>(std::lround(u / with_pixel)), 0, width - 1);
-      const int y = std::clamp(static_cast<int>(std::lround(v / with_pixel)), 0, height - 1);
+      const int x =
+          std::clamp(static_cast<int>(std::lround((u / with_pixel + 0.5) * scale_x - 0.5)), 0, width - 1);
+      const int y =
+          std::clamp(static_cast<int>(std::lround((v / with_pixel + 0.5) * scale_y - 0.5)), 0, height - 1);
       if (!reflectance_map.empty()) {
         const cv::Vec3f a = reflectance_map.at<cv::Vec3f>(y, x);
         rgb = Eigen::Vector3f(a[0], a[1], a[2]).cwiseMax(0.f).cwiseMin(1.f);

@@ -80,3 +80,46 @@ TEST(NightScene, AnOnLightEmitsItsLuminanceInItsColourAndAnOffLightNothing) {
   EXPECT_GT(emitting, 0);
   EXPECT_LT(emitting, 30) << "faces over the light that is off do not emit";
 }
+
+TEST(NightScene, AMeshFromADownsampledDepthMapTakesTheAlbedoUnderItsFacesAtFullResolution) {
+  // The image is 12x8; the mesh is made from its depth downsampled 2x (6x4 vertices), as
+  // `solo night --mesh-downsample 2` does. The albedo's left 6 columns are dark, the right 6
+  // bright: in coarse pixels the boundary lies between columns 2 and 3.
+  const solo::PinholeCamera image_camera{20, 20, 5.5, 3.5, 12, 8};
+  const cv::Mat coarse_depth(4, 6, CV_32F, cv::Scalar(4.f));
+  const solo::DepthMesh mesh = solo::meshFromDepth(coarse_depth, image_camera);
+  ASSERT_EQ(mesh.width, 6);
+  cv::Mat albedo(8, 12, CV_32FC3, cv::Scalar(0.2f, 0.2f, 0.2f));
+  albedo(cv::Rect(6, 0, 6, 8)).setTo(cv::Scalar(0.6f, 0.6f, 0.6f));
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, albedo, {}, {}, solo::LightRecord{}, options);
+  // The render camera is the image's, not the mesh's.
+  EXPECT_EQ(night.scene.camera.width, 12);
+  EXPECT_EQ(night.scene.camera.height, 8);
+  EXPECT_DOUBLE_EQ(night.scene.camera.cx, image_camera.cx);
+  const auto props = solo::ImageVertexProperties::find(mesh.mesh);
+  ASSERT_TRUE(props.has_value());
+  std::size_t face_index = 0;
+  int left_faces = 0, right_faces = 0;
+  for (const auto f : mesh.mesh.faces()) {
+    int min_u = 99, max_u = -1;
+    for (const auto vh : mesh.mesh.fv_range(f)) {
+      const int u = mesh.mesh.property(props->pixel, vh)[0];
+      min_u = std::min(min_u, u);
+      max_u = std::max(max_u, u);
+    }
+    const float y = night.scene.face_reflectance[face_index++].y();
+    if (max_u <= 2) {  // covers image columns 0-5 only
+      EXPECT_NEAR(y, 0.2f, 1e-5f) << "coarse columns " << min_u << "-" << max_u;
+      ++left_faces;
+    }
+    if (min_u >= 3) {  // image columns 6-11 (read at its own coarse column, they would be dark)
+      EXPECT_NEAR(y, 0.6f, 1e-5f) << "coarse columns " << min_u << "-" << max_u;
+      ++right_faces;
+    }
+  }
+  EXPECT_EQ(face_index, night.scene.faces.size());
+  EXPECT_EQ(left_faces, 12);   // quads 0-1 and 1-2 of 3 rows, two faces each
+  EXPECT_EQ(right_faces, 12);  // quads 3-4 and 4-5
+}

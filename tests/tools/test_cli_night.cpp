@@ -82,6 +82,15 @@ TEST_F(NightCli, DraftPresetSetsItsKnobsAndTheReportNamesIt) {
   // docs/presets.md: draft renders at most 2 samples per pixel and optimises 3 iterations.
   EXPECT_EQ(stage(j, "render")["metrics"]["samples_per_pixel_max"], 2);
   EXPECT_LE(stage(j, "optimize")["metrics"]["iterations"].get<int>(), 3);
+  // ... and meshes the depth downsampled 2x and renders at half the image size, upsampled.
+  const int width = stage(j, "upsample")["metrics"]["image_width"]["value"].get<int>();
+  const int height = stage(j, "upsample")["metrics"]["image_height"]["value"].get<int>();
+  EXPECT_EQ(stage(j, "mesh")["metrics"]["depth_width"]["value"].get<int>(), width / 2);
+  EXPECT_EQ(stage(j, "render")["metrics"]["render_width"]["value"].get<int>(), width / 2);
+  EXPECT_EQ(stage(j, "render")["metrics"]["render_height"]["value"].get<int>(), height / 2);
+  const cv::Mat night = cv::imread((dir / "n.png").string(), cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(night.cols, width);
+  EXPECT_EQ(night.rows, height);
 }
 
 TEST_F(NightCli, OptionsGivenExplicitlyBeatThePreset) {

@@ -28,10 +28,13 @@ struct NightScene {
   StageReport report;  ///< "scene": faces, emitting faces per category, lights on without faces
 };
 
-/// albedo: CV_32FC3 linear RGB reflectance at the mesh's depth-map resolution, or empty (then
-/// the linearised day image stands in for it, with a note). roughness: CV_32F or empty.
-/// record: lights at the same resolution (tree.width x tree.height); lights that are off emit
-/// nothing. Units: emitted luminance in cd/m^2 = render units (docs/lighting.md).
+/// albedo: CV_32FC3 linear RGB reflectance at the image resolution, or empty (then the
+/// linearised day image stands in for it, with a note). roughness: CV_32F of the same size, or
+/// empty. record: lights at the same resolution (tree.width x tree.height); lights that are off
+/// emit nothing. The render camera is at the albedo's (else the record's, else the mesh's)
+/// resolution; the mesh may come from a depth map downsampled by an integer factor (its pixel
+/// coordinates are scaled to the maps). Units: emitted luminance in cd/m^2 = render units
+/// (docs/lighting.md).
 NightScene buildNightScene(const DepthMesh& mesh, const cv::Mat& albedo, const cv::Mat& roughness,
                            const cv::Mat& day_image, const LightRecord& record, const NightSceneOptions& options = {});
 

@@ -1,0 +1,228 @@
+// `solo night`'s stages after the input (night_pipeline.h).
+
+#include "night_pipeline.h"
+
+#include <solo/geometry/downsample_depth.h>
+#include <solo/geometry/error.h>
+#include <solo/geometry/mesh_cleanup.h>
+#include <solo/lighting/light_stage.h>
+#include <solo/render/exposure.h>
+#include <solo/render/night_scene.h>
+#include <solo/render/sensor_noise.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <stdexcept>
+
+namespace solo::tools {
+
+namespace {
+
+// A render made at a fraction of the image size, upsampled to it: radiance, albedo and normal
+// bilinear, first-hit depth and light ids nearest (they are not averageable across edges).
+RenderOutput upsampleRender(RenderOutput r, cv::Size size) {
+  const auto resize = [&](cv::Mat& m, int interpolation) {
+    if (m.empty() || m.size() == size) return;
+    cv::Mat out;
+    cv::resize(m, out, size, 0, 0, interpolation);
+    m = out;
+  };
+  resize(r.radiance, cv::INTER_LINEAR);
+  resize(r.albedo, cv::INTER_LINEAR);
+  resize(r.normal, cv::INTER_LINEAR);
+  resize(r.depth_m, cv::INTER_NEAREST);
+  resize(r.light_id, cv::INTER_NEAREST);
+  resize(r.samples, cv::INTER_NEAREST);
+  resize(r.std_error, cv::INTER_NEAREST);
+  return r;
+}
+
+}  // namespace
+
+LightSamplerKind lightSamplerOption(const NightOptions& o) {
+  try {
+    return lightSamplerFromName(o.light_sampler);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("--light-sampler", e.what());
+  }
+}
+
+SamplerKind samplerOption(const NightOptions& o) {
+  try {
+    return parseSamplerKind(o.sampler);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("--sampler", e.what());
+  }
+}
+
+NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, const NightPipelineExtras& extras) {
+  const auto say = [&](const std::string& line) {
+    if (extras.say) extras.say(line);
+  };
+  NightPipelineResult r;
+  std::vector<StageReport>& stages = r.stages;
+
+  // refine: upsampling always (every later stage works at the image resolution)
+  say("refine ... ");
+  DepthRefinementOptions refine_options;
+  refine_options.filter = o.refine;
+  refine_options.uncertain_regions = o.refine;
+  refine_options.optimize = o.refine && o.optimize;
+  refine_options.optimization.max_iterations = o.optimize_iterations;
+  refine_options.optimization.function_tolerance = o.optimize_tolerance;
+  r.refined = refineDepth(scene, refine_options);
+  const DepthRefinementResult& refined = r.refined;
+  for (const StageReport& step : refined.steps) stages.push_back(step);
+  if (!o.refine) stages.back().notes.push_back("refinement switched off (--no-refine): upsampling only");
+
+  // mesh
+  say("mesh ... ");
+  DepthMeshCleanupOptions mesh_options;
+  mesh_options.close_solids = o.solids;
+  mesh_options.evaluate = o.evaluate_mesh;
+  mesh_options.fill_holes = extras.fill_holes;
+  mesh_options.hole_filling.max_fair_vertices = extras.max_fair_vertices;
+  StageReport mesh_report;
+  const cv::Mat mesh_depth_m =
+      o.mesh_downsample > 1 ? downsampleDepth(refined.depth_m, o.mesh_downsample) : refined.depth_m;
+  r.mesh =
+      meshFromScene(mesh_depth_m, scene.camera, refined.maps.instances, refined.uncertain, mesh_options, mesh_report);
+  if (o.mesh_downsample > 1) {
+    char note[160];
+    std::snprintf(note, sizeof note, "mesh made from the refined depth downsampled %dx (%dx%d): --mesh-downsample",
+                  o.mesh_downsample, mesh_depth_m.cols, mesh_depth_m.rows);
+    mesh_report.notes.push_back(note);
+  }
+  if (!o.evaluate_mesh)
+    mesh_report.notes.push_back("mesh quality counts (self-intersections, manifoldness) not evaluated: they cost more "
+                                "than the rest of the stage; --evaluate-mesh, or solo eval mesh, gives them");
+  stages.push_back(mesh_report);
+  const DepthMesh& mesh = r.mesh;
+
+  // lights: a new draw, or the user's edited record
+  say("lights ... ");
+  LightRecord& record = r.record;
+  if (o.lights_record) {
+    const Stopwatch clock;
+    record = readLightRecord(*o.lights_record);
+    StageReport lights_report;
+    lights_report.name = "lights";
+    lights_report.seconds = clock.seconds();
+    lights_report.add("lights", static_cast<std::int64_t>(record.tree.lights.size()));
+    lights_report.notes.push_back("light record read from " + o.lights_record->string() + " (not drawn)");
+    stages.push_back(lights_report);
+  } else {
+    LightStageOptions light_options;
+    light_options.instantiation.seed = o.seed;
+    light_options.instantiation.ablation = o.ablation;
+    light_options.illuminant_table = extras.illuminant_table.empty() ? defaultIlluminantTable() : extras.illuminant_table;
+    LightStageResult lights = runLightStage(scene, refined.depth_m, light_options);
+    record = std::move(lights.record);
+    stages.push_back(lights.report);
+  }
+
+  // scene for the renderer
+  NightSceneOptions scene_options;
+  scene_options.headlights = o.headlights;
+  scene_options.headlight_flux_lm = o.headlight_flux_lm;
+  NightScene night = buildNightScene(mesh, refined.maps.albedo, refined.maps.roughness, scene.image, record, scene_options);
+  stages.push_back(night.report);
+
+  // render
+  say("render\n");
+  PathTracerOptions tracer;
+  tracer.seed = o.seed;
+  tracer.light_sampler = lightSamplerOption(o);
+  tracer.sampler = samplerOption(o);
+  tracer.progress = extras.progress;
+  tracer.min_samples = o.min_samples;
+  tracer.max_samples = o.max_samples;
+  tracer.relative_error = o.relative_error;
+  tracer.max_bounces = o.max_bounces;
+  const PinholeCamera image_camera = night.scene.camera;
+  if (o.render_downsample > 1)
+    night.scene.camera = image_camera.scaledTo(std::max(16, image_camera.width / o.render_downsample),
+                                                std::max(16, image_camera.height / o.render_downsample));
+  // --noise-target: stop where render noise is below noise_factor x the sensor noise the pixel
+  // will get. That needs the exposure first, so auto exposure meters a quarter-resolution
+  // preview at min_samples spp (about 1/16 of a min_samples render) before the full render.
+  double preview_white = 0;
+  std::string noise_target_note;
+  if (o.noise_target && o.noise) {
+    Stopwatch preview_clock;
+    preview_white = o.sensor_white_cd_m2;
+    const PinholeCamera full_camera = night.scene.camera;
+    if (!(preview_white > 0)) {
+      night.scene.camera = full_camera.scaledTo(std::max(16, full_camera.width / 4), std::max(16, full_camera.height / 4));
+      PathTracerOptions preview = tracer;
+      preview.max_samples = preview.min_samples;
+      preview.progress = false;
+      const RenderOutput metered = renderPathTraced(night.scene, preview);
+      night.scene.camera = full_camera;
+      preview_white = meteredSensorWhite(metered.radiance, metered.light_id);
+    }
+    const double exposure = exposureScale(PostProcessOptions{}.exposure_options);
+    tracer.noise_sigma = sensorNoiseSigma(1.0 / (preview_white * exposure), exposure, PostProcessOptions{}.noise_options);
+    tracer.noise_factor = o.noise_factor;
+    tracer.relative_error = 0;  // the sensor's noise is the target now; max_samples still caps
+    char note[256];
+    if (o.sensor_white_cd_m2 > 0)
+      std::snprintf(note, sizeof note,
+                    "noise-matched target: standard error <= %.2f x sensor noise sigma; sensor white given, %.6g cd/m2",
+                    o.noise_factor, preview_white);
+    else
+      std::snprintf(note, sizeof note,
+                    "noise-matched target: standard error <= %.2f x sensor noise sigma; exposure metered on a %dx%d "
+                    "preview at %d spp (%.2f s), sensor white %.6g cd/m2",
+                    o.noise_factor, std::max(16, full_camera.width / 4), std::max(16, full_camera.height / 4),
+                    std::max(2, o.min_samples), preview_clock.seconds(), preview_white);
+    noise_target_note = note;
+  }
+  r.rendered = renderPathTraced(night.scene, tracer);
+  RenderOutput& rendered = r.rendered;
+  stages.push_back(rendered.report);
+  stages.back().add("render_width", night.scene.camera.width, "px").add("render_height", night.scene.camera.height, "px");
+  if (o.render_downsample > 1) {
+    rendered = upsampleRender(std::move(rendered), cv::Size(image_camera.width, image_camera.height));
+    char note[160];
+    std::snprintf(note, sizeof note, "rendered at %dx%d and upsampled to %dx%d (bilinear): --render-downsample %d",
+                  night.scene.camera.width, night.scene.camera.height, image_camera.width, image_camera.height,
+                  o.render_downsample);
+    stages.back().notes.push_back(note);
+  }
+  if (!noise_target_note.empty()) stages.back().notes.push_back(noise_target_note);
+  if (o.noise_target && !o.noise)
+    stages.back().notes.push_back(
+        "noise-matched target skipped: sensor noise is off (--no-noise), the relative-error target applies");
+
+  // post: radiance in cd/m^2 scaled so that the reference exposure (+3.25 stops) puts
+  // sensor_white at 1. Only what will clip glows (the reference lets every pixel glow).
+  PostProcessOptions post;
+  post.glare = o.glare;
+  post.noise = o.noise;
+  post.noise_options.seed = o.seed;
+  const bool auto_white = !(o.sensor_white_cd_m2 > 0);
+  const double sensor_white = preview_white > 0 ? preview_white  // the exposure the noise target was set for
+                              : auto_white      ? meteredSensorWhite(rendered.radiance, rendered.light_id)
+                                                : o.sensor_white_cd_m2;
+  const double calibration = 1.0 / (sensor_white * exposureScale(post.exposure_options));
+  post.glare_options.threshold = o.glare_threshold >= 0 ? o.glare_threshold : 1.0 / exposureScale(post.exposure_options);
+  cv::Mat xyz = rendered.radiance * calibration;
+  r.developed = postProcess(xyz, post);
+  const PostProcessResult& developed = r.developed;
+  r.sensor_white_cd_m2 = sensor_white;
+  StageReport post_report = developed.report;
+  post_report.add("sensor_white", sensor_white, "cd/m2").add("sensor_white_auto", auto_white);
+  if (!o.glare) post_report.notes.push_back("glare switched off (--no-glare)");
+  if (!o.noise) post_report.notes.push_back("sensor noise switched off (--no-noise)");
+  for (const StageReport& step : developed.steps)
+    if (o.glare && step.name == "glare" && step.skipped)
+      post_report.notes.push_back("no light above glare threshold: glare skipped");
+  stages.push_back(post_report);
+
+  return r;
+}
+
+}  // namespace solo::tools
