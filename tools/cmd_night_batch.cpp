@@ -37,6 +37,7 @@
 #include <sstream>
 #include <sys/resource.h>
 #include <sys/wait.h>
+#include <thread>
 #include <unistd.h>
 
 extern char** environ;
@@ -239,7 +240,7 @@ struct ForwardedArguments {
 };
 
 ForwardedArguments forwardArguments(const std::vector<std::string>& argv) {
-  const std::set<std::string> dropped = {"--batch", "--shard", "--jobs",          "-o",
+  const std::set<std::string> dropped = {"--batch",  "--shard",  "--jobs",          "--scene-timeout", "-o",
                                          "--output", "--report", "--contact-sheet", "--seed"};
   ForwardedArguments result;
   for (std::size_t i = 1; i < argv.size(); ++i) {
@@ -292,6 +293,8 @@ extern "C" void onInterrupt(int signal) { g_interrupt_signal = signal; }
 struct Running {
   std::size_t scene = 0;  ///< index into the shard's scenes
   std::chrono::steady_clock::time_point start;
+  bool timed_out = false;  ///< stopped by --scene-timeout (SIGTERM, SIGKILL 10 s later)
+  std::chrono::steady_clock::time_point terminated;
 };
 
 struct Outcome {
@@ -470,14 +473,30 @@ int runNightBatch(const NightBatchOptions& batch, const NightOptions& night) {
 
     int status = 0;
     struct rusage usage {};
-    const pid_t pid = ::wait4(-1, &status, 0, &usage);
+    // With a time limit, poll: a scene past it gets SIGTERM, and SIGKILL if it ignores that.
+    const pid_t pid = ::wait4(-1, &status, batch.scene_timeout_s > 0 ? WNOHANG : 0, &usage);
     if (pid < 0) {
       if (errno == EINTR) continue;
       break;  // ECHILD: nothing left to wait for
     }
+    if (pid == 0) {
+      const auto now = std::chrono::steady_clock::now();
+      for (auto& [child, r] : running) {
+        if (!r.timed_out && std::chrono::duration<double>(now - r.start).count() > batch.scene_timeout_s) {
+          r.timed_out = true;
+          r.terminated = now;
+          ::kill(child, SIGTERM);
+        } else if (r.timed_out && now - r.terminated > std::chrono::seconds(10)) {
+          ::kill(child, SIGKILL);
+        }
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      continue;
+    }
     const auto it = running.find(pid);
     if (it == running.end()) continue;
     const std::size_t i = it->second.scene;
+    const bool timed_out = it->second.timed_out;
     Outcome& o = outcomes[i];
     o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - it->second.start).count();
     o.peak_rss_MiB = static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux: kibibytes
@@ -496,7 +515,15 @@ int runNightBatch(const NightBatchOptions& batch, const NightOptions& night) {
       o.signal = WTERMSIG(status);
       o.status = stopping && (o.signal == SIGTERM || o.signal == SIGINT) ? "interrupted" : "failed";
       o.reason = "killed by signal " + std::to_string(o.signal) + " (" + ::strsignal(o.signal) + ")";
-      if (o.signal == SIGKILL) o.reason += ", perhaps out of memory";
+      if (o.signal == SIGKILL && !timed_out) o.reason += ", perhaps out of memory";
+    }
+    if (timed_out) {
+      o.status = "failed";
+      std::ostringstream reason;
+      reason << "timed out: stopped after " << seconds3(o.seconds) << " (--scene-timeout " << batch.scene_timeout_s
+             << " s)";
+      o.reason = reason.str();
+      removeStaleTemporaries(out_dir, scenes[i].name);
     }
     std::ostringstream line;
     line << progress(i) << ": ";

@@ -80,6 +80,7 @@ struct NightBatchOptions {
   std::optional<std::filesystem::path> list;  ///< list file of manifests, or a folder searched for them
   std::string shard = "0/1";                  ///< i/N: scenes k with k % N == i
   int jobs = 1;                               ///< scenes converted at once
+  double scene_timeout_s = 0;                 ///< a scene running longer is stopped and recorded failed; 0: none
   std::vector<std::string> arguments;         ///< the command line, forwarded to the scenes minus the batch's own
 };
 int runNightBatch(const NightBatchOptions& batch, const NightOptions& night);

@@ -97,6 +97,9 @@ int main(int argc, char** argv) {
       ->capture_default_str()->needs(batch_opt)->configurable(false);
   night_cmd->add_option("--jobs", night_batch.jobs, "With --batch: scenes converted at once (child processes)")
       ->capture_default_str()->needs(batch_opt)->configurable(false);
+  night_cmd->add_option("--scene-timeout", night_batch.scene_timeout_s,
+                        "With --batch: stop a scene after this many seconds and record it failed (0: no limit)")
+      ->capture_default_str()->needs(batch_opt)->configurable(false)->check(CLI::NonNegativeNumber);
 
   ConvertOptions convert;
   CLI::App* convert_cmd = app.add_subcommand("convert", "Convert a depth or normal map between formats");

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <set>
 
@@ -212,4 +213,37 @@ TEST(CliBatch, BadBatchSpecificationsAreClearErrorsWithoutOutput) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("no scene manifest"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out)) << "no output folder for a batch that cannot start";
+}
+
+TEST(CliBatch, ASceneOverTheTimeLimitIsStoppedRecordedAndTheBatchGoesOn) {
+  TempDir dir;
+  const fs::path scenes = dir / "scenes";
+  synth(scenes / "small", 1);
+  // A 1920x1080 scene takes well over 10 s with any settings (its mesh stage alone takes
+  // several seconds); the 96x54 one well under a second.
+  fs::create_directories(scenes);
+  const auto big = runSolo("synth -o " + quoted(scenes / "big") + " --size 1920x1080 --seed 3");
+  ASSERT_EQ(big.exit_code, 0) << big.output;
+  const fs::path out = dir / "out";
+  const auto start = std::chrono::steady_clock::now();
+  const auto r = runSolo("night --batch " + quoted(scenes) + " -o " + quoted(out) + " --scene-timeout 4" + kFast);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_LT(seconds, 30.0) << "the big scene was stopped, not waited for";
+  expectNightImage(out / "small.png");
+  EXPECT_FALSE(fs::exists(out / "big.png"));
+  EXPECT_FALSE(fs::exists(out / "big.report.json"));
+  const auto failures = readJson(out / "failures.json");
+  ASSERT_EQ(failures["failures"].size(), 1u) << failures.dump(2);
+  const auto& failure = failures["failures"][0];
+  EXPECT_EQ(failure["scene"], "big");
+  const std::string reason = failure["reason"];
+  EXPECT_EQ(reason.rfind("timed out: stopped after ", 0), 0u) << reason;
+  EXPECT_NE(reason.find("--scene-timeout 4 s"), std::string::npos) << reason;
+  EXPECT_GE(failure["seconds"].get<double>(), 4.0);
+  const auto summary = readJson(out / "batch-summary.json");
+  EXPECT_EQ(scenesWithStatus(summary, "done"), (std::set<std::string>{"small"}));
+  EXPECT_EQ(scenesWithStatus(summary, "failed"), (std::set<std::string>{"big"}));
+  for (const std::string& file : solo::test::listFolder(out))
+    EXPECT_NE(file[0], '.') << "no temporary file left behind: " << file;
 }
