@@ -146,16 +146,19 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
     night.scene.camera = image_camera.scaledTo(std::max(16, image_camera.width / o.render_downsample),
                                                 std::max(16, image_camera.height / o.render_downsample));
   // --noise-target: stop where render noise is below noise_factor x the sensor noise the pixel
-  // will get. That needs the exposure first, so auto exposure meters a quarter-resolution
-  // preview at min_samples spp (about 1/16 of a min_samples render) before the full render.
+  // will get. That needs the exposure first, so auto exposure meters a small preview at
+  // min_samples spp (meteringPreviewSize) before the full render.
   double preview_white = 0;
+  double preview_seconds = 0;
   std::string noise_target_note;
   if (o.noise_target && o.noise) {
     Stopwatch preview_clock;
     preview_white = o.sensor_white_cd_m2;
     const PinholeCamera full_camera = night.scene.camera;
+    const cv::Size preview_size = meteringPreviewSize(full_camera.width, full_camera.height);
+    const int preview_width = preview_size.width, preview_height = preview_size.height;
     if (!(preview_white > 0)) {
-      night.scene.camera = full_camera.scaledTo(std::max(16, full_camera.width / 4), std::max(16, full_camera.height / 4));
+      night.scene.camera = full_camera.scaledTo(preview_width, preview_height);
       PathTracerOptions preview = tracer;
       preview.max_samples = preview.min_samples;
       preview.progress = false;
@@ -176,14 +179,19 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
       std::snprintf(note, sizeof note,
                     "noise-matched target: standard error <= %.2f x sensor noise sigma; exposure metered on a %dx%d "
                     "preview at %d spp (%.2f s), sensor white %.6g cd/m2",
-                    o.noise_factor, std::max(16, full_camera.width / 4), std::max(16, full_camera.height / 4),
-                    std::max(2, o.min_samples), preview_clock.seconds(), preview_white);
+                    o.noise_factor, preview_width, preview_height, std::max(2, o.min_samples), preview_clock.seconds(),
+                    preview_white);
     noise_target_note = note;
+    if (!(o.sensor_white_cd_m2 > 0)) preview_seconds = preview_clock.seconds();
   }
   r.rendered = renderPathTraced(night.scene, tracer);
   RenderOutput& rendered = r.rendered;
   stages.push_back(rendered.report);
   stages.back().add("render_width", night.scene.camera.width, "px").add("render_height", night.scene.camera.height, "px");
+  if (preview_seconds > 0) {  // the exposure preview belongs to the render's time
+    stages.back().add("preview_seconds", preview_seconds, "s");
+    stages.back().seconds += preview_seconds;
+  }
   if (o.render_downsample > 1) {
     rendered = upsampleRender(std::move(rendered), cv::Size(image_camera.width, image_camera.height));
     char note[160];

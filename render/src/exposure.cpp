@@ -52,6 +52,12 @@ StageReport applyExposure(cv::Mat& linear_image, const ExposureOptions& options)
   return report;
 }
 
+cv::Size meteringPreviewSize(int width, int height, int max_pixels) {
+  int divisor = 4;
+  while (divisor < 64 && static_cast<double>(width / divisor) * (height / divisor) > max_pixels) divisor *= 2;
+  return {std::max(16, width / divisor), std::max(16, height / divisor)};
+}
+
 double meteredSensorWhite(const cv::Mat& radiance_xyz, const cv::Mat& light_id, double percentile, double level) {
   std::vector<float> y;
   y.reserve(radiance_xyz.total());

@@ -30,6 +30,12 @@ double exposureStops(const ExposureOptions& options);
 /// The linear factor 2^exposureStops(options).
 double exposureScale(const ExposureOptions& options);
 
+/// Size (pixels) of the preview render that meters the exposure before a noise-matched render
+/// of width x height: a quarter of each side, or an eighth, a sixteenth ... (at most 1/64) while
+/// the preview would have more than max_pixels; never below 16 x 16. A 95th percentile is
+/// stable on a few ten thousand pixels, and the preview's cost grows with its pixel count.
+cv::Size meteringPreviewSize(int width, int height, int max_pixels = 40000);
+
 /// Auto exposure, metering the street rather than the lamps: the luminance (cd/m^2, the Y of a
 /// CV_32FC3 XYZ render) that puts the `percentile` of the lit pixels that show no emitter
 /// (light_id, CV_32S, 0) at `level` of sensor white; 1 when no such pixel is lit.
