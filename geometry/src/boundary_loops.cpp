@@ -83,6 +83,79 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     return false;
   };
 
+  // A piece of a run behind an occluder becomes a frame hole; with both ends on the frame it is
+  // closed along the frame, going from its last vertex back to its first the way the border
+  // loop does not go: the loop runs clockwise in the image (positive signed area in (u, v)),
+  // so the closing path runs counter-clockwise, and the hole's polygon has a hole's
+  // orientation (negative area). A path over pixels without depth (sky) would close the hole
+  // over the sky: such pieces, and pieces ending on the sky line, keep the chord.
+  const int perimeter = 2 * (w - 1) + 2 * (h - 1);
+  const auto frameParameter = [&](const OpenMesh::Vec2i& p) {
+    if (p[1] == 0) return p[0];
+    if (p[0] == w - 1) return (w - 1) + p[1];
+    if (p[1] == h - 1) return (w - 1) + (h - 1) + (w - 1 - p[0]);
+    return 2 * (w - 1) + (h - 1) + (h - 1 - p[1]);
+  };
+  const auto framePixel = [&](int t) {
+    t = ((t % perimeter) + perimeter) % perimeter;
+    if (t <= w - 1) return OpenMesh::Vec2i(t, 0);
+    if (t <= (w - 1) + (h - 1)) return OpenMesh::Vec2i(w - 1, t - (w - 1));
+    if (t <= 2 * (w - 1) + (h - 1)) return OpenMesh::Vec2i(w - 1 - (t - (w - 1) - (h - 1)), h - 1);
+    return OpenMesh::Vec2i(0, h - 1 - (t - 2 * (w - 1) - (h - 1)));
+  };
+  const auto closingPath = [&](const VertexLoop& run, std::vector<OpenMesh::Vec2i>& path) {
+    path.clear();
+    const OpenMesh::Vec2i a = pixelOf(run.back()), b = pixelOf(run.front());
+    if (w < 2 || h < 2 || frameSides(a) == 0 || frameSides(b) == 0) return false;
+    const int ta = frameParameter(a), tb = frameParameter(b);
+    const int steps = ((ta - tb) % perimeter + perimeter) % perimeter;  // counter-clockwise a -> b
+    for (int s = 1; s < steps; ++s) {
+      const OpenMesh::Vec2i p = framePixel(ta - s);
+      if (!had_depth.at<std::uint8_t>(p[1], p[0])) return false;
+      path.push_back(p);
+    }
+    double twice = 0;
+    std::vector<OpenMesh::Vec2i> polygon;
+    for (const auto v : run) polygon.push_back(pixelOf(v));
+    polygon.insert(polygon.end(), path.begin(), path.end());
+    for (std::size_t q = 0; q < polygon.size(); ++q) {
+      const auto& p0 = polygon[q];
+      const auto& p1 = polygon[(q + 1) % polygon.size()];
+      twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
+    }
+    return twice < 0;
+  };
+  const auto addFrameHole = [&](const VertexLoop& run) {
+    std::size_t behind = 0;
+    for (std::size_t e = 1; e + 1 < run.size(); ++e) behind += behindOccluder(run[e]);
+    if (2 * behind < run.size() - 2) return;
+    std::vector<OpenMesh::Vec2i> path;
+    const bool closed_along_frame = closingPath(run, path);  // (a path may be empty: neighbouring ends)
+    if (!closed_along_frame) {
+      path.clear();
+      // Closed by its chord, the run turning the loop's way (positive area) encloses its own
+      // sheet: the sheet's faces lie on the polygon's inner side all along the run, so every
+      // patch over that polygon lies on the sheet. Not attempted: reported open.
+      double twice = 0;
+      for (std::size_t q = 0; q < run.size(); ++q) {
+        const OpenMesh::Vec2i p0 = pixelOf(run[q]), p1 = pixelOf(run[(q + 1) % run.size()]);
+        twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
+      }
+      if (twice > 0) {
+        ++out.frame_holes;
+        ++out.frame_holes_unclosable;
+        out.unclosable_notes.push_back("frame hole of " + std::to_string(run.size()) +
+                                       " boundary vertices not filled: it reaches the sky (no closing path along the frame), "
+                                       "and closed by its chord it encloses its own sheet (closing along the sky line is not done)");
+        return;
+      }
+    }
+    out.holes.push_back(run);
+    out.chord_closed.push_back(closed_along_frame ? 0 : 1);
+    out.frame_paths.push_back(std::move(path));
+    ++out.frame_holes;
+  };
+
   for (const VertexLoop& loop : out.loops) {
     const std::size_t n = loop.size();
     std::vector<std::uint8_t> border_edge(n, 0);
@@ -90,8 +163,10 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     double twice_area = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const auto a = loop[i], b = loop[(i + 1) % n];
-      if (mesh.property(m.properties.origin, a) != static_cast<std::uint8_t>(VertexOrigin::pixel)) any_pixel_less = true;
       const OpenMesh::Vec2i pa = pixelOf(a), pb = pixelOf(b);
+      // Vertices a frame hole's patch added along the frame are part of the border.
+      if (mesh.property(m.properties.origin, a) != static_cast<std::uint8_t>(VertexOrigin::pixel) && frameSides(pa) == 0)
+        any_pixel_less = true;
       twice_area += double(pa[0]) * pb[1] - double(pb[0]) * pa[1];
       border_edge[i] = (frameSides(pa) & frameSides(pb)) != 0 || (nextToNoDepth(pa) && nextToNoDepth(pb));
       any_border = any_border || border_edge[i];
@@ -102,13 +177,18 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     else kind = any_border ? LoopKind::border : (twice_area == 0 ? LoopKind::hole : LoopKind::silhouette);
     out.kinds.push_back(kind);
     switch (kind) {
-      case LoopKind::hole: ++out.inner_holes; out.holes.push_back(loop); break;
+      case LoopKind::hole:
+        ++out.inner_holes;
+        out.holes.push_back(loop);
+        out.frame_paths.emplace_back();
+        out.chord_closed.push_back(0);
+        break;
       case LoopKind::sky_opening: ++out.sky_openings; break;
       case LoopKind::silhouette: ++out.silhouettes; break;
       case LoopKind::border: ++out.border_loops; break;
     }
     if (kind != LoopKind::border) continue;
-    // Runs of non-border edges, starting after a border edge.
+    // Runs of non-border edges, starting after a border edge, cut at their vertices on the frame.
     std::size_t first = 0;
     while (!border_edge[first]) ++first;
     for (std::size_t k = 1; k <= n;) {
@@ -119,15 +199,15 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       }
       std::size_t length = 0;  // edges in the run
       while (k + length <= n && !border_edge[(first + k + length) % n]) ++length;
-      VertexLoop run;
-      for (std::size_t e = 0; e <= length; ++e) run.push_back(loop[(i + e) % n]);
       k += length;
-      if (run.size() < 3) continue;
-      std::size_t behind = 0;
-      for (std::size_t e = 1; e + 1 < run.size(); ++e) behind += behindOccluder(run[e]);
-      if (2 * behind >= run.size() - 2) {
-        out.holes.push_back(std::move(run));
-        ++out.frame_holes;
+      VertexLoop run;
+      for (std::size_t e = 0; e <= length; ++e) {
+        const auto v = loop[(i + e) % n];
+        run.push_back(v);
+        const bool cut = e == length || (e > 0 && frameSides(pixelOf(v)) != 0);
+        if (!cut) continue;
+        if (run.size() >= 3) addFrameHole(run);
+        run = VertexLoop{v};
       }
     }
   }

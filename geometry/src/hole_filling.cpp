@@ -47,6 +47,12 @@ using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, CGAL::Triangulati
 
 struct DeadlineExceeded {};
 
+// A frame hole's vertex whose pixel shows a surface (obstacle depth) more than this factor
+// behind the extended depth sees a farther surface there; more than this fraction of the
+// covered vertices doing so means the region is not behind an occluder.
+constexpr double kHiddenDepthRatio = 1.1;
+constexpr double kMaxHiddenFraction = 0.05;
+
 /// CGAL hole-filling visitor that aborts a call running past its deadline (the quadratic and
 /// cubic phases report every step; an exception unwinds CGAL's containers cleanly).
 struct DeadlineVisitor : PMP::Hole_filling::Default_visitor {
@@ -319,15 +325,18 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 }
 
 HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const PinholeCamera& camera,
-                          const HoleFillOptions& options, const std::function<double(int, int)>& obstacle_depth_m) {
+                          const HoleFillOptions& options, const std::function<double(int, int)>& obstacle_depth_m,
+                          const std::vector<Eigen::Vector2d>& closing_path_px) {
   HolePatch patch;
-  const int n = static_cast<int>(boundary.size());
-  if (n < 3) {
+  const int n = static_cast<int>(boundary.size());  // points of known depth
+  const int f = static_cast<int>(closing_path_px.size());
+  const int polygon_size = n + f;
+  if (polygon_size < 3 || n < 2) {
     patch.failure = "boundary has fewer than 3 vertices";
     return patch;
   }
   std::vector<Point2> uv;
-  uv.reserve(n);
+  uv.reserve(polygon_size);
   for (const auto& p : boundary) {
     if (!p.allFinite() || !(p.z() > 0)) {
       patch.failure = "a boundary point is not in front of the camera";
@@ -336,8 +345,16 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
     const Eigen::Vector2d q = camera.project(p);
     uv.emplace_back(q.x(), q.y());
   }
+  for (const auto& q : closing_path_px) {
+    if (!q.allFinite()) {
+      patch.failure = "a closing-path point is not finite";
+      return patch;
+    }
+    uv.emplace_back(q.x(), q.y());
+  }
   double twice_area = 0;
-  for (int i = 0; i < n; ++i) twice_area += uv[i].x() * uv[(i + 1) % n].y() - uv[(i + 1) % n].x() * uv[i].y();
+  for (int i = 0; i < polygon_size; ++i)
+    twice_area += uv[i].x() * uv[(i + 1) % polygon_size].y() - uv[(i + 1) % polygon_size].x() * uv[i].y();
   if (!(std::abs(twice_area) > 0)) {
     patch.failure = "the hole's image polygon has no area";
     return patch;
@@ -353,20 +370,25 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
       return patch;
     }
     Cdt cdt;
-    std::vector<Cdt::Vertex_handle> handles(n);
-    for (int i = 0; i < n; ++i) {
+    std::vector<Cdt::Vertex_handle> handles(polygon_size);
+    for (int i = 0; i < polygon_size; ++i) {
       handles[i] = cdt.insert(uv[i], i == 0 ? Cdt::Face_handle() : handles[i - 1]->face());
       handles[i]->info() = i;
     }
-    for (int i = 0; i < n; ++i) cdt.insert_constraint(handles[i], handles[(i + 1) % n]);
+    for (int i = 0; i < polygon_size; ++i) cdt.insert_constraint(handles[i], handles[(i + 1) % polygon_size]);
     markNesting(cdt);
+    // The unknowns: the closing path's points (free: their depth comes from the extension too),
+    // then the interior pixel centres; index polygon_size + k is interior[k].
     const std::vector<Point2> interior = interiorPixelCentres(uv, cdt, options.max_image_interior_vertices);
-    const int m = static_cast<int>(interior.size());
-    Cdt::Vertex_handle last = handles[n - 1];
-    for (int k = 0; k < m; ++k) {
+    const int m_interior = static_cast<int>(interior.size());
+    Cdt::Vertex_handle last = handles[polygon_size - 1];
+    for (int k = 0; k < m_interior; ++k) {
       last = cdt.insert(interior[k], last->face());
-      last->info() = n + k;
+      last->info() = polygon_size + k;
     }
+    const int m = f + m_interior;
+    std::vector<Point2> unknown_uv(uv.begin() + n, uv.end());
+    unknown_uv.insert(unknown_uv.end(), interior.begin(), interior.end());
     if (m > 0) markNesting(cdt);
     if (clock.seconds() > options.time_limit_s) {
       patch.failure = "image-space triangulation exceeded its time limit";
@@ -379,16 +401,40 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
       if (orientation == CGAL::RIGHT_TURN) std::swap(t[1], t[2]);  // CGAL's faces turn left
       faces.push_back(t);
     }
-    if (static_cast<int>(cdt.number_of_vertices()) != n + m || static_cast<int>(faces.size()) != n - 2 + 2 * m) {
+    if (static_cast<int>(cdt.number_of_vertices()) != polygon_size + m_interior ||
+        static_cast<int>(faces.size()) != polygon_size - 2 + 2 * m_interior) {
       patch.failure = "image-space triangulation is incomplete (" + std::to_string(faces.size()) + " of " +
-                      std::to_string(n - 2 + 2 * m) + " triangles)";
+                      std::to_string(polygon_size - 2 + 2 * m_interior) + " triangles)";
       return patch;
     }
 
     // Inverse depth of the interior vertices: harmonic in the image (cotangent weights, which
     // are non-negative across the unconstrained edges of a constrained Delaunay triangulation).
+    // The closing path's points are free (a natural boundary: no flux across the frame); so
+    // that a plane is still reproduced exactly there, the harmonic part extends the residual
+    // of the boundary's inverse depth from its least-squares affine fit in the image (inverse
+    // depth is affine in the image on a plane; an affine function is harmonic).
     std::vector<Point2> position(uv);
     position.insert(position.end(), interior.begin(), interior.end());
+    double affine_c = 0, affine_gu = 0, affine_gv = 0, centre_u = 0, centre_v = 0;
+    if (f > 0) {
+      for (int i = 0; i < n; ++i) centre_u += uv[i].x() / n, centre_v += uv[i].y() / n;
+      double suu = 0, suv = 0, svv = 0, sy = 0, suy = 0, svy = 0;
+      for (int i = 0; i < n; ++i) {
+        const double du = uv[i].x() - centre_u, dv = uv[i].y() - centre_v, y = 1.0 / boundary[i].z();
+        suu += du * du, suv += du * dv, svv += dv * dv, sy += y, suy += du * y, svy += dv * y;
+      }
+      // A tiny ridge keeps the fit defined when the boundary is a straight line in the image
+      // (no gradient across it is then extrapolated); it is far below any real spread.
+      suu += 1e-6 * n, svv += 1e-6 * n;
+      const double det = suu * svv - suv * suv;
+      affine_c = sy / n;
+      affine_gu = (svv * suy - suv * svy) / det;
+      affine_gv = (suu * svy - suv * suy) / det;
+    }
+    const auto affine = [&](const Point2& p) {
+      return affine_c + affine_gu * (p.x() - centre_u) + affine_gv * (p.y() - centre_v);
+    };
     std::unordered_map<std::uint64_t, double> weight;
     for (const auto& t : faces)
       for (int k = 0; k < 3; ++k) {
@@ -410,7 +456,10 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
         int free_count = 0;
         for (int k = 0; k < m; ++k)
           if (pinned[k] == 0) unknown[k] = free_count++;
-        const auto known = [&](int i) { return i < n ? 1.0 / boundary[i].z() : pinned[i - n]; };
+        // The harmonic unknowns are residuals from the affine part (zero without a closing path).
+        const auto known = [&](int i) {
+          return (i < n ? 1.0 / boundary[i].z() : pinned[i - n]) - (f > 0 ? affine(position[i]) : 0.0);
+        };
         std::vector<Eigen::Triplet<double>> entries;
         Eigen::VectorXd rhs = Eigen::VectorXd::Zero(free_count);
         for (const auto& [key, w_raw] : weight) {
@@ -429,26 +478,49 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
           laplacian.setFromTriplets(entries.begin(), entries.end());
           Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(laplacian);
           solved = solver.solve(rhs);
-          if (solver.info() != Eigen::Success || !solved.allFinite() || (solved.size() > 0 && solved.minCoeff() <= 0)) {
+          if (solver.info() != Eigen::Success || !solved.allFinite() ||
+              (f == 0 && solved.size() > 0 && solved.minCoeff() <= 0)) {
             patch.failure = "harmonic inverse depth could not be solved";
             return patch;
           }
         }
+        if (f > 0) {
+          for (int k = 0; k < m; ++k)
+            if (unknown[k] >= 0) solved[unknown[k]] += affine(unknown_uv[k]);
+          if (solved.size() > 0 && !(solved.minCoeff() > 0)) {
+            patch.failure = "the inverse depth extended to the frame is not positive (the surface would pass behind the camera)";
+            return patch;
+          }
+        }
         bool changed = false;
+        std::int64_t covered = 0, hidden = 0;
         for (int k = 0; k < m; ++k) {
           inverse_depth[k] = unknown[k] >= 0 ? solved[unknown[k]] : pinned[k];
           if (unknown[k] < 0 || !obstacle_depth_m) continue;
-          const double z = obstacle_depth_m(static_cast<int>(std::lround(interior[k].x())),
-                                            static_cast<int>(std::lround(interior[k].y())));
+          const double z = obstacle_depth_m(static_cast<int>(std::lround(unknown_uv[k].x())),
+                                            static_cast<int>(std::lround(unknown_uv[k].y())));
+          if (z > 0) {
+            ++covered;
+            hidden += z > kHiddenDepthRatio / inverse_depth[k];
+          }
           if (z > 0 && 1.0 / inverse_depth[k] < z) {
             pinned[k] = 1.0 / z;
             changed = true;
           }
         }
+        // A frame hole's region reaches the frame: it is the part behind an occluder only when
+        // the surfaces seen inside it are nearer than the extension. Surfaces farther away are
+        // seen there: the region is not behind the occluder (the run outlines a sheet standing
+        // against other surfaces), and a patch pinned behind them would be a wall of nothing.
+        if (f > 0 && round == 0 && hidden > kMaxHiddenFraction * covered) {
+          patch.failure = "frame hole region shows " + std::to_string(hidden) + " of " + std::to_string(covered) +
+                          " covered vertices farther than the extension (not behind an occluder)";
+          return patch;
+        }
         if (!changed) break;
       }
       for (int k = 0; k < m; ++k)
-        patch.new_points.push_back(camera.backproject(interior[k].x(), interior[k].y(), 1.0 / inverse_depth[k]));
+        patch.new_points.push_back(camera.backproject(unknown_uv[k].x(), unknown_uv[k].y(), 1.0 / inverse_depth[k]));
     }
     patch.faces = std::move(faces);
     patch.filled = true;

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <memory>
 
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
 
@@ -16,6 +18,7 @@ using Face = std::array<int, 3>;
 struct Attempt {
   std::size_t hole = 0;
   HoleFillMethod method = HoleFillMethod::triangulate_refine_fair;
+  std::string large_method;  ///< fillLargeHole's method when it made the patch
   HolePatch patch;
   std::vector<Face> faces;  ///< global indices: mesh vertex handles, then new points
 };
@@ -54,6 +57,59 @@ bool nextMethod(HoleFillMethod& method, std::size_t hole_vertices, const HoleFil
     case HoleFillMethod::centroid_fan: return false;
   }
   return false;
+}
+
+/// Whether the segment a-b, less a thousandth of it at each end (its ends are mesh vertices),
+/// crosses one of `faces` (Moller-Trumbore in doubles: a heuristic for choosing chords; the patch
+/// itself is verified exactly).
+bool segmentCrossesFaces(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const std::vector<Eigen::Vector3d>& p,
+                         const std::vector<Face>& faces) {
+  const Eigen::Vector3d origin = a + 1e-3 * (b - a), direction = (b - a) * (1.0 - 2e-3);
+  for (const Face& f : faces) {
+    const Eigen::Vector3d e1 = p[f[1]] - p[f[0]], e2 = p[f[2]] - p[f[0]];
+    const Eigen::Vector3d h = direction.cross(e2);
+    const double det = e1.dot(h);
+    if (std::abs(det) < 1e-300) continue;
+    const Eigen::Vector3d s = origin - p[f[0]];
+    const double u = s.dot(h) / det;
+    if (u < 0 || u > 1) continue;
+    const Eigen::Vector3d q = s.cross(e1);
+    const double v = direction.dot(q) / det;
+    if (v < 0 || u + v > 1) continue;
+    const double t = e2.dot(q) / det;
+    if (t >= 0 && t <= 1) return true;
+  }
+  return false;
+}
+
+/// The faces of a patch reordered so that each shares an edge with the mesh or with a face
+/// before it (breadth first from the faces on the mesh's edges); the rest keep their order.
+std::vector<Face> grownFromMesh(const SurfaceMesh& mesh, const std::vector<Face>& faces, int first_new) {
+  std::map<std::pair<int, int>, std::vector<std::size_t>> by_edge;
+  for (std::size_t i = 0; i < faces.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      const int a = faces[i][k], b = faces[i][(k + 1) % 3];
+      by_edge[{std::min(a, b), std::max(a, b)}].push_back(i);
+    }
+  std::vector<std::uint8_t> queued(faces.size(), 0);
+  std::vector<std::size_t> queue;
+  for (const auto& [edge, users] : by_edge) {
+    if (edge.first >= first_new || edge.second >= first_new) continue;
+    if (!mesh.find_halfedge(OpenMesh::VertexHandle(edge.first), OpenMesh::VertexHandle(edge.second)).is_valid()) continue;
+    for (const std::size_t i : users)
+      if (!queued[i]) queued[i] = 1, queue.push_back(i);
+  }
+  for (std::size_t head = 0; head < queue.size(); ++head)
+    for (int k = 0; k < 3; ++k) {
+      const int a = faces[queue[head]][k], b = faces[queue[head]][(k + 1) % 3];
+      for (const std::size_t i : by_edge[{std::min(a, b), std::max(a, b)}])
+        if (!queued[i]) queued[i] = 1, queue.push_back(i);
+    }
+  std::vector<Face> out;
+  for (const std::size_t i : queue) out.push_back(faces[i]);
+  for (std::size_t i = 0; i < faces.size(); ++i)
+    if (!queued[i]) out.push_back(faces[i]);
+  return out;
 }
 
 bool boxesOverlap(const std::vector<Eigen::Vector3d>& p, const Face& a, const Face& b) {
@@ -126,12 +182,32 @@ bool patchMeetsDepthMesh(const Attempt& attempt, const std::vector<Eigen::Vector
 
 }  // namespace
 
-HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, const HoleFillOptions& options,
-                       const std::optional<PixelMapping>& pixels) {
+HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_holes, const HoleFillOptions& options,
+                       const std::optional<PixelMapping>& pixels, const LargeHoleOptions& large) {
   HoleClosing result;
-  result.holes = static_cast<std::int64_t>(holes.size());
-  if (holes.empty()) return result;
+  result.holes = static_cast<std::int64_t>(input_holes.size());
+  if (input_holes.empty()) return result;
   const bool by_pixels = pixels && pixels->vertex_of_pixel;
+  // The holes given, then the pieces of large holes split by chords (each a hole of its own).
+  std::vector<VertexLoop> holes = input_holes;
+  std::vector<std::size_t> root_of(holes.size());
+  for (std::size_t i = 0; i < holes.size(); ++i) root_of[i] = i;
+  std::vector<std::uint8_t> was_split(holes.size(), 0), attached(holes.size(), 0);
+  std::vector<int> pieces_of_root(holes.size(), 1);
+  result.hole_methods.assign(holes.size(), "open");
+  // Large-hole stage per hole, between the triangulation and the centroid fan (general meshes):
+  // 0 not yet, 1 tangent-continuous fit, 2 membrane without the mesh's slope (method_of says
+  // centroid_fan meanwhile), 3 done.
+  std::vector<std::uint8_t> large_stage(holes.size(), 0);
+  std::vector<std::string> large_failure(holes.size());
+  // Large holes (beyond the exhaustive search) of general meshes, and their pieces.
+  const auto largeRoot = [&](std::size_t hole) {
+    return !by_pixels && large.enabled &&
+           (large.any_size || static_cast<int>(input_holes[root_of[hole]].size()) > options.max_cubic_boundary_vertices);
+  };
+  const auto largeEligible = [&](std::size_t hole) {
+    return largeRoot(hole) && static_cast<int>(holes[hole].size()) > options.max_triangulation_only_vertices;
+  };
 
   std::vector<Eigen::Vector3d> points;
   points.reserve(mesh.n_vertices());
@@ -156,6 +232,65 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
   std::vector<Attempt> accepted;
   std::vector<std::size_t> given_up;
 
+  // Faces that can block a chord of a loop: those meeting its bounding box (chords lie inside).
+  const auto chordTest = [&](const std::vector<Eigen::Vector3d>& boundary) {
+    Eigen::Vector3d low = boundary[0], high = boundary[0];
+    for (const auto& p : boundary) low = low.cwiseMin(p), high = high.cwiseMax(p);
+    auto near = std::make_shared<std::vector<Face>>();
+    for (const Face& f : others) {
+      bool overlaps = true;
+      for (int axis = 0; axis < 3 && overlaps; ++axis)
+        overlaps = std::max({points[f[0]][axis], points[f[1]][axis], points[f[2]][axis]}) >= low[axis] &&
+                   std::min({points[f[0]][axis], points[f[1]][axis], points[f[2]][axis]}) <= high[axis];
+      if (overlaps) near->push_back(f);
+    }
+    return ChordTest([&points, near](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      return segmentCrossesFaces(a, b, points, *near);
+    });
+  };
+  // A large hole (or piece) no method closed is cut by a chord into two pieces that go through
+  // the whole chain again; each patch is verified alone, so the pieces that close stay closed.
+  constexpr int kMinSplitVertices = 24, kMaxSplitDepth = 8;
+  std::vector<int> split_depth(holes.size(), 0);
+  const auto splitHole = [&](std::size_t hole, std::vector<std::size_t>& into) {
+    const std::size_t root = root_of[hole];
+    if (!largeRoot(hole) || static_cast<int>(holes[hole].size()) < kMinSplitVertices ||
+        split_depth[hole] >= kMaxSplitDepth || pieces_of_root[root] + 1 > large.max_pieces)
+      return false;
+    std::vector<Eigen::Vector3d> boundary;
+    for (const auto v : holes[hole]) boundary.push_back(points[v.idx()]);
+    const VertexLoop& loop = holes[hole];
+    // A chord that is already an edge of the mesh (across a narrow strip) cannot be added.
+    int a = -1, b = -1;
+    for (const auto& [i, j] : chooseChords(boundary, 8, chordTest(boundary)))
+      if (!mesh.find_halfedge(loop[i], loop[j]).is_valid() && !mesh.find_halfedge(loop[j], loop[i]).is_valid()) {
+        a = i, b = j;
+        break;
+      }
+    if (a < 0) return false;
+    VertexLoop first(loop.begin() + a, loop.begin() + b + 1), second(loop.begin() + b, loop.end());
+    second.insert(second.end(), loop.begin(), loop.begin() + a + 1);
+    was_split[hole] = 1;
+    ++pieces_of_root[root];
+    for (VertexLoop* piece : {&first, &second}) {
+      const std::size_t id = holes.size();
+      const bool tiny = static_cast<int>(piece->size()) <= options.max_triangulation_only_vertices;
+      holes.push_back(std::move(*piece));
+      root_of.push_back(root);
+      was_split.push_back(0);
+      attached.push_back(0);
+      pieces_of_root.push_back(0);
+      split_depth.push_back(split_depth[hole] + 1);
+      result.hole_methods.push_back("open");
+      large_stage.push_back(0);
+      large_failure.push_back({});
+      last_failure.push_back({});
+      method_of.push_back(tiny ? HoleFillMethod::triangulate : HoleFillMethod::triangulate_refine_fair);
+      into.push_back(id);
+    }
+    return true;
+  };
+
   // Inside a hole's image region the only mesh vertices are those of an occluder in front of
   // it: an image-space patch stays kObstacleClearance_m behind them, leaving room for the
   // occluder's solid back (foreground_solids.cpp clamps it in front of the patch).
@@ -170,6 +305,9 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
   };
 
   while (!pending.empty()) {
+    for (const std::size_t hole : pending)
+      if (method_of[hole] == HoleFillMethod::centroid_fan && large_stage[hole] == 0 && largeEligible(hole))
+        large_stage[hole] = 1;
     // Patches of independent holes: computed in parallel, each into its own slot.
     std::vector<Attempt> tries(pending.size());
     cv::parallel_for_(cv::Range(0, static_cast<int>(pending.size())), [&](const cv::Range& range) {
@@ -179,17 +317,46 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
         for (const auto v : holes[hole]) boundary.push_back(points[v.idx()]);
         tries[i].hole = hole;
         tries[i].method = method_of[hole];
+        if (large_stage[hole] == 1 || large_stage[hole] == 2) {
+          // The mesh neighbours off the loop: the fit continues the surface across the boundary.
+          std::vector<std::vector<Eigen::Vector3d>> ring(holes[hole].size());
+          std::vector<int> on_loop;
+          for (const auto v : holes[hole]) on_loop.push_back(v.idx());
+          std::sort(on_loop.begin(), on_loop.end());
+          for (std::size_t k = 0; k < holes[hole].size(); ++k)
+            for (const auto u : mesh.vv_range(holes[hole][k]))
+              if (!std::binary_search(on_loop.begin(), on_loop.end(), u.idx())) ring[k].push_back(points[u.idx()]);
+          // Second try without the slope: where the surface meets the hole at a crease (a wall
+          // around a flat opening) continuing its slope overshoots into the mesh.
+          LargeHoleOptions this_try = large;
+          this_try.tangent_continuous = large_stage[hole] == 1;
+          LargeHolePatch filled = fillLargeHole(boundary, ring, options, this_try, chordTest(boundary));
+          tries[i].large_method = filled.patch.filled ? filled.method : "large_hole";
+          tries[i].patch = std::move(filled.patch);
+          continue;
+        }
+        std::vector<Eigen::Vector2d> closing_path;
+        if (method_of[hole] == HoleFillMethod::image_space && pixels->frame_paths && hole < pixels->frame_paths->size())
+          for (const auto& p : (*pixels->frame_paths)[hole]) closing_path.emplace_back(p[0], p[1]);
         tries[i].patch = method_of[hole] == HoleFillMethod::image_space
-                             ? fillHoleInImage(boundary, pixels->camera, options, obstacleDepth)
+                             ? fillHoleInImage(boundary, pixels->camera, options, obstacleDepth, closing_path)
                              : fillHolePolyline(boundary, method_of[hole], options);
       }
     });
     std::vector<Attempt> attempts;
     std::vector<std::size_t> still_pending;
     const auto retry = [&](std::size_t hole, const std::string& why) {
+      if (large_stage[hole] == 1 || large_stage[hole] == 2) {  // then without the slope, then the fan
+        large_failure[hole] += (large_stage[hole] == 1 ? "; large-hole fill (tangent): " : "; (membrane): ") + why;
+        ++large_stage[hole];
+        still_pending.push_back(hole);
+        return;
+      }
       last_failure[hole] = std::string(holeFillMethodName(method_of[hole])) + ": " + why;
-      if (nextMethod(method_of[hole], holes[hole].size(), options)) still_pending.push_back(hole);
-      else given_up.push_back(hole);
+      const bool image_only = method_of[hole] == HoleFillMethod::image_space && by_pixels && pixels->image_space_only &&
+                              hole < pixels->image_space_only->size() && (*pixels->image_space_only)[hole];
+      if (!image_only && nextMethod(method_of[hole], holes[hole].size(), options)) still_pending.push_back(hole);
+      else if (!splitHole(hole, still_pending)) given_up.push_back(hole);
     };
     std::vector<Eigen::Vector3d> round_points = points;
     for (Attempt& attempt : tries) {
@@ -251,13 +418,20 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
         attempt.faces.push_back(g);
         others.push_back(g);
       }
-      switch (attempt.method) {  // a patch too large to fair came back as its triangulation
-        case HoleFillMethod::image_space: ++result.by_image_space; break;
-        case HoleFillMethod::triangulate_refine_fair:
-          ++(attempt.patch.new_points.empty() ? result.by_triangulation : result.by_refine_fair);
-          break;
-        case HoleFillMethod::triangulate: ++result.by_triangulation; break;
-        case HoleFillMethod::centroid_fan: ++result.by_centroid_fan; break;
+      std::string& name = result.hole_methods[attempt.hole];
+      if (!attempt.large_method.empty()) {
+        ++(attempt.large_method == "chord_split" ? result.by_chord_split : result.by_membrane);
+        name = attempt.large_method;
+      } else {
+        switch (attempt.method) {  // a patch too large to fair came back as its triangulation
+          case HoleFillMethod::image_space: ++result.by_image_space, name = "image_space"; break;
+          case HoleFillMethod::triangulate_refine_fair:
+            ++(attempt.patch.new_points.empty() ? result.by_triangulation : result.by_refine_fair);
+            name = attempt.patch.new_points.empty() ? "triangulation" : "refine_fair";
+            break;
+          case HoleFillMethod::triangulate: ++result.by_triangulation, name = "triangulation"; break;
+          case HoleFillMethod::centroid_fan: ++result.by_centroid_fan, name = "centroid_fan"; break;
+        }
       }
       accepted.push_back(std::move(attempt));
     }
@@ -275,7 +449,15 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
   }
   const bool was_enabled = omerr().is_enabled();
   omerr().disable();
-  for (const Attempt& attempt : accepted) {
+  // General meshes: a patch whose faces OpenMesh refuses in their order (at a vertex with two
+  // boundary fans, e.g. a merged pinch) is tried again grown face by face from the mesh's edges,
+  // after the other patches.
+  std::vector<std::size_t> order(accepted.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::vector<std::uint8_t> tried_again(accepted.size(), 0);
+  for (std::size_t next = 0; next < order.size(); ++next) {
+    Attempt& attempt = accepted[order[next]];
+    if (tried_again[order[next]]) attempt.faces = grownFromMesh(mesh, attempt.faces, first_new);
     std::vector<OpenMesh::FaceHandle> added;
     bool ok = true;
     for (const auto& f : attempt.faces) {
@@ -290,11 +472,17 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
     }
     if (!ok) {
       for (const auto fh : added) mesh.delete_face(fh, false);
+      if (!by_pixels && !tried_again[order[next]]) {
+        tried_again[order[next]] = 1;
+        order.push_back(order[next]);
+        continue;
+      }
       last_failure[attempt.hole] = "the patch could not be attached (non-manifold configuration)";
+      result.hole_methods[attempt.hole] = "open";
       pending.push_back(attempt.hole);
       continue;
     }
-    ++result.filled;
+    attached[attempt.hole] = 1;
     result.faces_added += static_cast<std::int64_t>(added.size());
     result.vertices_added += static_cast<std::int64_t>(attempt.patch.new_points.size());
     result.patch_faces.insert(result.patch_faces.end(), added.begin(), added.end());
@@ -319,11 +507,71 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, 
   for (const auto vh : handle_of_new)
     if (!mesh.status(vh).deleted() && mesh.is_isolated(vh)) mesh.delete_vertex(vh, false);
 
+  // A hole given is closed when it or every piece of it got a patch attached.
+  std::vector<std::uint8_t> open(input_holes.size(), 0);
+  for (std::size_t hole = 0; hole < holes.size(); ++hole)
+    if (!was_split[hole] && !attached[hole]) open[root_of[hole]] = 1;
+  // General meshes: a piece whose patch could not be attached (its edges clash with a sibling's
+  // patch) leaves a smaller hole inside its split hole: one more pass over the loops open there.
+  std::vector<std::uint8_t> refilled(input_holes.size(), 0);
+  if (!by_pixels && large.refill_passes > 0) {
+    std::vector<int> root_of_vertex(mesh.n_vertices(), -1);
+    for (std::size_t root = 0; root < input_holes.size(); ++root)
+      if (open[root] && was_split[root])
+        for (const auto v : input_holes[root]) root_of_vertex[v.idx()] = static_cast<int>(root);
+    std::vector<VertexLoop> again;
+    std::vector<std::size_t> owner;
+    for (VertexLoop& loop : findBoundaryLoops(mesh)) {
+      const int r = root_of_vertex[loop.front().idx()];
+      bool inside = r >= 0;
+      for (const auto v : loop) inside = inside && root_of_vertex[v.idx()] == r;
+      if (!inside) continue;
+      again.push_back(std::move(loop));
+      owner.push_back(static_cast<std::size_t>(r));
+    }
+    if (!again.empty()) {
+      LargeHoleOptions next = large;
+      --next.refill_passes;
+      next.any_size = true;  // what is left of a large hole, however small
+      HoleClosing more = closeHoles(mesh, again, options, std::nullopt, next);
+      std::vector<std::uint8_t> still_open(input_holes.size(), 0);
+      for (std::size_t i = 0; i < again.size(); ++i) {
+        if (more.hole_methods[i] == "open") still_open[owner[i]] = 1;
+        refilled[owner[i]] = 1;
+      }
+      for (std::size_t root = 0; root < input_holes.size(); ++root)
+        if (refilled[root] && !still_open[root]) open[root] = 0;
+      result.by_refine_fair += more.by_refine_fair, result.by_triangulation += more.by_triangulation;
+      result.by_centroid_fan += more.by_centroid_fan, result.by_membrane += more.by_membrane;
+      result.by_chord_split += more.by_chord_split;
+      result.patches_rejected_for_intersection += more.patches_rejected_for_intersection;
+      result.faces_added += more.faces_added, result.vertices_added += more.vertices_added;
+      result.patch_faces.insert(result.patch_faces.end(), more.patch_faces.begin(), more.patch_faces.end());
+      for (const auto& w : more.warnings) result.warnings.push_back("refill: " + w);
+    }
+  }
+  for (std::size_t root = 0; root < input_holes.size(); ++root) {
+    if (open[root]) {
+      result.hole_methods[root] = "open";
+      continue;
+    }
+    ++result.filled;
+    if (was_split[root]) {
+      ++result.by_chord_split;
+      result.hole_methods[root] = "chord_split (" + std::to_string(pieces_of_root[root]) + " pieces" +
+                                  (refilled[root] ? ", one refilled)" : ")");
+    }
+  }
+  result.hole_methods.resize(input_holes.size());
+  result.left_open = static_cast<std::int64_t>(input_holes.size()) - result.filled;
   std::sort(pending.begin(), pending.end());
-  result.left_open = static_cast<std::int64_t>(pending.size());
-  for (const std::size_t hole : pending)
-    result.warnings.push_back("hole of " + std::to_string(holes[hole].size()) + " boundary vertices left open: " +
-                              last_failure[hole]);
+  for (const std::size_t hole : pending) {
+    if (!open[root_of[hole]]) continue;  // refilled
+    result.warnings.push_back((root_of[hole] == hole ? std::string("hole of ")
+                                                     : "piece (of a hole of " + std::to_string(input_holes[root_of[hole]].size()) + ") of ") +
+                              std::to_string(holes[hole].size()) + " boundary vertices left open: " + last_failure[hole] +
+                              large_failure[hole]);
+  }
   return result;
 }
 

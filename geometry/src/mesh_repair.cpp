@@ -5,6 +5,9 @@
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
+#include <map>
 #include <vector>
 
 namespace solo {
@@ -24,6 +27,64 @@ bool isCollinear(const SurfaceMesh& mesh, OpenMesh::FaceHandle f) {
   int k = 0;
   for (const auto vh : mesh.fv_range(f)) v[k++] = vh;
   return CGAL::collinear(pointOf(mesh, v[0]), pointOf(mesh, v[1]), pointOf(mesh, v[2]));
+}
+
+using Polygons = std::vector<std::vector<std::size_t>>;
+
+/// Groups of two or more boundary vertices (on an edge of a single face) at exactly one position
+/// whose members share no face: the pinch points of a boundary that passes twice through one
+/// place, or the two sides of a slit.
+std::vector<std::vector<std::size_t>> coincidentBoundaryVertices(const std::vector<Point>& points, const Polygons& polygons) {
+  std::map<std::pair<std::size_t, std::size_t>, int> edge_faces;
+  for (const auto& f : polygons)
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      const std::size_t a = f[k], b = f[(k + 1) % f.size()];
+      ++edge_faces[{std::min(a, b), std::max(a, b)}];
+    }
+  std::vector<std::uint8_t> on_boundary(points.size(), 0);
+  for (const auto& [edge, count] : edge_faces)
+    if (count == 1) on_boundary[edge.first] = on_boundary[edge.second] = 1;
+  std::map<std::array<double, 3>, std::vector<std::size_t>> at;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (on_boundary[i]) at[{points[i].x(), points[i].y(), points[i].z()}].push_back(i);
+  std::vector<std::size_t> group_of(points.size(), SIZE_MAX);
+  std::vector<std::vector<std::size_t>> groups;
+  for (auto& [position, members] : at) {
+    if (members.size() < 2) continue;
+    for (const std::size_t v : members) group_of[v] = groups.size();
+    groups.push_back(members);
+  }
+  // A face with two corners of one group would become degenerate: such a group stays apart.
+  std::vector<std::uint8_t> refused(groups.size(), 0);
+  for (const auto& f : polygons)
+    for (std::size_t a = 0; a < f.size(); ++a)
+      for (std::size_t b = a + 1; b < f.size(); ++b)
+        if (group_of[f[a]] != SIZE_MAX && group_of[f[a]] == group_of[f[b]]) refused[group_of[f[a]]] = 1;
+  std::vector<std::vector<std::size_t>> kept;
+  for (std::size_t g = 0; g < groups.size(); ++g)
+    if (!refused[g]) kept.push_back(std::move(groups[g]));
+  return kept;
+}
+
+Polygons mergedInto(const Polygons& polygons, const std::vector<std::vector<std::size_t>>& groups, std::size_t vertices) {
+  std::vector<std::size_t> target(vertices);
+  for (std::size_t i = 0; i < vertices; ++i) target[i] = i;
+  for (const auto& g : groups)
+    for (const std::size_t v : g) target[v] = g.front();
+  Polygons out = polygons;
+  for (auto& f : out)
+    for (auto& v : f) v = target[v];
+  return out;
+}
+
+std::int64_t facesRefused(const std::vector<Point>& points, const Polygons& polygons) {
+  TriangleMesh soup;
+  soup.vertices.resize(points.size(), Eigen::Vector3d::Zero());
+  for (const auto& f : polygons)
+    soup.faces.push_back({static_cast<std::uint32_t>(f[0]), static_cast<std::uint32_t>(f[1]), static_cast<std::uint32_t>(f[2])});
+  std::int64_t refused = 0;
+  toSurfaceMesh(soup, &refused);
+  return refused;
 }
 
 }  // namespace
@@ -47,6 +108,18 @@ SurfaceMesh repairSoup(const TriangleMesh& soup, SoupRepair* stats) {
                  polygons.end());
   s.faces_with_repeated_corner_removed = static_cast<std::int64_t>(before - polygons.size());
   s.duplicate_faces_removed = static_cast<std::int64_t>(PMP::merge_duplicate_polygons_in_polygon_soup(points, polygons));
+  // Boundary vertices at one position (kept apart above when the soup was a valid mesh): a hole
+  // through such a pinch touches itself there, so no patch over it passes verification, and the
+  // faces around the two copies count as intersecting. Merged, the loop splits at the pinch into
+  // holes that close (closing both sides makes the vertex manifold). Kept only when the merged
+  // soup loses no more faces to non-manifold edges than before.
+  if (const auto groups = coincidentBoundaryVertices(points, polygons); !groups.empty()) {
+    Polygons merged = mergedInto(polygons, groups, points.size());
+    if (facesRefused(points, merged) <= facesRefused(points, polygons)) {
+      polygons = std::move(merged);
+      for (const auto& g : groups) s.coincident_boundary_vertices_merged += static_cast<std::int64_t>(g.size() - 1);
+    }
+  }
   s.unreferenced_vertices_removed = static_cast<std::int64_t>(PMP::remove_isolated_points_in_polygon_soup(points, polygons));
 
   TriangleMesh cleaned;

@@ -10,6 +10,7 @@
 
 #include "test_support.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace {
@@ -155,7 +156,10 @@ TEST(SpuriousFaces, OcclusionStepIsCutExactlyAlongItsEdge) {
 
 TEST(SpuriousFaces, PrecisionAndRecallOnTheDefaultSyntheticScene) {
   // The embedded scene's exact depth, normals and instances (960x540). Measured: precision
-  // 0.923, recall 0.889 of the occlusion criteria (docs/mesh.md); the target is 0.95.
+  // 0.955, recall 0.946 of the occlusion criteria (docs/mesh.md; before the block planes and
+  // the line check 0.923 and 0.945 against this ground truth); the target is 0.95.
+  // 912 faces of the 15 627 the per-pixel planes call spurious are sub-pixel window detail of
+  // far side facades (the ground truth's exception, spurious_faces.h).
   const solo::Scene truth = solo::loadScene(std::filesystem::path(SOLO_PROJECT_DATA_DIR) / "default/gt/scene.json");
   const solo::DepthMesh m = solo::meshFromDepth(truth.depth_m, truth.camera, truth.instances);
   const std::vector<std::uint8_t> spurious = solo::spuriousFacesFromGroundTruth(m, truth.depth_m, truth.normals);
@@ -163,9 +167,207 @@ TEST(SpuriousFaces, PrecisionAndRecallOnTheDefaultSyntheticScene) {
   std::vector<std::uint8_t> occlusion(r.criteria.size());
   for (std::size_t i = 0; i < occlusion.size(); ++i) occlusion[i] = (r.criteria[i] & solo::kOcclusionCriteria) != 0;
   const solo::DetectionScore score = solo::scoreDetection(occlusion, spurious);
-  EXPECT_EQ(score.true_positives + score.false_negatives, 15627);
-  EXPECT_NEAR(score.precision, 0.923, 0.002);
-  EXPECT_NEAR(score.recall, 0.889, 0.002);
+  EXPECT_EQ(score.true_positives + score.false_negatives, 14715);
+  EXPECT_GE(score.precision, 0.95);
+  EXPECT_NEAR(score.precision, 0.955, 0.002);
+  EXPECT_NEAR(score.recall, 0.946, 0.002);
+}
+
+/// Exact depth and normals of axis-aligned boxes (and optionally the road plane y = 1.5 m, the
+/// camera 1.5 m above it), ray cast per pixel centre like `solo synth`: the ground truth of the
+/// hand-made cases below. Pixels that hit nothing get depth 0 (no vertex).
+struct Box {
+  Eigen::Vector3d lo, hi;
+};
+struct RayCast {
+  cv::Mat depth_m, normals;
+};
+RayCast castBoxes(const solo::PinholeCamera& camera, const std::vector<Box>& boxes, bool road) {
+  RayCast out{cv::Mat(camera.height, camera.width, CV_32F, cv::Scalar(0.0f)),
+              cv::Mat(camera.height, camera.width, CV_32FC3, cv::Scalar(0, 0, 0))};
+  for (int v = 0; v < camera.height; ++v)
+    for (int u = 0; u < camera.width; ++u) {
+      const Eigen::Vector3d ray((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+      double best = road && ray.y() > 0 ? 1.5 / ray.y() : 1e30;  // t is the z-depth (ray.z = 1)
+      Eigen::Vector3d normal(0, -1, 0);
+      for (const Box& b : boxes) {
+        double t_in = 0, t_out = 1e30;
+        int axis_in = -1;
+        for (int k = 0; k < 3; ++k) {
+          if (ray[k] == 0) {
+            if (0 < b.lo[k] || 0 > b.hi[k]) t_in = 1e30;
+            continue;
+          }
+          double t0 = b.lo[k] / ray[k], t1 = b.hi[k] / ray[k];
+          if (t0 > t1) std::swap(t0, t1);
+          if (t0 > t_in) t_in = t0, axis_in = k;
+          t_out = std::min(t_out, t1);
+        }
+        if (axis_in < 0 || t_in > t_out || t_in >= best) continue;
+        best = t_in;
+        normal = Eigen::Vector3d::Zero();
+        normal[axis_in] = ray[axis_in] > 0 ? -1 : 1;
+      }
+      if (best >= 1e29) continue;
+      out.depth_m.at<float>(v, u) = static_cast<float>(best);
+      out.normals.at<cv::Vec3f>(v, u) = cv::Vec3f(float(normal.x()), float(normal.y()), float(normal.z()));
+    }
+  return out;
+}
+
+struct Removal {
+  std::int64_t removed = 0, spurious = 0, removed_not_spurious = 0, spurious_kept = 0;
+};
+Removal scoreRemoval(const solo::DepthMesh& m, const RayCast& scene, const solo::SpuriousFaceOptions& options = {}) {
+  const solo::SpuriousFaceResult r = solo::findSpuriousFaces(m, scene.depth_m, {}, {}, options);
+  const std::vector<std::uint8_t> truth = solo::spuriousFacesFromGroundTruth(m, scene.depth_m, scene.normals);
+  Removal out;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    out.removed += r.spurious[i];
+    out.spurious += truth[i];
+    out.removed_not_spurious += r.spurious[i] && !truth[i];
+    out.spurious_kept += truth[i] && !r.spurious[i];
+  }
+  return out;
+}
+
+TEST(SpuriousFaces, GroundTruthCallsSubPixelDetailOfAFacadeSurface) {
+  // Each pixel of a row sees the camera-facing end of a different window of a side facade (the
+  // facade x = -3 m seen at grazing angles, 20 to 60 m away): parallel planes metres apart, but
+  // the points lie on the facade and a face through them follows it. The ground truth calls
+  // none spurious; with a 30 cm notch in every fourth column (the point 30 cm behind the
+  // facade) exactly the edges whose run of four pixels meets a notch are. Faces within one
+  // pixel of the frame or the facade's end are left out: their runs leave the image.
+  const solo::PinholeCamera camera{400.0, 400.0, 60.0, 4.0, 48, 9};
+  const auto facade_depth = [&](int u, double x_m) { return float(x_m / ((u - camera.cx) / camera.fx)); };
+  cv::Mat depth(camera.height, camera.width, CV_32F, cv::Scalar(0.0f));
+  cv::Mat normals(depth.size(), CV_32FC3, cv::Scalar(0, 0, 0));
+  for (int v = 0; v < camera.height; ++v)
+    for (int u = 0; u <= 40; ++u) {
+      depth.at<float>(v, u) = facade_depth(u, -3.0);
+      normals.at<cv::Vec3f>(v, u) = cv::Vec3f(0, 0, -1);
+    }
+  cv::Mat notched = depth.clone();
+  const auto is_notch = [](int u) { return u % 4 == 0 && u >= 4 && u <= 36; };
+  for (int u = 4; u <= 36; u += 4) notched.col(u).setTo(facade_depth(u, -3.3));
+  const solo::DepthMesh m = solo::meshFromDepth(depth, camera);
+  const std::vector<std::uint8_t> truth = solo::spuriousFacesFromGroundTruth(m, depth, normals);
+  const std::vector<std::uint8_t> notch_truth = solo::spuriousFacesFromGroundTruth(m, notched, normals);
+  std::int64_t interior = 0, notch_faces = 0;
+  for (const auto f : m.mesh.faces()) {
+    std::vector<OpenMesh::Vec2i> p;
+    for (const auto v : m.mesh.fv_range(f)) p.push_back(m.mesh.property(m.properties.pixel, v));
+    bool inside = true, meets_notch = false;
+    for (int k = 0; k < 3; ++k) {
+      const OpenMesh::Vec2i a = p[k], b = p[(k + 1) % 3];
+      inside = inside && a[0] >= 1 && a[0] <= 39 && a[1] >= 1 && a[1] <= camera.height - 2;
+      if (a[0] == b[0]) continue;  // same column, same plane
+      const int du = b[0] - a[0];
+      for (const int u : {a[0] - du, a[0], b[0], b[0] + du}) meets_notch = meets_notch || is_notch(u);
+    }
+    if (!inside) continue;
+    ++interior;
+    notch_faces += meets_notch;
+    EXPECT_EQ(truth[f.idx()], 0) << "face " << f.idx();
+    EXPECT_EQ(notch_truth[f.idx()] != 0, meets_notch) << "face " << f.idx();
+  }
+  EXPECT_EQ(interior, 2 * 38 * 6);
+  EXPECT_GT(notch_faces, interior / 2);
+}
+
+TEST(SpuriousFaces, SideFacadeWithWindowsSeenAtGrazingAnglesKeepsEveryFace) {
+  // A facade at x = -3 m seen at 77 to 83 degrees from its normal, 13 to 24 m away, with a grid
+  // of windows 6 cm proud of it (1.3 m wide every 2.6 m, 1.6 m tall every 3.2 m, as `solo
+  // synth` builds them): every step is 6 cm, nothing bridges an occlusion.
+  const solo::PinholeCamera camera{890.0, 890.0, 200.0, 18.0, 90, 36};
+  std::vector<Box> boxes{{{-20, -30, 2}, {-3, 1.5, 400}}};
+  for (double z0 = 5; z0 < 400; z0 += 2.6)
+    for (double h0 = -30; h0 < 1.5; h0 += 3.2) boxes.push_back({{-3.02, h0, z0}, {-2.94, h0 + 1.6, z0 + 1.3}});
+  const RayCast scene = castBoxes(camera, boxes, false);
+  const solo::DepthMesh m = solo::meshFromDepth(scene.depth_m, camera);
+  ASSERT_EQ(m.mesh.n_faces(), 2u * 89 * 35);  // every pixel sees the facade
+  const Removal r = scoreRemoval(m, scene);
+  EXPECT_EQ(r.spurious, 0);
+  EXPECT_EQ(r.removed, 0);
+  solo::SpuriousFaceOptions lines_only;  // the step measured from lines along the edge alone
+  lines_only.block_plane_tolerance_footprints = 0;
+  EXPECT_GT(scoreRemoval(m, scene, lines_only).removed, 0);  // 7: window edges cut
+}
+
+TEST(SpuriousFaces, TyreStandingOnTheRoadKeepsItsContact) {
+  // A 0.62 m tall wheel (0.25 m wide, 0.6 m long) standing on the road 15 m ahead, 4.1 m to the
+  // left: its side and the road beside it meet at the contact, seen at grazing angles. Only the
+  // faces from its top and back edges to the road behind are spurious. (The horizon is out of
+  // view: the road's farthest row, 33 m, has no row behind it.)
+  const solo::PinholeCamera camera{890.0, 890.0, 280.0, -40.0, 72, 56};
+  const RayCast scene = castBoxes(camera, {{{-4.35, 0.88, 15.0}, {-4.10, 1.5, 15.6}}}, true);
+  const solo::DepthMesh m = solo::meshFromDepth(scene.depth_m, camera);
+  const Removal r = scoreRemoval(m, scene);
+  EXPECT_GT(r.spurious, 0);
+  EXPECT_EQ(r.removed_not_spurious, 0);
+  EXPECT_EQ(r.spurious_kept, 0);
+  solo::SpuriousFaceOptions lines_only;
+  lines_only.block_plane_tolerance_footprints = 0;
+  // 16: the contact faces along the side's and the front's bottom edges, metres from the road's
+  // line along the edge but centimetres from its plane.
+  EXPECT_GT(scoreRemoval(m, scene, lines_only).removed_not_spurious, 0);
+}
+
+TEST(SpuriousFaces, ThinObjectBetweenANearAndAFarSurfaceIsCutFromBoth) {
+  // Columns: a far wall at 33 m, a 2-pixel-wide object at 10 m, then a near object at the depth
+  // where the line through the object's right column and the wall two pixels behind it meets the
+  // near object's first ray. That line runs along the viewing rays and crosses no surface: the
+  // near object is 2.6 m in front of the thin one, and every face between them is spurious.
+  const solo::PinholeCamera camera = kCamera;
+  const auto k = [&](int u) { return (u - camera.cx) / camera.fx; };
+  const double z_far = 33.0, z_mid = 10.0;
+  const double x1 = k(11) * z_mid, x2 = k(9) * z_far;
+  const double t = (k(12) * z_mid - x1) / ((x2 - x1) - k(12) * (z_far - z_mid));
+  const double z_near = z_mid + t * (z_far - z_mid);
+  ASSERT_GT(z_near, 5.0);
+  ASSERT_LT(z_near, 9.0);
+  cv::Mat depth(camera.height, camera.width, CV_32F, cv::Scalar(float(z_far)));
+  depth(cv::Rect(10, 0, 2, camera.height)).setTo(float(z_mid));
+  depth(cv::Rect(12, 0, camera.width - 12, camera.height)).setTo(float(z_near));
+  const solo::DepthMesh m = solo::meshFromDepth(depth, camera);
+  const solo::SpuriousFaceResult r = solo::findSpuriousFaces(m, depth, {}, {});
+  std::int64_t bridging_near = 0, cut_near = 0;
+  for (const auto f : m.mesh.faces()) {
+    int mid = 0, near = 0, far = 0;
+    for (const auto v : m.mesh.fv_range(f)) {
+      const int u = m.mesh.property(m.properties.pixel, v)[0];
+      mid += u == 10 || u == 11;
+      near += u >= 12;
+      far += u <= 9;
+    }
+    const bool bridges = (mid > 0) + (near > 0) + (far > 0) > 1;
+    EXPECT_EQ(r.spurious[f.idx()] != 0, bridges) << "face " << f.idx();
+    bridging_near += mid > 0 && near > 0;
+    cut_near += mid > 0 && near > 0 && r.spurious[f.idx()];
+  }
+  EXPECT_EQ(bridging_near, 2 * (camera.height - 1));
+  EXPECT_EQ(cut_near, bridging_near);
+  // Unchecked, the line through the thin object's right column and the wall two pixels behind
+  // it explains the step: those faces stay (away from the top and bottom rows, where a
+  // diagonal edge has no pixel two or four back).
+  solo::SpuriousFaceOptions unchecked;
+  unchecked.surface_line_linearity = 1e9;
+  const solo::SpuriousFaceResult old = solo::findSpuriousFaces(m, depth, {}, {}, unchecked);
+  std::int64_t interior_bridging = 0, interior_kept = 0;
+  for (const auto f : m.mesh.faces()) {
+    bool mid = false, near = false, interior = true;
+    for (const auto v : m.mesh.fv_range(f)) {
+      const OpenMesh::Vec2i p = m.mesh.property(m.properties.pixel, v);
+      mid = mid || p[0] == 10 || p[0] == 11;
+      near = near || p[0] >= 12;
+      interior = interior && p[1] >= 4 && p[1] <= camera.height - 5;
+    }
+    if (!(mid && near && interior)) continue;
+    ++interior_bridging;
+    interior_kept += !old.spurious[f.idx()];
+  }
+  EXPECT_EQ(interior_bridging, 2 * (camera.height - 9));
+  EXPECT_EQ(interior_kept, interior_bridging);
 }
 
 /// A 10 m wall filling the view, and a car (instance 26001) at 5 m over `rect`.

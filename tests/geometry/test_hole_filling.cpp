@@ -260,17 +260,18 @@ TEST_P(SharedMeshes, AllHolesClosedWithoutNewSelfIntersections) {
   EXPECT_EQ(metricInt(report, "after_non_manifold_edges"), 0);
   EXPECT_EQ(metricInt(report, "after_non_manifold_vertices"), 0);
   EXPECT_EQ(metricInt(report, "after_degenerate_faces"), 0);
-  // Some inputs already self-intersect (pig 3 pairs, beetle 5, camelhead 5): none is added.
-  EXPECT_EQ(metricInt(report, "after_self_intersecting_pairs"), metricInt(report, "before_self_intersecting_pairs"));
+  // Some inputs already self-intersect (pig 3 pairs, beetle 5, camelhead 5): none is added (the
+  // beetle's 5 are faces at two pinch points of its largest hole, merged by the repair: 0 after).
+  EXPECT_LE(metricInt(report, "after_self_intersecting_pairs"), metricInt(report, "before_self_intersecting_pairs"));
   EXPECT_EQ(solo::evaluateMesh(out).closed, c.holes == c.filled);
 }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, SharedMeshes,
-                         // The beetle's largest hole (512 boundary vertices) passes twice through one
-                         // position (two coincident vertices): every patch touches itself there,
-                         // which verification counts as a self-intersection, so it stays open.
+                         // The beetle's largest hole (512 boundary vertices) passes twice through two
+                         // positions: merged, it is a 464-vertex hole and two of 24, all closed
+                         // (the 464-vertex one in pieces: test_large_holes.cpp).
                          ::testing::Values(SharedMesh{"mech-holes-shark.off", 4, 4}, SharedMesh{"pig.off", 7, 7},
-                                           SharedMesh{"beetle.off", 11, 10}, SharedMesh{"camelhead.off", 1, 1},
+                                           SharedMesh{"beetle.off", 13, 13}, SharedMesh{"camelhead.off", 1, 1},
                                            SharedMesh{"bun_zipper.ply", 5, 5}, SharedMesh{"elephant.off", 0, 0}),
                          [](const auto& info) {
                            std::string name = info.param.file;

@@ -272,21 +272,172 @@ TEST(ImageHoleFilling, TwoHolesSharingAPixelCornerBothClose) {
   EXPECT_EQ(metrics.self_intersecting_pairs, 0);
 }
 
-TEST(ImageHoleFilling, DefaultSceneLeavesOnlyFrameHolesOpen) {
-  // data/default/scene.json as `solo mesh from-depth` meshes it. Measured: 1 925 inner holes
-  // and 39 frame holes found; every inner hole closes in image space; 15 frame holes stay open:
-  // their polygon (the run behind an occluder closed by a chord) holds faces of the mesh itself,
-  // so every patch, the 3D ones included, meets it.
+/// Depth of the plane normal . x = d_m seen through kCamera.
+cv::Mat planeDepth(const Eigen::Vector3d& normal, double d_m) {
+  cv::Mat depth(kCamera.height, kCamera.width, CV_32F);
+  for (int v = 0; v < kCamera.height; ++v)
+    for (int u = 0; u < kCamera.width; ++u) {
+      const Eigen::Vector3d ray((u - kCamera.cx) / kCamera.fx, (v - kCamera.cy) / kCamera.fy, 1.0);
+      depth.at<float>(v, u) = static_cast<float>(d_m / normal.dot(ray));
+    }
+  return depth;
+}
+
+TEST(ImageHoleFilling, FrameHoleBehindACornerOccluderClosesAlongTheFrame) {
+  // A tilted plane (6.6-12.3 m) and a car (instance 26001) at 4 m over the bottom-left corner,
+  // columns 0..11, rows 17..29: it touches the left and the bottom frame. The plane's outer loop
+  // runs around the car from the left frame to the bottom frame; a chord between those two ends
+  // would cut the corner off (and through the car's image). Closed along the frame instead, the
+  // patch reaches the corner pixel (0, 29) and covers the car's whole image behind it.
+  const Eigen::Vector3d normal = Eigen::Vector3d(0.25, -0.4, 1.0).normalized();
+  const double d = 9.0;
+  cv::Mat depth = planeDepth(normal, d);
+  cv::Mat ids(depth.size(), CV_32S, cv::Scalar(11));
+  const cv::Rect car(0, 17, 12, kCamera.height - 17);
+  depth(car).setTo(4.0f);
+  ids(car).setTo(26001);
+  solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, ids);
+  const solo::StageReport r = solo::cleanDepthMesh(m, depth, ids, {});
+  EXPECT_EQ(metricInt(r, "found_inner_holes"), 0);
+  EXPECT_EQ(metricInt(r, "found_frame_holes"), 1);
+  EXPECT_EQ(metricInt(r, "holes_filled_image_space"), 1);
+  EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
+  EXPECT_EQ(metricInt(r, "foreground_solids"), 1);
+  EXPECT_EQ(metricInt(r, "after_frame_holes"), 0);
+  EXPECT_EQ(metricInt(r, "after_inner_holes"), 0);
+  // What is left open is the plane's border along the frame (the new edges along the frame
+  // are border edges); the car is a closed solid.
+  EXPECT_EQ(metricInt(r, "after_boundary_loops_total"), 1);
+  EXPECT_EQ(metricInt(r, "after_border_loops"), 1);
+  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);  // the car's solid included
+  EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0);
+  EXPECT_EQ(metricInt(r, "after_non_manifold_vertices"), 0);
+  EXPECT_EQ(metricInt(r, "after_degenerate_faces"), 0);
+  // The patch lies on the plane. Its boundary vertices are the float depth map's (relative
+  // error <= 6e-8); the fill is the boundary's least-squares affine inverse depth (exact on a
+  // plane) plus the harmonic extension of the residual, both linear in those errors with a gain
+  // of a few units (the fit extrapolates about one run length; the harmonic part obeys the
+  // maximum principle): 1e-5 relative leaves two orders of magnitude of margin, and any
+  // departure from the plane a non-affine extension would make (cm over metres) fails it.
+  int fill_vertices = 0, on_frame = 0, behind_car = 0;
+  bool corner = false;
+  for (const auto v : m.mesh.vertices()) {
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) != solo::VertexOrigin::hole_fill) continue;
+    ++fill_vertices;
+    const auto& q = m.mesh.point(v);
+    const Eigen::Vector3d p(q[0], q[1], q[2]);
+    EXPECT_NEAR(normal.dot(p), d, 1e-5 * d);
+    const Eigen::Vector2d uv = kCamera.project(p);
+    if (uv.x() < 0.5 || uv.y() > kCamera.height - 1.5) ++on_frame;
+    corner = corner || (uv - Eigen::Vector2d(0, kCamera.height - 1)).norm() < 1e-6;
+    if (uv.x() < car.x + car.width && uv.y() > car.y) {
+      EXPECT_GT(p.z(), 4.0 + 1.0);  // the plane is 6.6 m or more away there, behind the car
+      ++behind_car;
+    }
+  }
+  EXPECT_TRUE(corner);
+  // Frame vertices: rows 17(+1)..29 on the left side and columns 0..12 on the bottom, less
+  // the run's two ends; interior vertices 2 pixels or more inside.
+  EXPECT_GE(on_frame, 20);
+  EXPECT_GT(behind_car, 40);
+  EXPECT_EQ(fill_vertices, metricInt(r, "hole_vertices_added"));
+}
+
+TEST(ImageHoleFilling, AClosingPathRegionShowingAFartherSurfaceIsRefused) {
+  // Three sides of a 20 x 20 pixel square at 8 m (the run), closed by the fourth side given as
+  // a closing path of pixels (as along the frame). The closing path's points come first among
+  // the new points, at the plane's depth (8 m: constant inverse depth is exactly affine).
+  std::vector<Eigen::Vector3d> run;
+  for (int k = 0; k < 20; ++k) run.push_back(kCamera.backproject(30, 10 + k, 8.0));
+  for (int k = 0; k < 20; ++k) run.push_back(kCamera.backproject(30 - k, 30, 8.0));
+  for (int k = 0; k <= 20; ++k) run.push_back(kCamera.backproject(10, 30 - k, 8.0));
+  std::vector<Eigen::Vector2d> path;
+  for (int k = 1; k < 20; ++k) path.emplace_back(10 + k, 10);
+  // A nearer surface (an occluder at 5 m plus clearance) over the region: filled behind it.
+  const auto nearer = [](int u, int v) { return u > 10 && u < 30 && v > 10 && v < 30 ? 5.1 : 0.0; };
+  const solo::HolePatch filled = solo::fillHoleInImage(run, kCamera, {}, nearer, path);
+  ASSERT_TRUE(filled.filled) << filled.failure;
+  ASSERT_GT(filled.new_points.size(), path.size());
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    EXPECT_NEAR(filled.new_points[k].z(), 8.0, 1e-9);
+    EXPECT_NEAR((kCamera.project(filled.new_points[k]) - path[k]).norm(), 0.0, 1e-9);
+  }
+  // A farther surface (20 m) seen over the region: the run does not bound a region behind an
+  // occluder; the fill is refused rather than pinned behind that surface.
+  const auto farther = [](int u, int v) { return u > 10 && u < 30 && v > 10 && v < 30 ? 20.1 : 0.0; };
+  const solo::HolePatch refused = solo::fillHoleInImage(run, kCamera, {}, farther, path);
+  EXPECT_FALSE(refused.filled);
+  EXPECT_NE(refused.failure.find("farther than the extension"), std::string::npos) << refused.failure;
+  // Without a closing path (an inner hole) the same obstacle is an occluder's back: pinned.
+  std::vector<Eigen::Vector3d> closed = run;
+  for (const auto& p : path) closed.push_back(kCamera.backproject(p.x(), p.y(), 8.0));
+  EXPECT_TRUE(solo::fillHoleInImage(closed, kCamera, {}, farther).filled);
+}
+
+TEST(ImageHoleFilling, FarWallSeenAtTheFrameContinuesBehindTheNearWall) {
+  // A wall at 10 m with a window at the left frame (columns 0..9, rows 8..19) through which a
+  // far wall at 30 m is seen. The far sheet's outer loop runs behind the near wall from the
+  // left frame back to it. Closed by a chord it would enclose the far sheet itself (every
+  // patch lies on it: before, every method failed on it); closed along the rest of the frame
+  // its region is everything behind the near wall: the far wall is continued there, 20 m
+  // behind the near one, and nothing is left open.
+  cv::Mat depth(kCamera.height, kCamera.width, CV_32F, cv::Scalar(10.0f));
+  depth(cv::Rect(0, 8, 10, 12)).setTo(30.0f);
+  {
+    solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, {});
+    const solo::StageReport r = solo::cleanDepthMesh(m, depth, {}, {});
+    EXPECT_EQ(metricInt(r, "found_frame_holes"), 1);
+    EXPECT_EQ(metricInt(r, "holes_filled_image_space"), 1);
+    EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
+    EXPECT_EQ(metricInt(r, "after_frame_holes"), 0);
+    EXPECT_EQ(metricInt(r, "after_boundary_loops_total"), 2);  // the borders of both walls
+    EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
+    int fill = 0;
+    for (const auto v : m.mesh.vertices())
+      if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::hole_fill) {
+        EXPECT_NEAR(m.mesh.point(v)[2], 30.0, 1e-4);  // a frontal plane: constant depth
+        ++fill;
+      }
+    EXPECT_GT(fill, 500);  // 40 x 30 pixels less the window, every pixel of the frame
+  }
+  // With sky over the top rows the frame between the loop's ends is not all depth: closing
+  // along the sky line is not done, and the chord polygon encloses the far sheet: the frame
+  // hole is reported open with its reason, and no method is tried on it.
+  depth(cv::Rect(0, 0, kCamera.width, 3)).setTo(0.0f);
+  solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, {});
+  const solo::StageReport r = solo::cleanDepthMesh(m, depth, {}, {});
+  EXPECT_EQ(metricInt(r, "found_frame_holes"), 1);
+  EXPECT_EQ(metricInt(r, "found_frame_holes_unclosable"), 1);
+  EXPECT_EQ(metricInt(r, "after_frame_holes"), 1);
+  EXPECT_EQ(metricInt(r, "holes_filled"), 0);
+  EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
+  bool noted = false;
+  for (const auto& note : r.notes) noted = noted || note.find("encloses its own sheet") != std::string::npos;
+  EXPECT_TRUE(noted);
+}
+
+TEST(ImageHoleFilling, DefaultSceneClosesEveryFrameHoleItCanBound) {
+  // data/default/scene.json as `solo mesh from-depth` meshes it. Measured: 1 887 inner holes
+  // and 40 frame holes found (counts of the spurious-face removal of this tree); every inner
+  // hole and all 29 frame holes with a region to fill close in image space. The 11 not
+  // attempted end on the sky line or have sky on the frame between their ends, and their chord
+  // polygon encloses their own sheet (a facade behind the trees, drawn up to the sky): bounding
+  // them needs the sky line, which is not done. After the fills and the solids the
+  // classification finds 8 such loops, and no other frame hole.
   const solo::Scene scene = solo::loadScene(std::filesystem::path(SOLO_PROJECT_DATA_DIR) / "default/scene.json");
   solo::DepthMeshCleanupOptions options;
   options.evaluate = false;
   solo::StageReport report;
   solo::meshFromScene(scene.depth_m, scene.camera, scene.instances, {}, options, report);
-  EXPECT_EQ(metricInt(report, "found_inner_holes"), 1925);
-  EXPECT_EQ(metricInt(report, "found_frame_holes"), 39);
-  EXPECT_EQ(metricInt(report, "holes_left_open"), 15);
+  EXPECT_EQ(metricInt(report, "found_inner_holes"), 1887);
+  EXPECT_EQ(metricInt(report, "found_frame_holes"), 40);
+  EXPECT_EQ(metricInt(report, "found_frame_holes_unclosable"), 11);
+  EXPECT_EQ(metricInt(report, "holes_filled"), 1887 + 40 - 11);
+  EXPECT_EQ(metricInt(report, "holes_filled_image_space"), 1887 + 40 - 11);
+  EXPECT_EQ(metricInt(report, "holes_left_open"), 0);
   EXPECT_EQ(metricInt(report, "after_inner_holes"), 0);
-  EXPECT_EQ(metricInt(report, "after_frame_holes"), 12);
+  EXPECT_EQ(metricInt(report, "after_frame_holes"), 8);
+  EXPECT_EQ(metricInt(report, "after_frame_holes_unclosable"), 8);  // every frame hole left is one of those
 }
 
 }  // namespace

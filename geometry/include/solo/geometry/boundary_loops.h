@@ -17,6 +17,7 @@
 #include "solo/geometry/depth_mesh.h"
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace solo {
@@ -34,9 +35,20 @@ const char* loopKindName(LoopKind kind);
 struct DepthLoops {
   std::vector<VertexLoop> loops;
   std::vector<LoopKind> kinds;
-  std::vector<VertexLoop> holes;        ///< closed polylines to fill: inner holes, then frame holes
+  std::vector<VertexLoop> holes;        ///< closed polylines to fill: inner holes and frame holes
+  /// Per hole: for a frame hole closed along the image frame, the frame pixels (u, v) that
+  /// close it, in order from the hole's last vertex to its first (both excluded; possibly none
+  /// when the two ends are neighbouring pixels); empty for the others (closed by a chord).
+  std::vector<std::vector<OpenMesh::Vec2i>> frame_paths;
+  /// Per hole: 1 for a frame hole closed by the chord between its ends (no frame path).
+  std::vector<std::uint8_t> chord_closed;
   std::int64_t inner_holes = 0, frame_holes = 0;
   std::int64_t border_loops = 0, sky_openings = 0, silhouettes = 0;
+  /// Frame holes (counted in frame_holes, not in holes) that cannot be closed: no closing path
+  /// along the frame (sky between their ends, or an end on the sky line) and, closed by their
+  /// chord, they enclose their own sheet. One note each.
+  std::int64_t frame_holes_unclosable = 0;
+  std::vector<std::string> unclosable_notes;
 };
 
 /// Classifies the loops of a depth mesh. `had_depth` (CV_8U, the depth map's size) marks the

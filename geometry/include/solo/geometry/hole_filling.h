@@ -81,9 +81,21 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 /// triangulation in the image without a degenerate triangle; crossing itself, none without
 /// overlap. Loops through one vertex twice are split by findBoundaryLoops, so pinched holes of
 /// a depth mesh arrive here as separate simple polygons.
+///
+/// `closing_path_px` (optional; a frame hole of a depth mesh): pixel positions closing the
+/// polygon from the last boundary point back to the first along the image frame. They become
+/// new points (new_points[0..size-1], in order; the interior vertices follow) whose inverse
+/// depth is free, extended like the interior's: the boundary's least-squares affine inverse
+/// depth (a plane stays exact) plus the harmonic extension of the residual, with no flux across
+/// the closing path; they are pinned behind obstacles too. The patch's edges along the path
+/// have no face beyond them (the frame). Fails when the extension is not in front of the camera,
+/// or when more than 5 % of the unknown vertices whose pixel holds an obstacle see it more than
+/// 10 % behind the extension (a farther surface is seen there: the region is not behind an
+/// occluder, and a patch pinned behind that surface would be a wall nobody sees).
 HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const PinholeCamera& camera,
                           const HoleFillOptions& options = {},
-                          const std::function<double(int, int)>& obstacle_depth_m = {});
+                          const std::function<double(int, int)>& obstacle_depth_m = {},
+                          const std::vector<Eigen::Vector2d>& closing_path_px = {});
 
 /// For each face of `candidates`, whether it intersects a face of `candidates` or of `others`
 /// other than in what they share by index (the rules of evaluateMesh: no shared vertex, any

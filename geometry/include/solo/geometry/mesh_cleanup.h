@@ -8,6 +8,7 @@
 #include "solo/geometry/depth_mesh.h"
 #include "solo/geometry/foreground_solids.h"
 #include "solo/geometry/hole_filling.h"
+#include "solo/geometry/large_hole_filling.h"
 #include "solo/geometry/mesh_metrics.h"
 #include "solo/geometry/report.h"
 #include "solo/geometry/spurious_faces.h"
@@ -46,6 +47,7 @@ DepthMesh meshFromScene(const cv::Mat& depth_m, const PinholeCamera& camera, con
 struct MeshCleanupOptions {
   bool fill_holes = true;
   HoleFillOptions hole_filling;
+  LargeHoleOptions large_holes;  ///< the fallback for holes the CGAL methods cannot close
 };
 
 /// Repairs and closes an arbitrary triangle mesh: the soup repair of repairSoup, then every

@@ -4,10 +4,13 @@
 // the full CGAL pipeline; every patch is then checked for intersections
 // with the other patches and with the mesh (findIntersectingFaces). A patch that intersects, or
 // that OpenMesh cannot attach, is replaced by the next simpler method (triangulation only, then
-// a centroid fan); a hole no method can close safely is left open with a warning.
+// a centroid fan); a hole no method can close safely is left open with a warning. On a general
+// mesh (no pixels) a hole the CGAL methods cannot close gets fillLargeHole (membrane, chord
+// splits) before the centroid fan.
 
 #include "solo/geometry/boundary_loops.h"
 #include "solo/geometry/hole_filling.h"
+#include "solo/geometry/large_hole_filling.h"
 #include "solo/geometry/surface_mesh.h"
 
 #include <cstdint>
@@ -20,11 +23,15 @@ namespace solo {
 struct HoleClosing {
   std::int64_t holes = 0, filled = 0, left_open = 0;
   std::int64_t by_image_space = 0, by_refine_fair = 0, by_triangulation = 0, by_centroid_fan = 0;
+  std::int64_t by_membrane = 0, by_chord_split = 0;  ///< fillLargeHole (general meshes)
   std::int64_t patches_rejected_for_intersection = 0;  ///< attempts that intersected and were replaced
   std::int64_t faces_added = 0, vertices_added = 0;
   std::int64_t largest_hole_vertices = 0;
   std::vector<std::string> warnings;                    ///< one per hole left open, with the reason
   std::vector<OpenMesh::FaceHandle> patch_faces;        ///< faces added
+  /// Per hole (in the order given): the method that closed it ("refine_fair", "triangulation",
+  /// "centroid_fan", "image_space", "membrane", "chord_split") or "open".
+  std::vector<std::string> hole_methods;
 };
 
 struct PixelMapping {
@@ -36,6 +43,12 @@ struct PixelMapping {
   /// its pixel quad, so one that meets a patch face has a corner within one pixel of the
   /// patch face's projection).
   const std::vector<int>* vertex_of_pixel = nullptr;
+  /// Optional, per hole (DepthLoops::frame_paths): the frame pixels closing a frame hole along
+  /// the image frame (fillHoleInImage's closing path), empty for a hole closed by its own loop.
+  const std::vector<std::vector<OpenMesh::Vec2i>>* frame_paths = nullptr;
+  /// Optional, per hole (DepthLoops::image_space_only): non-zero = no 3D fallback after the
+  /// image-space fill (a large frame hole closed by its chord, on which every 3D patch fails).
+  const std::vector<std::uint8_t>* image_space_only = nullptr;
 };
 
 /// Fills the holes (loops in border half-edge direction, see findBoundaryLoops). With `pixels`
@@ -45,7 +58,9 @@ struct PixelMapping {
 /// refinement or fairing). Patches are computed in parallel. When `pixels` is given, new
 /// vertices get their projected pixel (clamped to the map), origin hole_fill and the instance
 /// most boundary vertices carry, and every face of the mesh must have its corners on pixels.
+/// Without `pixels`, holes of more than options.max_triangulation_only_vertices that the CGAL
+/// methods cannot close get fillLargeHole (when `large.enabled`) before the centroid fan.
 HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& holes, const HoleFillOptions& options,
-                       const std::optional<PixelMapping>& pixels = std::nullopt);
+                       const std::optional<PixelMapping>& pixels = std::nullopt, const LargeHoleOptions& large = {});
 
 }  // namespace solo

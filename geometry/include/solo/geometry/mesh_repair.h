@@ -4,6 +4,8 @@
 //    valid polygon mesh (there coincident vertices are seams kept apart on purpose);
 //  - faces with a repeated corner, duplicate faces and unreferenced vertices removed (CGAL
 //    polygon-soup repair);
+//  - boundary vertices at exactly one position merged (a hole that passes twice through one
+//    place, the sides of a slit) when no face has two of them and no face is lost by it;
 //  - faces that would make an edge non-manifold left out (OpenMesh refuses them; their place
 //    becomes a hole that is filled);
 //  - degenerate faces (three distinct collinear corners, exact predicate) removed by flipping
@@ -21,6 +23,7 @@ struct SoupRepair {
   std::int64_t faces_with_repeated_corner_removed = 0;
   std::int64_t duplicate_faces_removed = 0;
   std::int64_t unreferenced_vertices_removed = 0;
+  std::int64_t coincident_boundary_vertices_merged = 0;
   std::int64_t non_manifold_faces_removed = 0;
   std::int64_t degenerate_faces_flipped = 0;
   std::int64_t degenerate_faces_removed = 0;

@@ -11,8 +11,13 @@
 //    occlusion does not), and whose sides are at least `min_step_m` apart (a window 6 cm proud
 //    of a side facade jumps by metres in depth at grazing angles but is a 6 cm step). Without
 //    the extrapolation a road seen at grazing angles would be cut wherever z / camera_height
-//    exceeds the factor. Where a side has no pixel behind it (frame, sky) only jumps over
-//    `edge_of_data_factor` times the criterion are cut.
+//    exceeds the factor. The step is measured from the lines through each side's point and the
+//    pixels one and two behind it (the latter only when those pixels sample one surface: a line
+//    across a jump runs along the viewing rays and passes near everything beside them) and from
+//    the planes of the 2x2 pixel blocks behind it (a tyre standing on the road is centimetres
+//    from the road's plane but metres from its line along the edge).
+//    Where a side has no pixel behind it (frame, sky) only jumps over `edge_of_data_factor`
+//    times the criterion are cut.
 //  - grazing: the face normal is more than `grazing_angle_deg` from the viewing ray;
 //  - uncertain: a vertex lies in the uncertain mask (depth refinement) and an edge jumps by
 //    more than `uncertain_jump_factor` pixel footprints (without the extrapolation and step
@@ -43,8 +48,18 @@ struct SpuriousFaceOptions {
   /// an edge is cut when its jump exceeds this many times depth_jump_factor footprints.
   double edge_of_data_factor = 4.0;
   /// Steps whose sides are closer than this (each point's distance from the other side's
-  /// surface line along the edge) are surface detail, not occlusions: metres.
+  /// surface lines and block planes) are surface detail, not occlusions: metres.
   double min_step_m = 0.10;
+  /// The step is also measured from the planes of the 2x2 pixel blocks behind each side (a
+  /// line along the edge misses a thin face standing on a surface seen at a grazing angle): a
+  /// block is a plane when its fourth point is within this many footprints of the plane of the
+  /// other three (exact depth: 0.1 measured best, docs/mesh.md); 0 = lines only.
+  double block_plane_tolerance_footprints = 0.1;
+  /// The line through a side's point and the pixel two back counts only when those pixels
+  /// sample one surface: within the footprint criterion, or inverse depth linear over three
+  /// pixels to this fraction of its first step (0 on a plane, 1 for a jump onto a flat
+  /// surface; 0.5 measured, docs/mesh.md).
+  double surface_line_linearity = 0.5;
   double grazing_angle_deg = 90.0;      ///< 90 = criterion off; MeshLab's 75 cuts every road beyond 6 m
   bool use_uncertain_mask = true;
   double uncertain_same_object_span_m = 3.0;
@@ -86,6 +101,12 @@ SpuriousFaceResult findSpuriousFaces(const DepthMesh& mesh, const cv::Mat& depth
 /// point at least that far from the other pixel's plane). A crease
 /// (a wall meeting the pavement) is not spurious; an occlusion is; a step thinner than the gap
 /// (a window 6 cm proud of its facade) is surface detail. Faces on one plane never are.
+/// Sub-pixel detail: an edge is not spurious either when the true points of its two pixels and
+/// of the next pixel beyond each end along the edge lie within min_gap_m / 2 of one straight
+/// line, sampled evenly (no step between them more than twice another). That is a surface
+/// the depth map samples smoothly while each pixel hits a different face smaller than a pixel
+/// (the 6 cm ends of a side facade's windows seen at grazing angles, 2.6 m apart): the per-pixel
+/// planes are parallel and metres apart, the face follows the facade within centimetres.
 std::vector<std::uint8_t> spuriousFacesFromGroundTruth(const DepthMesh& mesh, const cv::Mat& true_depth_m,
                                                        const cv::Mat& true_normals, double min_gap_m = 0.10);
 
