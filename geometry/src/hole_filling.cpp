@@ -4,6 +4,8 @@
 
 #include "solo/geometry/report.h"
 
+#include "polygon_cdt.h"
+
 #include <CGAL/Box_intersection_d/Box_with_info_d.h>
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -39,11 +41,9 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 
 // Image-space hole filling: vertex info = index into the patch's points (boundary first), face
 // info = how many constraints separate the face from the infinite face (1: inside the polygon).
-using Point2 = Kernel::Point_2;
-using CdtVertexBase = CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>;
-using CdtFaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel, CGAL::Triangulation_face_base_with_info_2<int, Kernel>>;
-using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, CGAL::Triangulation_data_structure_2<CdtVertexBase, CdtFaceBase>,
-                                                       CGAL::No_constraint_intersection_tag>;
+using polygon_cdt::Cdt;
+using polygon_cdt::markNesting;
+using polygon_cdt::Point2;
 
 struct DeadlineExceeded {};
 
@@ -183,26 +183,6 @@ bool facesIntersect(const std::vector<Point>& points, const std::array<int, 3>& 
   return CGAL::coplanar(p, q, ra, rb) && CGAL::coplanar_orientation(p, q, ra, rb) == CGAL::POSITIVE;
 }
 
-
-/// Face info = constraints crossed from the infinite face (flood fill, one level at a time).
-void markNesting(Cdt& cdt) {
-  for (const auto f : cdt.all_face_handles()) f->info() = -1;
-  std::vector<Cdt::Face_handle> current{cdt.infinite_face()}, next;
-  for (int level = 0; !current.empty(); ++level) {
-    while (!current.empty()) {
-      const Cdt::Face_handle f = current.back();
-      current.pop_back();
-      if (f->info() != -1) continue;
-      f->info() = level;
-      for (int i = 0; i < 3; ++i) {
-        const Cdt::Face_handle g = f->neighbor(i);
-        if (g->info() != -1) continue;
-        (cdt.is_constrained(Cdt::Edge(f, i)) ? next : current).push_back(g);
-      }
-    }
-    std::swap(current, next);
-  }
-}
 
 /// Pixel centres inside the polygon and about 2 pixels or more from its edges (a band of width
 /// 2 along the edges is cleared), every `step`-th in both axes (step grows until at most

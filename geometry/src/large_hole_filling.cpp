@@ -5,6 +5,8 @@
 
 #include "solo/geometry/report.h"
 
+#include "polygon_cdt.h"
+
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_2_algorithms.h>
@@ -26,37 +28,14 @@
 namespace solo {
 namespace {
 
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point2 = Kernel::Point_2;
+using polygon_cdt::Cdt;
+using polygon_cdt::Kernel;
+using polygon_cdt::markNesting;
+using polygon_cdt::Point2;
 using Point3 = Kernel::Point_3;
-// Vertex info: index into the piece's points (boundary first); face info: constraints crossed
-// from the infinite face (odd: inside the polygon).
-using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>;
-using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel, CGAL::Triangulation_face_base_with_info_2<int, Kernel>>;
-using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>,
-                                                       CGAL::No_constraint_intersection_tag>;
 using Face = std::array<int, 3>;
 
 struct TimeExceeded {};
-
-void markNesting(Cdt& cdt) {
-  for (const auto f : cdt.all_face_handles()) f->info() = -1;
-  std::vector<Cdt::Face_handle> current{cdt.infinite_face()}, next;
-  for (int level = 0; !current.empty(); ++level) {
-    while (!current.empty()) {
-      const Cdt::Face_handle f = current.back();
-      current.pop_back();
-      if (f->info() != -1) continue;
-      f->info() = level;
-      for (int i = 0; i < 3; ++i) {
-        const Cdt::Face_handle g = f->neighbor(i);
-        if (g->info() != -1) continue;
-        (cdt.is_constrained(Cdt::Edge(f, i)) ? next : current).push_back(g);
-      }
-    }
-    std::swap(current, next);
-  }
-}
 
 double segmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   const Eigen::Vector2d ab = b - a;

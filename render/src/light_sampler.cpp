@@ -70,30 +70,45 @@ class HierarchySampler final : public LightSampler {
     leaf_of_triangle_.assign(triangles.size(), -1);
     nodes_.reserve(2 * triangles.size());
     build(triangles, order, 0, static_cast<int>(order.size()), -1);
+    children_.resize(nodes_.size());
+    const auto code = [this](int child) {
+      const int triangle = nodes_[static_cast<std::size_t>(child)].triangle;
+      return triangle >= 0 ? -triangle - 1 : child;
+    };
+    for (std::size_t i = 0; i < nodes_.size(); ++i) {
+      const Node& node = nodes_[i];
+      if (node.triangle >= 0) continue;
+      children_[i] = {sphereOf(nodes_[static_cast<std::size_t>(node.left)]), sphereOf(nodes_[static_cast<std::size_t>(node.right)]),
+                      code(node.left), code(node.right)};
+    }
   }
 
   int pick(const Eigen::Vector3f& p, const Eigen::Vector3f& n, float u, float* pmf) const override {
     if (nodes_.empty()) return -1;
     float probability = 1.f;
-    int node = 0;
-    while (nodes_[static_cast<std::size_t>(node)].triangle < 0) {
-      const Node& current = nodes_[static_cast<std::size_t>(node)];
-      const float a = importance(nodes_[static_cast<std::size_t>(current.left)], p, n);
-      const float b = importance(nodes_[static_cast<std::size_t>(current.right)], p, n);
+    if (nodes_[0].triangle >= 0) {
+      *pmf = 1.f;
+      return nodes_[0].triangle;
+    }
+    int code = 0;  // an interior node's index, or -(triangle + 1) once a leaf is reached
+    do {
+      const Children& c = children_[static_cast<std::size_t>(code)];
+      const float a = importance(c.left_sphere, p, n);
+      const float b = importance(c.right_sphere, p, n);
       if (!(a + b > 0.f)) return -1;
       const float pa = a / (a + b);
       if (u < pa) {
         u = std::min(u / pa, 0.99999994f);
         probability *= pa;
-        node = current.left;
+        code = c.left;
       } else {
         u = std::min((u - pa) / (1.f - pa), 0.99999994f);
         probability *= 1.f - pa;
-        node = current.right;
+        code = c.right;
       }
-    }
+    } while (code >= 0);
     *pmf = probability;
-    return nodes_[static_cast<std::size_t>(node)].triangle;
+    return -code - 1;
   }
 
   float pmf(const Eigen::Vector3f& p, const Eigen::Vector3f& n, int triangle) const override {
@@ -102,8 +117,9 @@ class HierarchySampler final : public LightSampler {
     while (nodes_[static_cast<std::size_t>(node)].parent >= 0) {
       const int parent = nodes_[static_cast<std::size_t>(node)].parent;
       const Node& up = nodes_[static_cast<std::size_t>(parent)];
-      const float a = importance(nodes_[static_cast<std::size_t>(up.left)], p, n);
-      const float b = importance(nodes_[static_cast<std::size_t>(up.right)], p, n);
+      const Children& c = children_[static_cast<std::size_t>(parent)];
+      const float a = importance(c.left_sphere, p, n);
+      const float b = importance(c.right_sphere, p, n);
       if (!(a + b > 0.f)) return 0.f;
       probability *= (node == up.left ? a : b) / (a + b);
       node = parent;
@@ -118,14 +134,31 @@ class HierarchySampler final : public LightSampler {
     int left = -1, right = -1, parent = -1;
     int triangle = -1;  // leaf: the triangle index
   };
+  // What importance() reads of a node, computed once: the bounding sphere of its box (the
+  // traversal evaluates two per level; this saves a square root and memory traffic each).
+  struct Sphere {
+    Eigen::Vector3f centre;
+    float radius, radius2, power;
+  };
 
-  static float importance(const Node& node, const Eigen::Vector3f& p, const Eigen::Vector3f& n) {
-    const Eigen::Vector3f centre = node.bounds.center();
+  // Per interior node, what a traversal step reads, in one cache line: both children's spheres
+  // and where to go next (a child's index, or -(triangle + 1) for a leaf).
+  struct alignas(64) Children {
+    Sphere left_sphere, right_sphere;
+    int left, right;
+  };
+
+  static Sphere sphereOf(const Node& node) {
     const float radius = 0.5f * node.bounds.diagonal().norm();
-    const Eigen::Vector3f to_centre = centre - p;
+    return {node.bounds.center(), radius, radius * radius, node.power};
+  }
+
+  static float importance(const Sphere& node, const Eigen::Vector3f& p, const Eigen::Vector3f& n) {
+    const float radius = node.radius;
+    const Eigen::Vector3f to_centre = node.centre - p;
     const float distance2 = to_centre.squaredNorm();
     float cosine_bound = 1.f;
-    if (distance2 > radius * radius) {
+    if (distance2 > node.radius2) {
       // cos(max(0, theta - theta_box)) without trigonometric calls: theta is the angle between
       // n and the direction to the centre, theta_box the box's angular radius.
       const float inv_distance = 1.f / std::sqrt(distance2);
@@ -137,7 +170,7 @@ class HierarchySampler final : public LightSampler {
         cosine_bound = std::max(0.f, cos_theta * cos_box + sin_theta * sin_box);
       }
     }
-    return node.power * cosine_bound / std::max(distance2, std::max(radius * radius, 1e-8f));
+    return node.power * cosine_bound / std::max(distance2, std::max(node.radius2, 1e-8f));
   }
 
   int build(const std::vector<EmissiveTriangle>& tris, std::vector<int>& order, int begin, int end, int parent) {
@@ -177,6 +210,7 @@ class HierarchySampler final : public LightSampler {
   }
 
   std::vector<Node> nodes_;
+  std::vector<Children> children_;  // per node (unused for leaves), see Children
   std::vector<int> leaf_of_triangle_;
 };
 

@@ -7,11 +7,14 @@
 #include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
 
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <mutex>
+#include <stdexcept>
+#include <string>
 #include <unistd.h>
 
 namespace solo {
@@ -88,6 +91,7 @@ struct Context {
   std::vector<Eigen::Vector3f> face_normals;  // unit geometric normals
   SunDisc sun;
   bool sky_on;  // a non-black sky: next-event estimation toward it
+  std::vector<float> rectangle_area, rectangle_cos_half_spread;  // per rectangle light, computed once
 };
 
 struct FirstHit {
@@ -178,19 +182,24 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       const float cos_surface = n.dot(wi);
       const float cos_light = std::abs(t.normal.dot(wi));
       if (cos_surface > 0.f && cos_light > 1e-6f && distance > 0.f) {
-        ++rays;
-        if (!c.caster.occluded(shadow_origin, wi, 0.f, distance * (1.f - 1e-4f))) {
-          const Emitter& e = c.scene.emitters[static_cast<std::size_t>(c.scene.face_emitter[t.face])];
-          const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, cos_light);
-          const float light_pdf = pick_pmf / t.area * distance2 / cos_light;
-          const float weight = powerHeuristic(light_pdf, bsdf.pdf(wi));
-          radiance += throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(emitted) * (cos_surface * weight / light_pdf);
+        // The unoccluded contribution first: a shadow ray is cast only where it is not zero
+        // (a black surface, an emitter seen at grazing through its profile).
+        const Emitter& e = c.scene.emitters[static_cast<std::size_t>(c.scene.face_emitter[t.face])];
+        const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, cos_light);
+        const float light_pdf = pick_pmf / t.area * distance2 / cos_light;
+        const float weight = powerHeuristic(light_pdf, bsdf.pdf(wi));
+        const Eigen::Vector3f contribution =
+            throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(emitted) * (cos_surface * weight / light_pdf);
+        if (contribution.maxCoeff() > 0.f || !contribution.allFinite()) {
+          ++rays;
+          if (!c.caster.occluded(shadow_origin, wi, 0.f, distance * (1.f - 1e-4f))) radiance += contribution;
         }
       }
     }
     // Rectangle lights (headlights) are not geometry: light sampling only, weight 1.
-    for (const RectangleLight& light : c.scene.rectangle_lights) {
-      const float area = light.edge_u.cross(light.edge_v).norm();
+    for (std::size_t l = 0; l < c.scene.rectangle_lights.size(); ++l) {
+      const RectangleLight& light = c.scene.rectangle_lights[l];
+      const float area = c.rectangle_area[l];
       const auto [lu, lv] = rng.get2D();
       const Eigen::Vector3f q = light.centre + light.edge_u * (lu - 0.5f) + light.edge_v * (lv - 0.5f);
       Eigen::Vector3f wi = q - shadow_origin;
@@ -200,11 +209,13 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       wi /= distance;
       const float cos_surface = n.dot(wi);
       const float cos_light = light.normal.dot(-wi);
-      if (cos_surface <= 0.f || cos_light <= std::cos(0.5f * light.spread_rad)) continue;
+      if (cos_surface <= 0.f || cos_light <= c.rectangle_cos_half_spread[l]) continue;
+      const float pdf = distance2 / (cos_light * area);
+      const Eigen::Vector3f contribution = throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(light.radiance) * (cos_surface / pdf);
+      if (!(contribution.maxCoeff() > 0.f) && contribution.allFinite()) continue;  // nothing a shadow ray could add
       ++rays;
       if (c.caster.occluded(shadow_origin, wi, 0.f, distance * (1.f - 1e-4f))) continue;
-      const float pdf = distance2 / (cos_light * area);
-      radiance += throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(light.radiance) * (cos_surface / pdf);
+      radiance += contribution;
     }
     // Sky: a cosine-weighted direction, MIS-weighted against BSDF sampling.
     constexpr float kInfinity = std::numeric_limits<float>::infinity();
@@ -311,7 +322,11 @@ RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions&
   if (!scene.face_roughness.empty()) ggxAverageAlbedo(0.5f);  // builds the albedo table before the tiles start
   const bool sky_on = scene.sky_radiance.maxCoeff() > 0.f ||
                       (scene.sky_zenith_radiance && scene.sky_zenith_radiance->maxCoeff() > 0.f);
-  Context context{scene, options, caster, emissive, face_to_emissive, *sampler, {}, SunDisc(scene.sun), sky_on};
+  Context context{scene, options, caster, emissive, face_to_emissive, *sampler, {}, SunDisc(scene.sun), sky_on, {}, {}};
+  for (const RectangleLight& light : scene.rectangle_lights) {
+    context.rectangle_area.push_back(light.edge_u.cross(light.edge_v).norm());
+    context.rectangle_cos_half_spread.push_back(std::cos(0.5f * light.spread_rad));
+  }
   context.face_normals.reserve(scene.faces.size());
   for (const auto& f : scene.faces) {
     const Eigen::Vector3f cross = (scene.vertices[f[1]] - scene.vertices[f[0]]).cross(scene.vertices[f[2]] - scene.vertices[f[0]]);
@@ -332,54 +347,127 @@ RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions&
   const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
   ProgressBar progress(options.progress, tiles_x * tiles_y);
   std::atomic<std::int64_t> total_rays{0}, total_samples{0}, dropped{0};
-  const int min_samples = std::max(2, options.min_samples);
+  const bool adaptive = std::max(2, options.min_samples) < options.max_samples;
+  // Replicates (sampler.h) only where stopping decisions are made: a fixed sample count keeps
+  // the single, best stratified point set.
+  const int replicates = options.sampler == SamplerKind::Sobol && adaptive ? options.error_replicates : 1;
+  if (replicates != 1 && replicates != 2 && replicates != 4 && replicates != 8)
+    throw std::invalid_argument("renderPathTraced: error_replicates must be 1, 2, 4 or 8, got " +
+                                std::to_string(options.error_replicates));
+  // Checks fall on multiples of the replicate count, where every replicate has as many samples.
+  const int min_samples = (std::max(2, options.min_samples) + replicates - 1) / replicates * replicates;
   const int max_samples = std::max(min_samples, options.max_samples);
+
+  const bool pooled = replicates > 1 && options.pool_error_gain;
+
+  // A pixel's running state; a tile's pixels advance in rounds of 8 samples so that the pooled
+  // error estimate (below) can use the whole tile before each round's stopping decisions.
+  struct PixelState {
+    int x, y;
+    Sampler rng;
+    FirstHit first;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double mean_y = 0, m2_y = 0;  // running mean and squared deviations of Y (Welford)
+    std::array<double, kMaxReplicates> replicate_sum{};
+    std::array<int, kMaxReplicates> replicate_count{};
+    int n = 0, taken = 0;  // finite samples, samples taken
+    bool done = false;
+    // Variance of the mean as if the samples were independent: sample variance / n.
+    double independentVariance() const { return n > 1 ? m2_y / (n - 1) / n : 0.0; }
+    // Variance of the mean from the spread of the replicate means (unbiased for any sampler).
+    double replicateVariance(int replicates) const {
+      double means[kMaxReplicates], grand = 0;
+      for (int r = 0; r < replicates; ++r) {
+        if (replicate_count[static_cast<std::size_t>(r)] == 0) return std::numeric_limits<double>::infinity();
+        means[r] = replicate_sum[static_cast<std::size_t>(r)] / replicate_count[static_cast<std::size_t>(r)];
+        grand += means[r] / replicates;
+      }
+      double squares = 0;
+      for (int r = 0; r < replicates; ++r) squares += (means[r] - grand) * (means[r] - grand);
+      return squares / (replicates * (replicates - 1));
+    }
+  };
 
   tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
     std::int64_t rays = 0, samples_taken = 0, nonfinite = 0;
     const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
+    std::vector<PixelState> pixels;
+    pixels.reserve(kTile * kTile);
     for (int y = y0; y < std::min(y0 + kTile, height); ++y)
-      for (int x = x0; x < std::min(x0 + kTile, width); ++x) {
-        Sampler rng(options.sampler, options.seed, static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(width) + static_cast<std::uint64_t>(x));
-        FirstHit first;
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        double mean_y = 0, m2_y = 0;
-        int n = 0, taken = 0;
-        const float absolute = options.absolute_error.empty() ? 0.f : options.absolute_error.at<float>(y, x);
-        double standard_error = 0;
-        while (taken < max_samples) {
-          rng.startSample(static_cast<std::uint32_t>(taken));
-          const auto [jx, jy] = rng.get2D();
-          const Eigen::Vector3f value = tracePath(context, static_cast<float>(x) + jx - 0.5f, static_cast<float>(y) + jy - 0.5f, rng,
-                                                  taken == 0 ? &first : nullptr, rays);
-          ++taken;
-          if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
-            ++nonfinite;  // never reaches the image
-            continue;
-          }
-          ++n;
-          sum += value.cast<double>();
-          const double delta = luminance(value) - mean_y;
-          mean_y += delta / n;
-          m2_y += delta * (luminance(value) - mean_y);
-          if (n >= min_samples && (n - min_samples) % 8 == 0) {
-            standard_error = std::sqrt(m2_y / (n - 1) / n);
-            double target = std::max(options.relative_error * std::abs(mean_y), static_cast<double>(absolute));
-            if (options.noise_sigma) target = std::max(target, options.noise_factor * options.noise_sigma(mean_y));
-            if (standard_error <= target) break;
-          }
-        }
-        if (n > 1) standard_error = std::sqrt(m2_y / (n - 1) / n);
-        samples_taken += taken;
-        const Eigen::Vector3d mean = n > 0 ? Eigen::Vector3d(sum / n) : Eigen::Vector3d::Zero();
-        out.radiance.at<cv::Vec3f>(y, x) = {static_cast<float>(mean.x()), static_cast<float>(mean.y()), static_cast<float>(mean.z())};
-        out.albedo.at<cv::Vec3f>(y, x) = {first.albedo.x(), first.albedo.y(), first.albedo.z()};
-        out.normal.at<cv::Vec3f>(y, x) = {first.normal.x(), first.normal.y(), first.normal.z()};
-        out.depth_m.at<float>(y, x) = first.depth;
-        out.light_id.at<int>(y, x) = first.light_id;
-        out.samples.at<int>(y, x) = taken;
-        out.std_error.at<float>(y, x) = static_cast<float>(standard_error);
+      for (int x = x0; x < std::min(x0 + kTile, width); ++x)
+        pixels.push_back({x, y,
+                          Sampler(options.sampler, options.seed,
+                                  static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(width) + static_cast<std::uint64_t>(x), replicates),
+                          {}});
+    const auto takeSample = [&](PixelState& p) {
+      p.rng.startSample(static_cast<std::uint32_t>(p.taken));
+      const auto [jx, jy] = p.rng.get2D();
+      const Eigen::Vector3f value = tracePath(context, static_cast<float>(p.x) + jx - 0.5f, static_cast<float>(p.y) + jy - 0.5f, p.rng,
+                                              p.taken == 0 ? &p.first : nullptr, rays);
+      const int replicate = p.taken % replicates;
+      ++p.taken;
+      if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
+        ++nonfinite;  // never reaches the image
+        return;
       }
+      ++p.n;
+      p.sum += value.cast<double>();
+      const double delta = luminance(value) - p.mean_y;
+      p.mean_y += delta / p.n;
+      p.m2_y += delta * (luminance(value) - p.mean_y);
+      p.replicate_sum[static_cast<std::size_t>(replicate)] += luminance(value);
+      ++p.replicate_count[static_cast<std::size_t>(replicate)];
+    };
+    // The tile's stratification gain: summed replicate variances over summed independent-sample
+    // variances. Its numerator and denominator pool every pixel of the tile, so it is steady
+    // where one pixel's replicate spread (R - 1 degrees of freedom) is not; pixels with larger
+    // variance weigh more, so it leans toward the gain of the tile's noisiest pixels.
+    const auto tileGain = [&]() {
+      double replicate = 0, independent = 0;
+      for (const PixelState& p : pixels) {
+        const double v = p.replicateVariance(replicates);
+        if (!std::isfinite(v)) continue;
+        replicate += v;
+        independent += p.independentVariance();
+      }
+      return independent > 0 ? replicate / independent : 1.0;
+    };
+    const auto variance = [&](const PixelState& p, double gain) {
+      if (replicates == 1) return p.independentVariance();
+      return pooled ? gain * p.independentVariance() : p.replicateVariance(replicates);
+    };
+    for (PixelState& p : pixels)
+      while (p.taken < min_samples) takeSample(p);
+    double gain = 1.0;
+    for (;;) {
+      if (pooled) gain = tileGain();
+      bool active = false;
+      for (PixelState& p : pixels) {
+        if (p.done) continue;
+        const float absolute = options.absolute_error.empty() ? 0.f : options.absolute_error.at<float>(p.y, p.x);
+        double target = std::max(options.relative_error * std::abs(p.mean_y), static_cast<double>(absolute));
+        if (options.noise_sigma) target = std::max(target, options.noise_factor * options.noise_sigma(p.mean_y));
+        if (p.taken >= max_samples || std::sqrt(variance(p, gain)) <= target) p.done = true;
+        else active = true;
+      }
+      if (!active) break;
+      for (PixelState& p : pixels)
+        for (int k = 0; k < 8 && !p.done && p.taken < max_samples; ++k) takeSample(p);
+    }
+    for (const PixelState& p : pixels) {
+      double standard_error = std::sqrt(variance(p, gain));
+      if (!std::isfinite(standard_error)) standard_error = std::sqrt(p.independentVariance());
+      samples_taken += p.taken;
+      const Eigen::Vector3d mean = p.n > 0 ? Eigen::Vector3d(p.sum / p.n) : Eigen::Vector3d::Zero();
+      const int x = p.x, y = p.y;
+      out.radiance.at<cv::Vec3f>(y, x) = {static_cast<float>(mean.x()), static_cast<float>(mean.y()), static_cast<float>(mean.z())};
+      out.albedo.at<cv::Vec3f>(y, x) = {p.first.albedo.x(), p.first.albedo.y(), p.first.albedo.z()};
+      out.normal.at<cv::Vec3f>(y, x) = {p.first.normal.x(), p.first.normal.y(), p.first.normal.z()};
+      out.depth_m.at<float>(y, x) = p.first.depth;
+      out.light_id.at<int>(y, x) = p.first.light_id;
+      out.samples.at<int>(y, x) = p.taken;
+      out.std_error.at<float>(y, x) = static_cast<float>(standard_error);
+    }
     total_rays += rays;
     total_samples += samples_taken;
     dropped += nonfinite;

@@ -97,23 +97,34 @@ Pcg32::Pcg32(std::uint64_t seed, std::uint64_t stream) : increment_((stream << 1
   next();
 }
 
-Sampler::Sampler(SamplerKind kind, std::uint64_t seed, std::uint64_t pixel) : kind_(kind), rng_(seed, pixel) {
+Sampler::Sampler(SamplerKind kind, std::uint64_t seed, std::uint64_t pixel, int replicates)
+    : kind_(kind), replicates_(static_cast<std::uint32_t>(replicates)), rng_(seed, pixel) {
+  if (replicates < 1 || replicates > kMaxReplicates)
+    throw std::invalid_argument("Sampler: replicates must be in [1, " + std::to_string(kMaxReplicates) + "], got " +
+                                std::to_string(replicates));
   if (kind_ != SamplerKind::Sobol) return;
   const std::uint32_t pixel_hash = hash32(static_cast<std::uint32_t>(pixel) ^
                                           hash32(static_cast<std::uint32_t>(pixel >> 32) ^
                                                  hash32(static_cast<std::uint32_t>(seed) ^ hash32(static_cast<std::uint32_t>(seed >> 32)))));
-  // Per dimension: the index shuffle's seed and one scrambling seed per coordinate.
-  for (std::size_t i = 0; i < scramble_.size(); ++i) scramble_[i] = hash32(pixel_hash + 0x632be5abU * static_cast<std::uint32_t>(i + 1));
+  // Per replicate and dimension: the index shuffle's seed and one scrambling seed per
+  // coordinate. Replicate 0's seeds do not depend on the replicate count.
+  const std::size_t used = static_cast<std::size_t>(3 * kLowDiscrepancyDimensions) * replicates_;
+  for (std::size_t i = 0; i < used; ++i) scramble_[i] = hash32(pixel_hash + 0x632be5abU * static_cast<std::uint32_t>(i + 1));
 }
 
 void Sampler::startSample(std::uint32_t index) {
-  index_reversed_ = reverseBits(index);
+  if (replicates_ == 1) {
+    index_reversed_ = reverseBits(index);
+  } else {
+    index_reversed_ = reverseBits(index / replicates_);
+    seed_offset_ = static_cast<std::uint32_t>(3 * kLowDiscrepancyDimensions) * (index % replicates_);
+  }
   dimension_ = 0;
 }
 
 float Sampler::get1D() {
   if (kind_ == SamplerKind::Independent || dimension_ >= kLowDiscrepancyDimensions) return rng_.uniform();
-  const std::uint32_t* seed = &scramble_[static_cast<std::size_t>(3 * dimension_)];
+  const std::uint32_t* seed = &scramble_[seed_offset_ + static_cast<std::uint32_t>(3 * dimension_)];
   ++dimension_;
   // Shuffling the index (an Owen scramble of its reversed bits keeps every aligned block of
   // 2^k indices together) decorrelates this dimension from the others sharing the index; the
@@ -127,7 +138,7 @@ std::pair<float, float> Sampler::get2D() {
     const float u = rng_.uniform();
     return {u, rng_.uniform()};
   }
-  const std::uint32_t* seed = &scramble_[static_cast<std::size_t>(3 * dimension_)];
+  const std::uint32_t* seed = &scramble_[seed_offset_ + static_cast<std::uint32_t>(3 * dimension_)];
   ++dimension_;
   const std::uint32_t shuffled = reverseBits(laineKarras(index_reversed_, seed[0]));
   const std::uint64_t both = (static_cast<std::uint64_t>(laineKarras(shuffled, seed[1])) << 32) |

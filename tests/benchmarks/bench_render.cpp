@@ -11,9 +11,12 @@
 #include <solo/render/ray_caster.h>
 #include <solo/render/street_scene.h>
 
+#include <tbb/global_control.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <random>
@@ -22,6 +25,34 @@ namespace {
 
 solo::RenderScene nightStreet(int width, int height) {
   return solo::bench::nightStreet({width, height});
+}
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// Raw Embree: camera rays then one random bounce per hit, single rays as the tracer casts
+// them, on the calling thread. Closest-hit rays only (the tracer's shadow rays are cheaper).
+double rawEmbreeRaysPerSecond(const solo::RenderScene& scene, const solo::RayCaster& caster) {
+  std::mt19937 rng(1);
+  std::normal_distribution<float> g(0, 1);
+  solo::Stopwatch clock;
+  std::int64_t rays = 0;
+  for (int pass = 0; pass < 4; ++pass)
+    for (int y = 0; y < scene.camera.height; ++y)
+      for (int x = 0; x < scene.camera.width; ++x) {
+        const Eigen::Vector3f d = Eigen::Vector3f(static_cast<float>((x - scene.camera.cx) / scene.camera.fx),
+                                                  static_cast<float>((y - scene.camera.cy) / scene.camera.fy), 1.f)
+                                      .normalized();
+        const solo::RayHit hit = caster.intersect(Eigen::Vector3f::Zero(), d);
+        ++rays;
+        if (!hit.hit) continue;
+        const Eigen::Vector3f p = d * hit.distance * 0.999f;
+        caster.intersect(p, Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
+        ++rays;
+      }
+  return static_cast<double>(rays) / clock.seconds();
 }
 
 double relativeRmse(const cv::Mat& image, const cv::Mat& reference, const cv::Mat& light_id) {
@@ -42,37 +73,47 @@ int main(int argc, char** argv) {
   int width = 480, height = 270, reference_spp = 1024;
   if (argc > 1) std::sscanf(argv[1], "%dx%d", &width, &height);
   if (argc > 2) reference_spp = std::atoi(argv[2]);
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // lines appear as they are measured
   const solo::RenderScene scene = nightStreet(width, height);
   std::printf("night street %dx%d: %zu triangles, %zu lights, 2 headlights\n", width, height, scene.faces.size(),
               scene.emitters.size());
 
-  // Raw Embree: camera rays then one random bounce per hit, single rays as the tracer casts them.
+  // Efficiency: raw Embree against the tracer's rays per second on one thread each (so "per
+  // thread" means the same thing for both, whatever the cores are), alternated five times so
+  // that machine load hits all alike; medians, with the load average before and after.
   {
     std::vector<float> vertices;
     for (const auto& v : scene.vertices) vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
     std::vector<std::uint32_t> indices;
     for (const auto& f : scene.faces) indices.insert(indices.end(), f.begin(), f.end());
     const solo::RayCaster caster(std::move(vertices), std::move(indices));
-    std::mt19937 rng(1);
-    std::normal_distribution<float> g(0, 1);
-    solo::Stopwatch clock;
-    std::int64_t rays = 0;
-    for (int pass = 0; pass < 4; ++pass)
-      for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
-          const Eigen::Vector3f d = Eigen::Vector3f(static_cast<float>((x - scene.camera.cx) / scene.camera.fx),
-                                                    static_cast<float>((y - scene.camera.cy) / scene.camera.fy), 1.f)
-                                        .normalized();
-          const solo::RayHit hit = caster.intersect(Eigen::Vector3f::Zero(), d);
-          ++rays;
-          if (!hit.hit) continue;
-          const Eigen::Vector3f p = d * hit.distance * 0.999f;
-          caster.intersect(p, Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
-          ++rays;
-        }
-    const double seconds = clock.seconds();
-    std::printf("raw Embree, 1 thread: %.2f Mrays/s (%lld rays in %.2f s)\n", rays / seconds / 1e6,
-                static_cast<long long>(rays), seconds);
+    double load_before[3] = {0, 0, 0}, load_after[3] = {0, 0, 0};
+    getloadavg(load_before, 3);
+    std::vector<double> raw, power, hierarchy, power_samples, hierarchy_samples;
+    for (int repeat = 0; repeat < 5; ++repeat) {
+      raw.push_back(rawEmbreeRaysPerSecond(scene, caster));
+      tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+      for (auto kind : {solo::LightSamplerKind::Power, solo::LightSamplerKind::Hierarchy}) {
+        solo::PathTracerOptions t;
+        t.progress = false;
+        t.min_samples = t.max_samples = 4;
+        t.seed = 11;
+        t.light_sampler = kind;
+        const solo::RenderOutput out = solo::renderPathTraced(scene, t);
+        const double rate = std::get<double>(*out.report.find("rays_per_second"));
+        const double samples = 4.0 * width * height / out.report.seconds;
+        (kind == solo::LightSamplerKind::Power ? power : hierarchy).push_back(rate);
+        (kind == solo::LightSamplerKind::Power ? power_samples : hierarchy_samples).push_back(samples);
+      }
+    }
+    getloadavg(load_after, 3);
+    const double raw_median = median(raw);
+    std::printf("efficiency, 1 thread, 4 spp, median of 5 (load average %.1f before, %.1f after): raw Embree %.3f Mrays/s; "
+                "tracer power %.3f Mrays/s (%.1f %% of raw, %.3f M samples/s), hierarchy %.3f Mrays/s (%.1f %%, %.3f M "
+                "samples/s)\n",
+                load_before[0], load_after[0], raw_median / 1e6, median(power) / 1e6, 100 * median(power) / raw_median,
+                median(power_samples) / 1e6, median(hierarchy) / 1e6, 100 * median(hierarchy) / raw_median,
+                median(hierarchy_samples) / 1e6);
   }
 
   solo::PathTracerOptions o;
@@ -99,13 +140,38 @@ int main(int argc, char** argv) {
         rate[k].push_back(std::get<double>(*out.report.find("rays_per_second")) / 1e6);
         error[k].push_back(relativeRmse(out.radiance, reference.radiance, reference.light_id));
       }
-    const auto median = [](std::vector<double> v) {
-      std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-      return v[v.size() / 2];
-    };
     std::printf("sampler cost, 16 spp, median of 5: sobol %.3f Mrays/s (relative RMSE %.4f), independent %.3f Mrays/s "
                 "(%.4f): sobol/independent rays/s %.3f\n",
                 median(rate[0]), error[0][0], median(rate[1]), error[1][0], median(rate[0]) / median(rate[1]));
+  }
+
+  // Adaptive stopping (relative error 5 %, 16 to 256 samples) with the Sobol sampler: the
+  // error estimate from 1 replicate (sample variance / n, which assumes independent samples),
+  // 2 replicates per pixel, 2 or 4 with the tile-pooled gain; the independent sampler.
+  {
+    struct Row {
+      solo::SamplerKind sampler;
+      int replicates;
+      bool pooled;
+    };
+    for (const Row& row : {Row{solo::SamplerKind::Sobol, 1, true}, Row{solo::SamplerKind::Sobol, 2, false},
+                           Row{solo::SamplerKind::Sobol, 2, true}, Row{solo::SamplerKind::Sobol, 4, true},
+                           Row{solo::SamplerKind::Independent, 1, true}}) {
+      solo::PathTracerOptions a = o;
+      a.min_samples = 16;
+      a.max_samples = 256;
+      a.relative_error = 0.05;
+      a.seed = 7;
+      a.sampler = row.sampler;
+      a.error_replicates = row.replicates;
+      a.pool_error_gain = row.pooled;
+      const solo::RenderOutput out = solo::renderPathTraced(scene, a);
+      std::printf("adaptive 5 %%, %s, %d replicate(s)%s: %.1f spp mean, %.2f s, relative RMSE %.4f\n",
+                  solo::samplerKindName(row.sampler), row.replicates,
+                  row.replicates == 1 ? "" : row.pooled ? ", tile-pooled gain" : ", per pixel",
+                  std::get<double>(*out.report.find("samples_per_pixel_mean")), out.report.seconds,
+                  relativeRmse(out.radiance, reference.radiance, reference.light_id));
+    }
   }
 
   std::FILE* csv = argc > 3 ? std::fopen(argv[3], "w") : nullptr;

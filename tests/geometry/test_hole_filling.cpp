@@ -18,11 +18,7 @@ namespace {
 
 using solo::TriangleMesh;
 
-std::int64_t metricInt(const solo::StageReport& report, const std::string& name) {
-  const solo::MetricValue* v = report.find(name);
-  if (!v) ADD_FAILURE() << "no metric " << name;
-  return v ? std::get<std::int64_t>(*v) : -1;
-}
+using solo::test::metricInt;
 
 /// Unit cube, 12 outward triangles.
 TriangleMesh cube() {

@@ -21,11 +21,7 @@ namespace {
 
 using solo::TriangleMesh;
 
-std::int64_t metricInt(const solo::StageReport& report, const std::string& name) {
-  const solo::MetricValue* v = report.find(name);
-  if (!v) ADD_FAILURE() << "no metric " << name;
-  return v ? std::get<std::int64_t>(*v) : -1;
-}
+using solo::test::metricInt;
 
 /// Torus (major radius 1, tube radius `r`), `nu` x `nv` quads, each split in two, with the faces
 /// whose centre (u, v) (u around the axis, v around the tube, v = 0 outside) lies in the wavy

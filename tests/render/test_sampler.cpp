@@ -189,3 +189,38 @@ TEST(Sampler, NamesParseAndUnknownNamesAreRefused) {
   EXPECT_STREQ(solo::samplerKindName(solo::SamplerKind::Sobol), "sobol");
   EXPECT_THROW(solo::parseSamplerKind("halton"), std::invalid_argument);
 }
+
+TEST(Sampler, ReplicatesAreIndependentlyScrambledCopiesOfTheNets) {
+  // With R replicates, sample i is point i / R of copy i % R: copy 0 is the single-copy
+  // sequence itself, every copy's power-of-two prefixes are (0,k,2)-nets, and the copies are
+  // differently scrambled (they share no point).
+  constexpr int kReplicates = 4, kPoints = 256;
+  solo::Sampler single(solo::SamplerKind::Sobol, 5, 77);
+  solo::Sampler replicated(solo::SamplerKind::Sobol, 5, 77, kReplicates);
+  std::vector<std::vector<std::pair<float, float>>> copies(kReplicates);
+  for (int i = 0; i < kReplicates * kPoints; ++i) {
+    replicated.startSample(static_cast<std::uint32_t>(i));
+    replicated.get2D();  // dimension 0, then a later one
+    copies[static_cast<std::size_t>(i % kReplicates)].push_back(replicated.get2D());
+  }
+  for (int i = 0; i < kPoints; ++i) {
+    single.startSample(static_cast<std::uint32_t>(i));
+    single.get2D();
+    ASSERT_EQ(single.get2D(), copies[0][static_cast<std::size_t>(i)]) << i;
+  }
+  for (const auto& points : copies)
+    for (int k = 0; k <= 8; ++k)
+      for (int a = 0; a <= k; ++a) {
+        const int nx = 1 << a, ny = 1 << (k - a);
+        std::vector<int> count(static_cast<std::size_t>(nx * ny), 0);
+        for (int i = 0; i < (1 << k); ++i)
+          ++count[static_cast<std::size_t>(static_cast<int>(points[static_cast<std::size_t>(i)].second * ny) * nx +
+                                           static_cast<int>(points[static_cast<std::size_t>(i)].first * nx))];
+        for (int c : count) ASSERT_EQ(c, 1) << "k " << k << " a " << a;
+      }
+  std::set<std::pair<float, float>> seen;
+  for (const auto& points : copies) seen.insert(points.begin(), points.end());
+  EXPECT_EQ(seen.size(), static_cast<std::size_t>(kReplicates * kPoints));
+  EXPECT_THROW(solo::Sampler(solo::SamplerKind::Sobol, 1, 1, 0), std::invalid_argument);
+  EXPECT_THROW(solo::Sampler(solo::SamplerKind::Sobol, 1, 1, solo::kMaxReplicates + 1), std::invalid_argument);
+}

@@ -68,4 +68,10 @@ std::vector<std::string> listFolder(const fs::path& folder) {
   return names;
 }
 
+std::int64_t metricInt(const solo::StageReport& report, const std::string& name) {
+  const solo::MetricValue* v = report.find(name);
+  if (!v) ADD_FAILURE() << "no metric " << name;
+  return v ? std::get<std::int64_t>(*v) : -1;
+}
+
 }  // namespace solo::test

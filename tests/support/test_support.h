@@ -1,7 +1,11 @@
 #pragma once
 // Helpers shared by the tests: temporary folders, running the solo binary, shared data.
 
+#include <solo/geometry/report.h>
+
 #include <gtest/gtest.h>
+
+#include <cstdint>
 
 #include <filesystem>
 #include <string>
@@ -34,6 +38,9 @@ CommandResult runSolo(const std::string& arguments);
 
 /// ../shared/data/<relative>, or an empty path when the shared data is absent.
 std::filesystem::path sharedData(const std::string& relative);
+
+/// An integer metric of a stage report; a test failure and -1 when the report has none.
+std::int64_t metricInt(const solo::StageReport& report, const std::string& name);
 
 /// Files in a folder (names only), for "no partial output" checks.
 std::vector<std::string> listFolder(const std::filesystem::path& folder);

@@ -2,40 +2,56 @@
 // with solo (a converged reference and the runs to compare), and compares any render with the
 // reference. Benchmark tool only: neither the tests nor `solo night` need it or Blender.
 //
-//   export_blender_scene export SCENE OUT_DIR [WIDTHxHEIGHT] [REFERENCE_SPP]
+//   export_blender_scene export SCENE OUT_DIR [WIDTHxHEIGHT] [REFERENCE_SPP] [SAMPLERS]
 //       SCENE: night (the bench_render street: ~300 lights, 2 headlights), plane-area (a grey
-//       plane under one rectangle light), plane-emitter (a grey plane under an emitting quad).
+//       plane under one rectangle light), plane-emitter (a grey plane under an emitting quad),
+//       pipeline:MANIFEST (the render scene `solo night` builds from a scene manifest, e.g. of
+//       `solo synth --seed 3 --size 1920x1080`: refined depth, cleaned mesh with solids, the
+//       light record drawn with seed 3, the two headlights; the camera scaled to WIDTHxHEIGHT).
 //       Writes OUT_DIR/scene.json + *.f32/*.u32 arrays (camera frame = OpenCV, metres; colours
 //       are XYZ relative to E, rendered channel by channel, so Cycles receives them as "RGB"
 //       and no colour transform may touch them), solo_reference.exr, emitter_mask.exr (1 where an
 //       emitter is seen directly), solo_runs.csv (fixed sample counts and the default adaptive
-//       settings: seconds and relative RMSE).
-//   export_blender_scene runs SCENE OUT_DIR [WIDTHxHEIGHT]
-//       The solo runs again against the reference already in OUT_DIR (solo_runs_again.csv).
+//       settings: wall and CPU seconds, relative RMSE; each image as solo_<settings>.exr) for
+//       each per-sample sampler in SAMPLERS ("sobol,independent" by default; "sobol" alone
+//       halves the time). Prints the reference's own noise from its per-pixel standard errors.
+//   export_blender_scene runs SCENE OUT_DIR [WIDTHxHEIGHT] [-] [SAMPLERS]
+//       The solo runs again against the reference already in OUT_DIR (solo_runs_again.csv); the
+//       exported scene files stay as they are.
 //   export_blender_scene compare OUT_DIR IMAGE.exr
 //       Relative RMSE of IMAGE's Y (second channel) against the reference on the pixels where no
-//       emitter is seen, and the ratio of their means there.
+//       emitter is seen, the ratio of their means there, the share of the squared error in the
+//       worst 1 % of those pixels and the three worst pixels.
 //
 // Differences from the production scene, so both renderers solve the same problem: every emitter
 // is uniform (Cycles has no g(v, n) profile), the headlights emit over the full hemisphere (solo
 // cuts at its spread angle, Cycles' spread falls off smoothly), Lambertian diffuse (Cycles'
-// Diffuse BSDF at roughness 0), black sky.
+// Diffuse BSDF at roughness 0), no roughness map (no specular lobe), black sky.
 
 #include "../night_street.h"
 
+#include <solo/geometry/depth_refinement.h>
 #include <solo/geometry/image_io.h>
+#include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/report.h>
+#include <solo/geometry/scene.h>
 #include <solo/lighting/light_category.h>
+#include <solo/lighting/light_stage.h>
+#include <solo/render/night_scene.h>
 #include <solo/render/path_tracer.h>
 #include <solo/render/street_scene.h>
 
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
+#include <sstream>
+#include <sys/resource.h>
 #include <stdexcept>
 #include <string>
 
@@ -47,6 +63,50 @@ namespace {
 // fades a spot light's edge where solo cuts a hard cone).
 solo::RenderScene nightStreet(int width, int height) {
   return solo::bench::nightStreet({width, height, /*profiled_emitters=*/false, /*headlight_spread_rad=*/3.14159265f});
+}
+
+// The light record's draw for the pipeline scene (solo night's --seed; the synth scene's seed).
+constexpr std::uint64_t kPipelineLightSeed = 3;
+
+// What `solo night` renders for `manifest` with its default preset, built by the same library
+// stages in the same order (tools/cmd_night.cpp): upsampled and refined depth (filter, uncertain
+// regions, 10 Ceres iterations), the cleaned mesh at the image resolution with closed solids, a
+// light record drawn with kPipelineLightSeed (real strengths and chromaticities), the scene with
+// the two 1200 lm headlights. Then the comparison's simplifications: every emitter uniform,
+// headlights over the hemisphere, no roughness (diffuse only), black sky, and the camera scaled
+// to width x height (same view, fewer pixels; the mesh keeps the image resolution).
+solo::RenderScene pipelineScene(const fs::path& manifest, int width, int height) {
+  solo::Stopwatch clock;
+  const solo::Scene input = solo::loadScene(manifest);
+  solo::DepthRefinementOptions refine_options;
+  refine_options.optimization.max_iterations = 10;
+  refine_options.optimization.function_tolerance = 1e-9;
+  const solo::DepthRefinementResult refined = solo::refineDepth(input, refine_options);
+  solo::DepthMeshCleanupOptions mesh_options;
+  mesh_options.close_solids = true;
+  mesh_options.evaluate = false;
+  solo::StageReport mesh_report;
+  const solo::DepthMesh mesh = solo::meshFromScene(refined.depth_m, input.camera, refined.maps.instances,
+                                                   refined.uncertain, mesh_options, mesh_report);
+  solo::LightStageOptions light_options;
+  light_options.instantiation.seed = kPipelineLightSeed;
+  const char* data_dir = std::getenv("SOLO_DATA_DIR");
+  light_options.illuminant_table =
+      fs::path(data_dir && *data_dir ? data_dir : SOLO_PROJECT_DATA_DIR) / "illuminants" / "night_illuminants.csv";
+  const solo::LightStageResult lights = solo::runLightStage(input, refined.depth_m, light_options);
+  solo::NightScene night =
+      solo::buildNightScene(mesh, refined.maps.albedo, refined.maps.roughness, input.image, lights.record);
+  std::printf("pipeline scene from %s: %dx%d mesh, light seed %llu, %.1f s\n", manifest.string().c_str(),
+              input.width(), input.height(), static_cast<unsigned long long>(kPipelineLightSeed), clock.seconds());
+  std::fflush(stdout);
+  solo::RenderScene scene = std::move(night.scene);
+  for (auto& emitter : scene.emitters) emitter.directional_profile = false;
+  for (auto& light : scene.rectangle_lights) light.spread_rad = 3.14159265f;
+  scene.face_roughness.clear();
+  scene.sky_radiance = Eigen::Vector3f::Zero();
+  scene.sky_zenith_radiance.reset();
+  scene.camera = scene.camera.scaledTo(width, height);
+  return scene;
 }
 
 // Adds the quad centre +- u/2 +- v/2 (two triangles, normal along u x v) to the scene.
@@ -92,6 +152,15 @@ solo::RenderScene litPlane(int width, int height, bool mesh_emitter) {
     scene.rectangle_lights.push_back(light);
   }
   return scene;
+}
+
+// CPU seconds of this process, every thread: on a shared machine a fairer cost than wall time
+// (a render that gets half the cores for twice as long costs the same).
+double processCpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 }
 
 template <typename T>
@@ -155,22 +224,30 @@ double relativeRmse(const cv::Mat& image, const cv::Mat& reference, const cv::Ma
 }
 
 int exportScene(int argc, char** argv, bool reuse_reference) {
-  if (argc < 4) throw std::runtime_error("usage: export_blender_scene export|runs SCENE OUT_DIR [WxH] [REFERENCE_SPP]");
+  if (argc < 4)
+    throw std::runtime_error("usage: export_blender_scene export|runs SCENE OUT_DIR [WxH] [REFERENCE_SPP] [SAMPLERS]");
   const std::string name = argv[2];
   const fs::path dir = argv[3];
   int width = 480, height = 270, reference_spp = 4096;
   if (argc > 4 && std::sscanf(argv[4], "%dx%d", &width, &height) != 2) throw std::runtime_error("bad size");
-  if (argc > 5) reference_spp = std::atoi(argv[5]);
+  if (argc > 5 && std::string(argv[5]) != "-") reference_spp = std::atoi(argv[5]);
+  std::vector<solo::SamplerKind> samplers = {solo::SamplerKind::Sobol, solo::SamplerKind::Independent};
+  if (argc > 6) {
+    samplers.clear();
+    std::stringstream list(argv[6]);
+    for (std::string item; std::getline(list, item, ',');) samplers.push_back(solo::parseSamplerKind(item));
+  }
   solo::RenderScene scene;
   if (name == "night") scene = nightStreet(width, height);
   else if (name == "plane-area") scene = litPlane(width, height, false);
   else if (name == "plane-emitter") scene = litPlane(width, height, true);
-  else throw std::runtime_error("unknown scene " + name + " (night, plane-area, plane-emitter)");
+  else if (name.rfind("pipeline:", 0) == 0) scene = pipelineScene(name.substr(9), width, height);
+  else throw std::runtime_error("unknown scene " + name + " (night, plane-area, plane-emitter, pipeline:MANIFEST)");
   fs::create_directories(dir);
   solo::PathTracerOptions o;
   o.progress = false;
   o.diffuse = solo::DiffuseModel::Lambert;
-  writeScene(scene, o, dir);
+  if (!reuse_reference) writeScene(scene, o, dir);  // `runs` keeps the files the reference was made from
   std::printf("%s %dx%d: %zu triangles, %zu emitters, %zu rectangle lights\n", name.c_str(), width, height,
               scene.faces.size(), scene.emitters.size(), scene.rectangle_lights.size());
 
@@ -182,33 +259,53 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     o.min_samples = o.max_samples = reference_spp;
     o.seed = 1000;
     solo::Stopwatch reference_clock;
+    const double cpu_start = processCpuSeconds();
     const solo::RenderOutput out = solo::renderPathTraced(scene, o);
-    std::printf("reference: %d spp, seed 1000, %.1f s\n", reference_spp, reference_clock.seconds());
-    std::fflush(stdout);
+    std::printf("reference: %d spp, seed 1000, %.1f s, %.1f cpu s\n", reference_spp, reference_clock.seconds(),
+                processCpuSeconds() - cpu_start);
     reference = out.radiance;
-    solo::writeImage(dir / "solo_reference.exr", reference);
     out.light_id.convertTo(mask, CV_32F);
     mask = cv::min(mask, 1.0);
+    // The reference's own relative noise from its per-pixel standard-error estimates, on the
+    // pixels the comparison uses: exact in expectation for independent samples, an upper bound
+    // for sobol (the estimate ignores stratification).
+    double variance = 0, norm = 0;
+    for (int y = 0; y < reference.rows; ++y)
+      for (int x = 0; x < reference.cols; ++x) {
+        if (mask.at<float>(y, x) != 0) continue;
+        const double e = out.std_error.at<float>(y, x), r = reference.ptr<float>(y)[x * reference.channels() + 1];
+        variance += e * e;
+        norm += r * r;
+      }
+    std::printf("reference relative noise (per-pixel standard errors, an upper bound with sobol): %.4f\n",
+                norm > 0 ? std::sqrt(variance / norm) : 0.0);
+    std::fflush(stdout);
+    solo::writeImage(dir / "solo_reference.exr", reference);
     solo::writeImage(dir / "emitter_mask.exr", mask);
   }
 
   std::ofstream csv(dir / (reuse_reference ? "solo_runs_again.csv" : "solo_runs.csv"));
-  csv << "settings,spp_mean,seconds,relative_rmse,mean_ratio\n";
-  std::printf("%-22s %8s %9s %14s %10s\n", "solo settings", "spp", "seconds", "relative_rmse", "mean_ratio");
+  csv << "settings,spp_mean,seconds,cpu_seconds,relative_rmse,mean_ratio\n";
+  std::printf("%-22s %8s %9s %9s %14s %10s\n", "solo settings", "spp", "seconds", "cpu_s", "relative_rmse",
+              "mean_ratio");
   const auto run = [&](const std::string& label, solo::PathTracerOptions options) {
     options.seed = 7;
     solo::Stopwatch clock;
+    const double cpu_start = processCpuSeconds();
     const solo::RenderOutput out = solo::renderPathTraced(scene, options);
-    const double seconds = clock.seconds();
+    const double seconds = clock.seconds(), cpu_seconds = processCpuSeconds() - cpu_start;
     double ratio = 0;
     const double error = relativeRmse(out.radiance, reference, mask, &ratio);
     const double spp = cv::mean(out.samples)[0];
-    std::printf("%-22s %8.1f %9.3f %14.4f %10.4f\n", label.c_str(), spp, seconds, error, ratio);
-    csv << label << "," << spp << "," << seconds << "," << error << "," << ratio << "\n";
+    std::printf("%-22s %8.1f %9.3f %9.3f %14.4f %10.4f\n", label.c_str(), spp, seconds, cpu_seconds, error, ratio);
+    csv << label << "," << spp << "," << seconds << "," << cpu_seconds << "," << error << "," << ratio << std::endl;
+    std::string file = "solo_" + label + ".exr";  // for `compare` (error concentration) and viewing
+    std::replace(file.begin(), file.end(), ' ', '_');
+    solo::writeImage(dir / file, out.radiance);
     std::fflush(stdout);
   };
   // Both per-sample samplers (sobol is the default); the reference above uses the default.
-  for (const solo::SamplerKind kind : {solo::SamplerKind::Sobol, solo::SamplerKind::Independent}) {
+  for (const solo::SamplerKind kind : samplers) {
     const std::string suffix = std::string(" ") + solo::samplerKindName(kind);
     for (int spp : {1, 4, 16, 64}) {
       solo::PathTracerOptions fixed = o;
@@ -235,7 +332,33 @@ int compare(int argc, char** argv) {
     throw std::runtime_error(std::string(argv[3]) + ": not the reference's size or fewer than 3 channels");
   double ratio = 0;
   const double error = relativeRmse(image, reference, mask, &ratio);
-  std::printf("relative_rmse %.5f mean_ratio %.5f\n", error, ratio);
+  // How concentrated the error is: the share of the squared error in the worst 1 % of the pixels
+  // (near 1 % for even noise, near 1 for a few fireflies).
+  struct PixelError {
+    double square;
+    int x, y;
+  };
+  const auto luminance = [](const cv::Mat& m, int x, int y) { return m.ptr<float>(y)[x * m.channels() + 1]; };
+  std::vector<PixelError> squares;
+  double total = 0;
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x) {
+      if (mask.at<float>(y, x) != 0) continue;
+      const double d = luminance(image, x, y) - luminance(reference, x, y);
+      squares.push_back({d * d, x, y});
+      total += d * d;
+    }
+  std::sort(squares.begin(), squares.end(),
+            [](const PixelError& a, const PixelError& b) { return a.square > b.square; });
+  double worst = 0;
+  for (std::size_t i = 0; i < squares.size() / 100; ++i) worst += squares[i].square;
+  std::printf("relative_rmse %.5f mean_ratio %.5f worst_1%%_share %.3f\n", error, ratio,
+              total > 0 ? worst / total : 0.0);
+  for (std::size_t i = 0; i < std::min<std::size_t>(squares.size(), 3); ++i) {
+    const PixelError& p = squares[i];
+    std::printf("  worst pixel (%d, %d): image Y %.4g reference Y %.4g\n", p.x, p.y, luminance(image, p.x, p.y),
+                luminance(reference, p.x, p.y));
+  }
   return 0;
 }
 

@@ -1,12 +1,16 @@
 """Renders a scene exported by export_blender_scene with Blender's Cycles on the CPU.
 
     blender -b --factory-startup -P render_cycles.py -- SCENE_DIR/scene.json OUT.exr \
-        --samples N [--threads 2] [--seed 1]
+        --samples N[,N2,...] [--threads 2] [--seed 1]
 
 Writes a linear 32-bit EXR (no view transform, no denoising, no clamping, box pixel filter, fixed
 sample count) whose channels are the scene's XYZ-relative-to-E triples rendered channel by channel
 (the exporter hands XYZ over as "RGB": Cycles multiplies colours per channel, so no colour space
-enters). Prints one line "cycles: samples N threads T render_seconds S" for the timing table.
+enters). Prints one line "cycles: samples N threads T render_seconds S cpu_seconds C" for the
+timing table (C: CPU time of the whole process during the render, all threads: a fairer cost than
+wall time on a shared machine).
+Several sample counts render one after the other from the same built scene (each a full Cycles
+render: sync, BVH, samples); OUT.exr must then contain "{n}", replaced by the sample count.
 
 Mapping from solo's scene (scene.json):
   * frame: solo's OpenCV camera frame (x right, y down, z forward) becomes Blender's world by
@@ -40,14 +44,17 @@ from mathutils import Matrix, Vector
 def parse_args():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     if len(argv) < 2:
-        raise SystemExit("usage: blender -b -P render_cycles.py -- scene.json out.exr --samples N [--threads T] [--seed S]")
-    options = {"scene": argv[0], "output": argv[1], "samples": 16, "threads": 2, "seed": 1}
+        raise SystemExit("usage: blender -b -P render_cycles.py -- scene.json out.exr --samples N[,N2...] "
+                         "[--threads T] [--seed S]")
+    options = {"scene": argv[0], "output": argv[1], "samples": [16], "threads": 2, "seed": 1}
     rest = argv[2:]
     for i in range(0, len(rest), 2):
         key = rest[i].lstrip("-")
         if key not in ("samples", "threads", "seed") or i + 1 >= len(rest):
             raise SystemExit("render_cycles.py: unknown or incomplete option " + rest[i])
-        options[key] = int(rest[i + 1])
+        options[key] = [int(n) for n in rest[i + 1].split(",")] if key == "samples" else int(rest[i + 1])
+    if len(options["samples"]) > 1 and "{n}" not in options["output"]:
+        raise SystemExit("render_cycles.py: several sample counts need {n} in the output name")
     return options
 
 
@@ -100,9 +107,10 @@ def build_mesh(scene_dir, spec):
     n_vertices, n_faces = m["vertex_count"], m["face_count"]
     assert len(vertices) == 3 * n_vertices and len(faces) == 3 * n_faces
     assert len(reflectance) == 3 * n_faces and len(emission) == 3 * n_faces
-    for i in range(n_vertices):  # (x, y, z) -> (x, -y, -z)
-        vertices[3 * i + 1] = -vertices[3 * i + 1]
-        vertices[3 * i + 2] = -vertices[3 * i + 2]
+    # (x, y, z) -> (x, -y, -z); strided slices, since per-element Python loops take minutes on
+    # a 1080p depth mesh (millions of faces).
+    for axis in (1, 2):
+        vertices[axis::3] = array("f", (-c for c in vertices[axis::3]))
 
     mesh = bpy.data.meshes.new("solo_mesh")
     mesh.vertices.add(n_vertices)
@@ -116,14 +124,15 @@ def build_mesh(scene_dir, spec):
     if len(mesh.polygons) != n_faces:
         raise SystemExit("render_cycles.py: Blender dropped faces of the mesh")
 
-    emitting = array("i", (1 if max(emission[3 * f:3 * f + 3]) > 0 else 0 for f in range(n_faces)))
+    emitting = array("i", map(lambda x, y, z: 1 if max(x, y, z) > 0 else 0,
+                               emission[0::3], emission[1::3], emission[2::3]))
     mesh.polygons.foreach_set("material_index", emitting)
     mesh.polygons.foreach_set("use_smooth", [False] * n_faces)
     for name, values in (("reflectance", reflectance), ("emission", emission)):
         attribute = mesh.attributes.new(name, "FLOAT_COLOR", "FACE")
         rgba = array("f", [1.0]) * (4 * n_faces)
-        for f in range(n_faces):
-            rgba[4 * f:4 * f + 3] = values[3 * f:3 * f + 3]
+        for channel in range(3):
+            rgba[channel::4] = values[channel::3]
         attribute.data.foreach_set("color", rgba)
     mesh.materials.append(make_material("surface", False))
     mesh.materials.append(make_material("emitter", True))
@@ -176,6 +185,7 @@ def setup_camera(spec):
 
 
 def main():
+    setup_start = time.time()
     options = parse_args()
     scene_dir = os.path.dirname(os.path.abspath(options["scene"]))
     with open(options["scene"]) as f:
@@ -195,7 +205,6 @@ def main():
     scene.render.engine = "CYCLES"
     cycles = scene.cycles
     cycles.device = "CPU"
-    cycles.samples = options["samples"]
     cycles.use_adaptive_sampling = False
     cycles.use_denoising = False
     cycles.seed = options["seed"]
@@ -225,14 +234,21 @@ def main():
     scene.render.image_settings.color_depth = "32"
     scene.render.image_settings.color_mode = "RGB"
     scene.render.image_settings.exr_codec = "ZIP"
-    scene.render.filepath = os.path.abspath(options["output"])
     scene.render.use_file_extension = False
+    # Several sample counts: keep the synced scene and its BVH between the renders (only the first
+    # render's time then includes them).
+    scene.render.use_persistent_data = len(options["samples"]) > 1
 
-    start = time.time()
-    bpy.ops.render.render(write_still=True)
-    seconds = time.time() - start
-    print("cycles: samples %d threads %d render_seconds %.3f emitting_faces %d" %
-          (options["samples"], options["threads"], seconds, emitting))
+    print("cycles: scene built in %.1f s (%d faces, %d emitting)" %
+          (time.time() - setup_start, spec["mesh"]["face_count"], emitting), flush=True)
+    for samples in options["samples"]:
+        cycles.samples = samples
+        scene.render.filepath = os.path.abspath(options["output"].replace("{n}", str(samples)))
+        start, cpu_start = time.time(), time.process_time()
+        bpy.ops.render.render(write_still=True)
+        seconds, cpu_seconds = time.time() - start, time.process_time() - cpu_start
+        print("cycles: samples %d threads %d render_seconds %.3f cpu_seconds %.3f emitting_faces %d" %
+              (samples, options["threads"], seconds, cpu_seconds, emitting), flush=True)
 
 
 main()

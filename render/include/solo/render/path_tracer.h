@@ -23,7 +23,21 @@ struct PathTracerOptions {
   int max_samples = 256;  ///< per pixel
   /// Stop a pixel when the standard error of its mean luminance (Y) is below
   /// max(relative_error * mean, absolute_error[pixel], noise_factor * noise_sigma(mean)).
+  /// The standard error: with the independent sampler, sample variance / n; with the Sobol
+  /// sampler (whose stratified samples make that an overestimate), the spread of the means of
+  /// `error_replicates` independently scrambled point sets the samples alternate between
+  /// (batch means over replicates); both are unbiased for the mean's variance. By default the
+  /// replicate spread is pooled over the pixel's tile (pool_error_gain).
   double relative_error = 0.02;
+  /// 1, 2, 4 or 8; used with the Sobol sampler when min_samples < max_samples (adaptive). More
+  /// replicates give a less noisy error estimate but smaller, less stratified point sets; 1
+  /// falls back to sample variance / n. min_samples is rounded up to a multiple of it.
+  int error_replicates = 2;
+  /// With replicates: a pixel's variance is its sample variance / n times the tile's
+  /// stratification gain (summed replicate variances / summed sample variances / n over its
+  /// 16x16 tile), which pools the tile's degrees of freedom; false: the pixel's own replicate
+  /// spread (R - 1 degrees of freedom, too few to stop on: docs/rendering.md).
+  bool pool_error_gain = true;
   cv::Mat absolute_error;  ///< CV_32F per pixel, render units; empty = none
   /// Standard deviation of the noise the output will receive afterwards (the sensor noise)
   /// as a function of the pixel's mean luminance, render units; empty = none. Called from

@@ -13,6 +13,11 @@
 // deep path vertices gain nothing from stratification.
 // SamplerKind::Independent: every value from the pixel's PCG32 stream.
 // Both are deterministic for (seed, pixel), whatever thread renders the pixel.
+//
+// Replicates (Sobol only): a pixel's samples can alternate between R independently scrambled
+// copies of the point set, sample i taking point i / R of copy i % R. The R partial means are
+// then independent and unbiased, so their spread estimates the error of the pixel's mean
+// without assuming independent samples (path_tracer.cpp's stopping rule).
 
 #include <array>
 #include <cstdint>
@@ -52,11 +57,17 @@ class Pcg32 {
 /// gave the same error (docs/rendering.md, Sampler).
 inline constexpr int kLowDiscrepancyDimensions = 16;
 
+/// Most independently scrambled copies of the point set a pixel's samples may alternate between.
+inline constexpr int kMaxReplicates = 8;
+
 class Sampler {
  public:
-  /// A pixel's stream; pixel is any per-pixel id (row-major index).
-  Sampler(SamplerKind kind, std::uint64_t seed, std::uint64_t pixel);
+  /// A pixel's stream; pixel is any per-pixel id (row-major index). replicates in
+  /// [1, kMaxReplicates] (see above; ignored by the independent sampler); std::invalid_argument
+  /// otherwise.
+  Sampler(SamplerKind kind, std::uint64_t seed, std::uint64_t pixel, int replicates = 1);
   /// Starts sample `index` of the pixel at dimension 0. Indices are used in order 0, 1, 2, ...
+  /// With replicates, it is point index / replicates of replicate index % replicates.
   void startSample(std::uint32_t index);
   float get1D();
   std::pair<float, float> get2D();
@@ -64,9 +75,12 @@ class Sampler {
 
  private:
   SamplerKind kind_;
-  std::uint32_t index_reversed_ = 0;  // the sample index, bit-reversed
+  std::uint32_t replicates_ = 1;
+  std::uint32_t index_reversed_ = 0;  // the point index within its replicate, bit-reversed
+  std::uint32_t seed_offset_ = 0;  // where the current replicate's scrambling seeds start
   int dimension_ = 0;
-  std::array<std::uint32_t, 3 * kLowDiscrepancyDimensions> scramble_{};  // seeds per dimension
+  // Seeds per replicate and dimension; only the first replicates_ blocks are filled.
+  std::array<std::uint32_t, 3 * kLowDiscrepancyDimensions * kMaxReplicates> scramble_;
   Pcg32 rng_;
 };
 
