@@ -127,7 +127,7 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   NightSceneOptions scene_options;
   scene_options.headlights = o.headlights;
   scene_options.headlight_flux_lm = o.headlight_flux_lm;
-  NightScene night = buildNightScene(mesh, refined.maps.albedo, refined.maps.roughness, scene.image, record, scene_options);
+  const NightScene night = buildNightScene(mesh, refined.maps.albedo, refined.maps.roughness, scene.image, record, scene_options);
   stages.push_back(night.report);
 
   // render
@@ -142,9 +142,11 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   tracer.relative_error = o.relative_error;
   tracer.max_bounces = o.max_bounces;
   const PinholeCamera image_camera = night.scene.camera;
-  if (o.render_downsample > 1)
-    night.scene.camera = image_camera.scaledTo(std::max(16, image_camera.width / o.render_downsample),
-                                                std::max(16, image_camera.height / o.render_downsample));
+  const PinholeCamera render_camera =
+      o.render_downsample > 1 ? image_camera.scaledTo(std::max(16, image_camera.width / o.render_downsample),
+                                                      std::max(16, image_camera.height / o.render_downsample))
+                              : image_camera;
+  const PreparedRenderScene prepared(night.scene);  // one BVH for the preview and the render
   // --noise-target: stop where render noise is below noise_factor x the sensor noise the pixel
   // will get. That needs the exposure first, so auto exposure meters a small preview at
   // min_samples spp (meteringPreviewSize) before the full render.
@@ -154,16 +156,15 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   if (o.noise_target && o.noise) {
     Stopwatch preview_clock;
     preview_white = o.sensor_white_cd_m2;
-    const PinholeCamera full_camera = night.scene.camera;
+    const PinholeCamera& full_camera = render_camera;
     const cv::Size preview_size = meteringPreviewSize(full_camera.width, full_camera.height);
     const int preview_width = preview_size.width, preview_height = preview_size.height;
     if (!(preview_white > 0)) {
-      night.scene.camera = full_camera.scaledTo(preview_width, preview_height);
       PathTracerOptions preview = tracer;
       preview.max_samples = preview.min_samples;
       preview.progress = false;
-      const RenderOutput metered = renderPathTraced(night.scene, preview);
-      night.scene.camera = full_camera;
+      const RenderOutput metered =
+          renderPathTraced(prepared, full_camera.scaledTo(preview_width, preview_height), preview);
       preview_white = meteredSensorWhite(metered.radiance, metered.light_id);
     }
     const double exposure = exposureScale(PostProcessOptions{}.exposure_options);
@@ -184,10 +185,10 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
     noise_target_note = note;
     if (!(o.sensor_white_cd_m2 > 0)) preview_seconds = preview_clock.seconds();
   }
-  r.rendered = renderPathTraced(night.scene, tracer);
+  r.rendered = renderPathTraced(prepared, render_camera, tracer);
   RenderOutput& rendered = r.rendered;
   stages.push_back(rendered.report);
-  stages.back().add("render_width", night.scene.camera.width, "px").add("render_height", night.scene.camera.height, "px");
+  stages.back().add("render_width", render_camera.width, "px").add("render_height", render_camera.height, "px");
   if (preview_seconds > 0) {  // the exposure preview belongs to the render's time
     stages.back().add("preview_seconds", preview_seconds, "s");
     stages.back().seconds += preview_seconds;
@@ -196,7 +197,7 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
     rendered = upsampleRender(std::move(rendered), cv::Size(image_camera.width, image_camera.height));
     char note[160];
     std::snprintf(note, sizeof note, "rendered at %dx%d and upsampled to %dx%d (bilinear): --render-downsample %d",
-                  night.scene.camera.width, night.scene.camera.height, image_camera.width, image_camera.height,
+                  render_camera.width, render_camera.height, image_camera.width, image_camera.height,
                   o.render_downsample);
     stages.back().notes.push_back(note);
   }

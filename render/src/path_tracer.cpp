@@ -83,12 +83,13 @@ float luminance(const Eigen::Vector3f& xyz) { return xyz.y(); }
 
 struct Context {
   const RenderScene& scene;
+  const PinholeCamera& camera;
   const PathTracerOptions& options;
   const RayCaster& caster;
   const std::vector<EmissiveTriangle>& emissive;
   const std::vector<int>& face_to_emissive;
   const LightSampler& sampler;
-  std::vector<Eigen::Vector3f> face_normals;  // unit geometric normals
+  const std::vector<Eigen::Vector3f>& face_normals;  // unit geometric normals
   SunDisc sun;
   bool sky_on;  // a non-black sky: next-event estimation toward it
   std::vector<float> rectangle_area, rectangle_cos_half_spread;  // per rectangle light, computed once
@@ -104,7 +105,7 @@ float offsetFor(float distance) { return 1e-4f * std::max(1.f, distance); }
 
 // One path sample from the camera through (px, py). Returns XYZ radiance.
 Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, FirstHit* first, std::int64_t& rays) {
-  const PinholeCamera& cam = c.scene.camera;
+  const PinholeCamera& cam = c.camera;
   Eigen::Vector3f direction(static_cast<float>((px - cam.cx) / cam.fx), static_cast<float>((py - cam.cy) / cam.fy), 1.f);
   const float z_per_distance = 1.f / direction.norm();
   direction.normalize();
@@ -295,15 +296,18 @@ class ProgressBar {
 
 }  // namespace
 
-RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions& options) {
-  Stopwatch clock;
-  const int width = scene.camera.width, height = scene.camera.height;
-  CV_Assert(width > 0 && height > 0);
+struct PreparedRenderScene::Impl {
+  const RenderScene& scene;
+  std::unique_ptr<RayCaster> caster;
+  double build_seconds = 0;
+  std::vector<EmissiveTriangle> emissive;
+  std::vector<int> face_to_emissive;
+  std::vector<Eigen::Vector3f> face_normals;
+};
+
+PreparedRenderScene::PreparedRenderScene(const RenderScene& scene) : impl_(new Impl{scene, nullptr, 0, {}, {}, {}}) {
   CV_Assert(scene.face_reflectance.size() == scene.faces.size());
   CV_Assert(scene.face_emitter.empty() || scene.face_emitter.size() == scene.faces.size());
-  CV_Assert(options.absolute_error.empty() || (options.absolute_error.type() == CV_32F &&
-                                                options.absolute_error.size() == cv::Size(width, height)));
-
   std::vector<float> vertices;
   vertices.reserve(scene.vertices.size() * 3);
   for (const Eigen::Vector3f& v : scene.vertices) vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
@@ -311,27 +315,53 @@ RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions&
   indices.reserve(scene.faces.size() * 3);
   for (const auto& f : scene.faces) indices.insert(indices.end(), f.begin(), f.end());
   Stopwatch build_clock;
-  const RayCaster caster(std::move(vertices), std::move(indices));
-  const double build_seconds = build_clock.seconds();
+  impl_->caster = std::make_unique<RayCaster>(std::move(vertices), std::move(indices));
+  impl_->build_seconds = build_clock.seconds();
 
-  const std::vector<EmissiveTriangle> emissive = collectEmissiveTriangles(scene);
-  std::vector<int> face_to_emissive(scene.faces.size(), -1);
-  for (std::size_t i = 0; i < emissive.size(); ++i) face_to_emissive[emissive[i].face] = static_cast<int>(i);
+  impl_->emissive = collectEmissiveTriangles(scene);
+  impl_->face_to_emissive.assign(scene.faces.size(), -1);
+  for (std::size_t i = 0; i < impl_->emissive.size(); ++i)
+    impl_->face_to_emissive[impl_->emissive[i].face] = static_cast<int>(i);
+  impl_->face_normals.reserve(scene.faces.size());
+  for (const auto& f : scene.faces) {
+    const Eigen::Vector3f cross = (scene.vertices[f[1]] - scene.vertices[f[0]]).cross(scene.vertices[f[2]] - scene.vertices[f[0]]);
+    const float norm = cross.norm();
+    impl_->face_normals.push_back(norm > 0.f ? Eigen::Vector3f(cross / norm) : Eigen::Vector3f::UnitZ());
+  }
+}
+
+PreparedRenderScene::~PreparedRenderScene() = default;
+const RenderScene& PreparedRenderScene::scene() const { return impl_->scene; }
+double PreparedRenderScene::bvhBuildSeconds() const { return impl_->build_seconds; }
+
+RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions& options) {
+  const PreparedRenderScene prepared(scene);
+  return renderPathTraced(prepared, scene.camera, options);
+}
+
+RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const PinholeCamera& camera,
+                              const PathTracerOptions& options) {
+  Stopwatch clock;
+  const RenderScene& scene = prepared.scene();
+  const PreparedRenderScene::Impl& p = prepared.impl();
+  const int width = camera.width, height = camera.height;
+  CV_Assert(width > 0 && height > 0);
+  CV_Assert(options.absolute_error.empty() || (options.absolute_error.type() == CV_32F &&
+                                                options.absolute_error.size() == cv::Size(width, height)));
+  const double build_seconds = p.build_seconds;
+  const RayCaster& caster = *p.caster;
+  const std::vector<EmissiveTriangle>& emissive = p.emissive;
+  const std::vector<int>& face_to_emissive = p.face_to_emissive;
   const std::unique_ptr<LightSampler> sampler = makeLightSampler(options.light_sampler, emissive);
 
   if (!scene.face_roughness.empty()) ggxAverageAlbedo(0.5f);  // builds the albedo table before the tiles start
   const bool sky_on = scene.sky_radiance.maxCoeff() > 0.f ||
                       (scene.sky_zenith_radiance && scene.sky_zenith_radiance->maxCoeff() > 0.f);
-  Context context{scene, options, caster, emissive, face_to_emissive, *sampler, {}, SunDisc(scene.sun), sky_on, {}, {}};
+  Context context{scene, camera, options, caster, emissive, face_to_emissive, *sampler, p.face_normals, SunDisc(scene.sun),
+                  sky_on, {}, {}};
   for (const RectangleLight& light : scene.rectangle_lights) {
     context.rectangle_area.push_back(light.edge_u.cross(light.edge_v).norm());
     context.rectangle_cos_half_spread.push_back(std::cos(0.5f * light.spread_rad));
-  }
-  context.face_normals.reserve(scene.faces.size());
-  for (const auto& f : scene.faces) {
-    const Eigen::Vector3f cross = (scene.vertices[f[1]] - scene.vertices[f[0]]).cross(scene.vertices[f[2]] - scene.vertices[f[0]]);
-    const float norm = cross.norm();
-    context.face_normals.push_back(norm > 0.f ? Eigen::Vector3f(cross / norm) : Eigen::Vector3f::UnitZ());
   }
 
   RenderOutput out;

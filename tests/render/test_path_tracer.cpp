@@ -272,6 +272,30 @@ TEST(PathTracer, DeterministicForASeedWhateverTheThreadCount) {
   EXPECT_GT(cv::norm(one, solo::renderPathTraced(s, o).radiance, cv::NORM_INF), 0.0);
 }
 
+TEST(PathTracer, OnePreparedSceneRendersThroughSeveralCamerasAsSeparateRendersWould) {
+  // solo night renders its exposure preview and the image from one BVH: sharing it must not
+  // change a single pixel of either.
+  solo::RenderScene s = furnace(0.5f);
+  s.face_reflectance[0] = Eigen::Vector3f(0.9f, 0.9f, 0.9f);  // one brighter wall: images differ by view
+  solo::PathTracerOptions o;
+  o.progress = false;
+  o.min_samples = 4;
+  o.max_samples = 16;
+  const solo::PreparedRenderScene prepared(s);
+  const solo::PinholeCamera small = camera(8, 6), tilted = cameraLookingAt(16, 12, 0.7, -0.3);
+  const cv::Mat small_shared = solo::renderPathTraced(prepared, small, o).radiance;
+  const cv::Mat tilted_shared = solo::renderPathTraced(prepared, tilted, o).radiance;
+  ASSERT_EQ(small_shared.size(), cv::Size(8, 8));
+  ASSERT_EQ(tilted_shared.size(), cv::Size(16, 16));
+  solo::RenderScene alone = s;
+  alone.camera = small;
+  EXPECT_EQ(cv::norm(small_shared, solo::renderPathTraced(alone, o).radiance, cv::NORM_INF), 0.0);
+  alone.camera = tilted;
+  EXPECT_EQ(cv::norm(tilted_shared, solo::renderPathTraced(alone, o).radiance, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(tilted_shared, solo::renderPathTraced(prepared, s.camera, o).radiance, cv::NORM_INF), 0.0)
+      << "the camera given is the one rendered through, not the scene's";
+}
+
 TEST(PathTracer, NoNanOrInfReachesTheImage) {
   solo::RenderScene s;
   s.camera = camera(6, 4);

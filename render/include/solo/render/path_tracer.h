@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 
 namespace solo {
 
@@ -69,8 +70,33 @@ struct RenderOutput {
   StageReport report;
 };
 
-/// Renders the scene. Preconditions: per-face arrays sized like faces (or empty where
-/// optional), emitter indices valid, camera resolution > 0.
+/// The scene's geometry prepared for rendering: the BVH (Embree), the emissive triangles and the
+/// face normals, built once for several renders through different cameras (`solo night` meters
+/// its exposure on a small preview first). Keeps a reference to `scene`, which must outlive it.
+/// Preconditions: per-face arrays sized like faces (or empty where optional), emitter indices
+/// valid.
+class PreparedRenderScene {
+ public:
+  explicit PreparedRenderScene(const RenderScene& scene);
+  ~PreparedRenderScene();
+  PreparedRenderScene(const PreparedRenderScene&) = delete;
+  PreparedRenderScene& operator=(const PreparedRenderScene&) = delete;
+
+  const RenderScene& scene() const;
+  double bvhBuildSeconds() const;
+
+  struct Impl;
+  const Impl& impl() const { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Renders the prepared scene through `camera` (its width and height are the output's; > 0).
+RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const PinholeCamera& camera,
+                              const PathTracerOptions& options = {});
+
+/// Prepares the scene and renders it through its own camera.
 RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions& options = {});
 
 }  // namespace solo
