@@ -189,7 +189,10 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   RenderOutput& rendered = r.rendered;
   stages.push_back(rendered.report);
   stages.back().add("render_width", render_camera.width, "px").add("render_height", render_camera.height, "px");
-  if (preview_seconds > 0) {  // the exposure preview belongs to the render's time
+  // The BVH and the exposure preview belong to the render's time.
+  stages.back().add("prepare_seconds", prepared.prepareSeconds(), "s");
+  stages.back().seconds += prepared.prepareSeconds();
+  if (preview_seconds > 0) {
     stages.back().add("preview_seconds", preview_seconds, "s");
     stages.back().seconds += preview_seconds;
   }

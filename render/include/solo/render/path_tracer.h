@@ -84,6 +84,7 @@ class PreparedRenderScene {
 
   const RenderScene& scene() const;
   double bvhBuildSeconds() const;
+  double prepareSeconds() const;  ///< the whole preparation, BVH included
 
   struct Impl;
   const Impl& impl() const { return *impl_; }
@@ -93,6 +94,7 @@ class PreparedRenderScene {
 };
 
 /// Renders the prepared scene through `camera` (its width and height are the output's; > 0).
+/// The report's seconds are the render's alone (add prepareSeconds() for the first render).
 RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const PinholeCamera& camera,
                               const PathTracerOptions& options = {});
 
