@@ -26,19 +26,10 @@ float profile(bool directional, float abs_cosine) {
   return directional ? std::cos(kPi * (abs_cosine - 1.f) * 0.5f) : 1.f;
 }
 
-// Orthonormal basis around n (Duff et al. 2017).
-void basis(const Eigen::Vector3f& n, Eigen::Vector3f& t, Eigen::Vector3f& b) {
-  const float sign = std::copysign(1.f, n.z());
-  const float a = -1.f / (sign + n.z());
-  const float c = n.x() * n.y() * a;
-  t = {1.f + sign * n.x() * n.x() * a, sign * c, -sign * n.x()};
-  b = {c, sign + n.y() * n.y() * a, -n.y()};
-}
-
 Eigen::Vector3f cosineSample(const Eigen::Vector3f& n, float u1, float u2) {
   const float r = std::sqrt(u1), phi = 2.f * kPi * u2;
   Eigen::Vector3f t, b;
-  basis(n, t, b);
+  orthonormalBasis(n, t, b);
   const float z = std::sqrt(std::max(0.f, 1.f - u1));
   return (t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * z).normalized();
 }
@@ -62,7 +53,7 @@ struct SunDisc {
     const float r = std::clamp(sun.angular_radius_rad, 1e-5f, 0.5f);
     on = sun.illuminance.maxCoeff() > 0.f && sun.direction.norm() > 0.f;
     direction = sun.direction.normalized();
-    basis(direction, t, b);
+    orthonormalBasis(direction, t, b);
     const float half = std::sin(0.5f * r);
     one_minus_cos = 2.f * half * half;
     const float sin_r = std::sin(r);

@@ -10,8 +10,9 @@ namespace {
 
 constexpr float kPi = 3.14159265358979f;
 
-// Orthonormal basis around n (Duff et al. 2017).
-void basis(const Eigen::Vector3f& n, Eigen::Vector3f& t, Eigen::Vector3f& b) {
+}  // namespace
+
+void orthonormalBasis(const Eigen::Vector3f& n, Eigen::Vector3f& t, Eigen::Vector3f& b) {
   const float sign = std::copysign(1.f, n.z());
   const float a = -1.f / (sign + n.z());
   const float c = n.x() * n.y() * a;
@@ -19,12 +20,10 @@ void basis(const Eigen::Vector3f& n, Eigen::Vector3f& t, Eigen::Vector3f& b) {
   b = {c, sign + n.y() * n.y() * a, -n.y()};
 }
 
-}  // namespace
-
 SurfaceBsdf::SurfaceBsdf(const Eigen::Vector3f& n, const Eigen::Vector3f& wo, const Eigen::Vector3f& albedo,
                          float roughness, DiffuseModel diffuse, bool specular)
     : n_(n), wo_(wo), albedo_(albedo), roughness_(roughness), diffuse_(diffuse), specular_(specular) {
-  basis(n_, t_, b_);
+  orthonormalBasis(n_, t_, b_);
   wo_local_ = toLocal(wo_);
   cos_o_ = std::max(0.f, wo_local_.z());
   if (specular_) {

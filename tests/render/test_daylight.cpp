@@ -7,6 +7,8 @@
 #include <solo/render/path_tracer.h>
 #include <solo/render/scene_raster.h>
 
+#include "rectangle_irradiance.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -46,17 +48,7 @@ double renderY(solo::RenderScene s, double x, double z, int spp) {
   return solo::renderPathTraced(s, o).radiance.at<cv::Vec3f>(0, 0)[1];
 }
 
-// int cos cos / r^2 dA of a rectangle parallel to the receiver at height h, spanning
-// [x0, x1] x [y0, y1] relative to the point (the form factor times pi).
-double cornerIntegral(double a, double b, double h) {
-  const double A = std::abs(a) / h, B = std::abs(b) / h;
-  const double f = 0.5 * (A / std::sqrt(1 + A * A) * std::atan(B / std::sqrt(1 + A * A)) +
-                          B / std::sqrt(1 + B * B) * std::atan(A / std::sqrt(1 + B * B)));
-  return (a < 0) != (b < 0) ? -f : f;
-}
-double rectangleIntegral(double x0, double x1, double y0, double y1, double h) {
-  return cornerIntegral(x1, y1, h) - cornerIntegral(x0, y1, h) - cornerIntegral(x1, y0, h) + cornerIntegral(x0, y0, h);
-}
+using solo::test::rectangleIntegral;
 
 }  // namespace
 

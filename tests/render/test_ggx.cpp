@@ -5,6 +5,7 @@
 #include <solo/render/ggx.h>
 #include <solo/render/surface_bsdf.h>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -132,4 +133,21 @@ TEST(Ggx, CoupledMaterialConservesEnergyAndIsReciprocal) {
   const solo::SurfaceBsdf plain(n, wo, Eigen::Vector3f::Constant(0.5f), 0.3f, solo::DiffuseModel::Lambert, false);
   EXPECT_NEAR(plain.eval(wi).y(), 0.5 / kPi, 1e-7);
   EXPECT_NEAR(plain.pdf(wi), 0.8 / kPi, 1e-6);
+}
+
+TEST(SurfaceBsdf, OrthonormalBasisIsRightHandedAroundAnyUnitNormal) {
+  const std::vector<Eigen::Vector3f> normals = {
+      Eigen::Vector3f::UnitZ(), -Eigen::Vector3f::UnitZ(), Eigen::Vector3f::UnitX(),
+      Eigen::Vector3f(0.3f, -0.4f, 0.866f).normalized(), Eigen::Vector3f(1e-4f, 2e-4f, -1.f).normalized(),
+      Eigen::Vector3f(-0.7f, 0.7f, -0.1f).normalized()};
+  for (const Eigen::Vector3f& n : normals) {
+    Eigen::Vector3f t, b;
+    solo::orthonormalBasis(n, t, b);
+    EXPECT_NEAR(t.norm(), 1.f, 1e-5f) << n.transpose();
+    EXPECT_NEAR(b.norm(), 1.f, 1e-5f) << n.transpose();
+    EXPECT_NEAR(t.dot(b), 0.f, 1e-5f) << n.transpose();
+    EXPECT_NEAR(t.dot(n), 0.f, 1e-5f) << n.transpose();
+    EXPECT_NEAR(b.dot(n), 0.f, 1e-5f) << n.transpose();
+    EXPECT_LT((t.cross(b) - n).norm(), 1e-5f) << "right-handed: t x b = n for " << n.transpose();
+  }
 }

@@ -5,6 +5,7 @@
 #include <solo/render/light_sampler.h>
 #include <solo/render/path_tracer.h>
 
+#include "rectangle_irradiance.h"
 #include "test_support.h"
 
 #include <Eigen/Geometry>
@@ -59,17 +60,7 @@ solo::RenderScene furnace(float reflectance) {
 
 double meanY(const cv::Mat& radiance) { return cv::mean(radiance)[1]; }
 
-// Irradiance factor of a rectangle parallel to the receiver, corner above the point:
-// int cos cos / r^2 dA over [0, a] x [0, b] at height h (the form factor times pi).
-double cornerIntegral(double a, double b, double h) {
-  const double A = std::abs(a) / h, B = std::abs(b) / h;
-  const double f = 0.5 * (A / std::sqrt(1 + A * A) * std::atan(B / std::sqrt(1 + A * A)) +
-                          B / std::sqrt(1 + B * B) * std::atan(A / std::sqrt(1 + B * B)));
-  return (a < 0) != (b < 0) ? -f : f;
-}
-double rectangleIntegral(double x0, double x1, double y0, double y1, double h) {
-  return cornerIntegral(x1, y1, h) - cornerIntegral(x0, y1, h) - cornerIntegral(x1, y0, h) + cornerIntegral(x0, y0, h);
-}
+using solo::test::rectangleIntegral;
 
 }  // namespace
 

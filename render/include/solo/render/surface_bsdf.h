@@ -52,4 +52,8 @@ class SurfaceBsdf {
   float specular_probability_ = 0.f;
 };
 
+/// A right-handed orthonormal basis (t, b, n) around the unit vector n, branch-free and
+/// continuous except at n = -z (Duff et al. 2017, "Building an orthonormal basis, revisited").
+void orthonormalBasis(const Eigen::Vector3f& n, Eigen::Vector3f& t, Eigen::Vector3f& b);
+
 }  // namespace solo
