@@ -14,7 +14,6 @@ namespace fs = std::filesystem;
 
 namespace solo::tools {
 
-fs::path defaultIlluminantTable() { return dataDirectory() / "illuminants" / "night_illuminants.csv"; }
 
 int runLights(const LightsOptions& options) {
   Stopwatch total;

@@ -7,25 +7,16 @@
 
 #include <solo/geometry/atomic_file.h>
 #include <solo/geometry/depth_refinement.h>
-#include <solo/geometry/downsample_depth.h>
 #include <solo/geometry/error.h>
 #include <solo/geometry/image_io.h>
-#include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/report.h>
 #include <solo/geometry/scene.h>
 #include <solo/lighting/light_overlay.h>
-#include <solo/lighting/light_stage.h>
 #include <solo/render/colour_encoding.h>
 #include <solo/render/contact_sheet.h>
-#include <solo/render/exposure.h>
-#include <solo/render/night_scene.h>
-#include <solo/render/path_tracer.h>
-#include <solo/render/post_process.h>
-#include <solo/render/sensor_noise.h>
 
 #include <opencv2/imgproc.hpp>
 
-#include <algorithm>
 #include <cstdio>
 #include <iostream>
 

@@ -26,5 +26,6 @@ fs::path dataDirectory() {
 }
 
 fs::path defaultScene() { return dataDirectory() / kDefaultSceneManifest; }
+fs::path defaultIlluminantTable() { return dataDirectory() / "illuminants" / "night_illuminants.csv"; }
 
 }  // namespace solo::tools

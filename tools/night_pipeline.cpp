@@ -57,11 +57,11 @@ SamplerKind samplerOption(const NightOptions& o) {
   }
 }
 
-NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, const NightPipelineExtras& extras) {
+NightScene runNightSceneStages(const Scene& scene, const NightOptions& o, const NightPipelineExtras& extras,
+                               NightPipelineResult& r) {
   const auto say = [&](const std::string& line) {
     if (extras.say) extras.say(line);
   };
-  NightPipelineResult r;
   std::vector<StageReport>& stages = r.stages;
 
   // refine: upsampling always (every later stage works at the image resolution)
@@ -127,11 +127,18 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   NightSceneOptions scene_options;
   scene_options.headlights = o.headlights;
   scene_options.headlight_flux_lm = o.headlight_flux_lm;
-  const NightScene night = buildNightScene(mesh, refined.maps.albedo, refined.maps.roughness, scene.image, record, scene_options);
+  NightScene night = buildNightScene(mesh, refined.maps.albedo, refined.maps.roughness, scene.image, record, scene_options);
   stages.push_back(night.report);
+  return night;
+}
+
+NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, const NightPipelineExtras& extras) {
+  NightPipelineResult r;
+  const NightScene night = runNightSceneStages(scene, o, extras, r);
+  std::vector<StageReport>& stages = r.stages;
 
   // render
-  say("render\n");
+  if (extras.say) extras.say("render\n");
   PathTracerOptions tracer;
   tracer.seed = o.seed;
   tracer.light_sampler = lightSamplerOption(o);

@@ -12,6 +12,7 @@
 #include <solo/geometry/scene.h>
 #include <solo/lighting/light_record.h>
 #include <solo/render/light_sampler.h>
+#include <solo/render/night_scene.h>
 #include <solo/render/path_tracer.h>
 #include <solo/render/post_process.h>
 #include <solo/render/sampler.h>
@@ -46,6 +47,13 @@ struct NightPipelineResult {
 /// for an unknown name.
 LightSamplerKind lightSamplerOption(const NightOptions& options);
 SamplerKind samplerOption(const NightOptions& options);
+
+/// The stages before the render (refine, mesh, lights, night scene) on `scene` with `options`
+/// (its preset already applied): fills result.refined, .mesh, .record and appends to
+/// result.stages; returns the scene to render. The Cycles exporter (tests/benchmarks/blender)
+/// stops here.
+NightScene runNightSceneStages(const Scene& scene, const NightOptions& options, const NightPipelineExtras& extras,
+                               NightPipelineResult& result);
 
 /// Runs every stage after the input on `scene` with `options` (its preset already applied).
 NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& options,

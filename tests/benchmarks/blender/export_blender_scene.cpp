@@ -29,14 +29,12 @@
 // Diffuse BSDF at roughness 0), no roughness map (no specular lobe), black sky.
 
 #include "../night_street.h"
+#include "night_pipeline.h"
 
-#include <solo/geometry/depth_refinement.h>
 #include <solo/geometry/image_io.h>
-#include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/report.h>
 #include <solo/geometry/scene.h>
 #include <solo/lighting/light_category.h>
-#include <solo/lighting/light_stage.h>
 #include <solo/render/night_scene.h>
 #include <solo/render/path_tracer.h>
 #include <solo/render/street_scene.h>
@@ -68,34 +66,20 @@ solo::RenderScene nightStreet(int width, int height) {
 // The light record's draw for the pipeline scene (solo night's --seed; the synth scene's seed).
 constexpr std::uint64_t kPipelineLightSeed = 3;
 
-// What `solo night` renders for `manifest` with its default preset, built by the same library
-// stages in the same order (tools/cmd_night.cpp): upsampled and refined depth (filter, uncertain
-// regions, 10 Ceres iterations), the cleaned mesh at the image resolution with closed solids, a
-// light record drawn with kPipelineLightSeed (real strengths and chromaticities), the scene with
-// the two 1200 lm headlights. Then the comparison's simplifications: every emitter uniform,
-// headlights over the hemisphere, no roughness (diffuse only), black sky, and the camera scaled
-// to width x height (same view, fewer pixels; the mesh keeps the image resolution).
+// What `solo night --seed kPipelineLightSeed` renders for `manifest` with its default preset,
+// built by solo night's own stages (tools/night_pipeline.h, runNightSceneStages): refined depth,
+// the cleaned mesh at the image resolution with closed solids, the light record's draw (real
+// strengths and chromaticities), the scene with the two headlights. Then the comparison's
+// simplifications: every emitter uniform, headlights over the hemisphere, no roughness (diffuse
+// only), black sky, and the camera scaled to width x height (same view, fewer pixels; the mesh
+// keeps the image resolution).
 solo::RenderScene pipelineScene(const fs::path& manifest, int width, int height) {
   solo::Stopwatch clock;
   const solo::Scene input = solo::loadScene(manifest);
-  solo::DepthRefinementOptions refine_options;
-  refine_options.optimization.max_iterations = 10;
-  refine_options.optimization.function_tolerance = 1e-9;
-  const solo::DepthRefinementResult refined = solo::refineDepth(input, refine_options);
-  solo::DepthMeshCleanupOptions mesh_options;
-  mesh_options.close_solids = true;
-  mesh_options.evaluate = false;
-  solo::StageReport mesh_report;
-  const solo::DepthMesh mesh = solo::meshFromScene(refined.depth_m, input.camera, refined.maps.instances,
-                                                   refined.uncertain, mesh_options, mesh_report);
-  solo::LightStageOptions light_options;
-  light_options.instantiation.seed = kPipelineLightSeed;
-  const char* data_dir = std::getenv("SOLO_DATA_DIR");
-  light_options.illuminant_table =
-      fs::path(data_dir && *data_dir ? data_dir : SOLO_PROJECT_DATA_DIR) / "illuminants" / "night_illuminants.csv";
-  const solo::LightStageResult lights = solo::runLightStage(input, refined.depth_m, light_options);
-  solo::NightScene night =
-      solo::buildNightScene(mesh, refined.maps.albedo, refined.maps.roughness, input.image, lights.record);
+  solo::tools::NightOptions options;  // the default preset
+  options.seed = kPipelineLightSeed;
+  solo::tools::NightPipelineResult stages;
+  solo::NightScene night = solo::tools::runNightSceneStages(input, options, {}, stages);
   std::printf("pipeline scene from %s: %dx%d mesh, light seed %llu, %.1f s\n", manifest.string().c_str(),
               input.width(), input.height(), static_cast<unsigned long long>(kPipelineLightSeed), clock.seconds());
   std::fflush(stdout);
