@@ -125,6 +125,85 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     }
     return twice < 0;
   };
+  // Closing along the sky line: from the run's last pixel the outer contour of the pixels with
+  // depth (the frame counting as their edge) is followed the way the border loop does not go,
+  // back to the run's first pixel. Next to a run that ends on the sky line beside a nearer
+  // occluder rising into the sky, that contour climbs the occluder's silhouette against the
+  // sky (and runs along the frame where the occluder meets it): the polygon covers what lies
+  // behind the occluder. Every pixel of the path must show a nearer surface than both ends of
+  // the run (the occluder) and no vertex lying itself behind an occluder: the contour must not
+  // go on over the far surface (another sheet of it, or the run's own sheet).
+  static constexpr int kDu[8] = {1, 1, 0, -1, -1, -1, 0, 1};  // clockwise in the image (v down)
+  static constexpr int kDv[8] = {0, 1, 1, 1, 0, -1, -1, -1};
+  const auto hasDepth = [&](int u, int v) { return u >= 0 && v >= 0 && u < w && v < h && had_depth.at<std::uint8_t>(v, u) != 0; };
+  const auto directionOf = [&](int du, int dv) {
+    for (int k = 0; k < 8; ++k)
+      if (kDu[k] == du && kDv[k] == dv) return k;
+    return -1;
+  };
+  const auto skyPath = [&](const VertexLoop& run, std::vector<OpenMesh::Vec2i>& path) {
+    path.clear();
+    const OpenMesh::Vec2i a = pixelOf(run.back()), b = pixelOf(run.front());
+    const double nearer_than_m = 0.99 * std::min(depth_m.at<float>(a[1], a[0]), depth_m.at<float>(b[1], b[0]));
+    std::unordered_map<std::int64_t, std::size_t> on_path;  // pixel -> index in path
+    std::unordered_map<std::int64_t, char> on_run;
+    const auto key = [&](const OpenMesh::Vec2i& p) { return std::int64_t(p[1]) * w + p[0]; };
+    for (const auto v : run) on_run.emplace(key(pixelOf(v)), 1);
+    const std::int64_t max_steps = 4 * std::int64_t(w) * h + 8;
+    const auto trace = [&](int back) {
+      path.clear();
+      on_path.clear();
+      OpenMesh::Vec2i current = a;
+      for (std::int64_t step = 0; step < max_steps; ++step) {
+        // The next contour pixel: the first with depth turning from the background neighbour
+        // towards the front (counter-clockwise in the image), so the depth lies on the left.
+        int k = -1;
+        for (int turn = 1; turn < 8 && k < 0; ++turn) {
+          const int d = ((back - turn) % 8 + 8) % 8;
+          if (hasDepth(current[0] + kDu[d], current[1] + kDv[d])) k = d;
+        }
+        if (k < 0) return false;
+        const int behind = (k + 1) % 8;  // the last background neighbour, seen from the next pixel
+        const OpenMesh::Vec2i next(current[0] + kDu[k], current[1] + kDv[k]);
+        back = directionOf(current[0] + kDu[behind] - next[0], current[1] + kDv[behind] - next[1]);
+        if (next == b) return true;
+        if (next == a || on_run.count(key(next)) || back < 0) return false;
+        if (!(depth_m.at<float>(next[1], next[0]) < nearer_than_m)) return false;
+        const int q = m.vertexAt(next[0], next[1]);
+        if (q >= 0 && !mesh.status(OpenMesh::VertexHandle(q)).deleted() && behindOccluder(OpenMesh::VertexHandle(q))) return false;
+        // A pixel reached again closes an excursion (a spike or a lobe behind a one-pixel
+        // neck): it is dropped, so the path stays simple.
+        const auto seen = on_path.find(key(next));
+        if (seen != on_path.end()) {
+          for (std::size_t j = seen->second + 1; j < path.size(); ++j) on_path.erase(key(path[j]));
+          path.resize(seen->second + 1);
+        } else {
+          on_path.emplace(key(next), path.size());
+          path.push_back(next);
+        }
+        current = next;
+      }
+      return false;
+    };
+    // One try per arc of background around the run's end (the trace's first step differs).
+    for (int start = 0; start < 8; ++start) {
+      const int before = (start + 7) % 8;
+      if (hasDepth(a[0] + kDu[start], a[1] + kDv[start]) || !hasDepth(a[0] + kDu[before], a[1] + kDv[before])) continue;
+      if (!trace(start)) continue;
+      double twice = 0;
+      std::vector<OpenMesh::Vec2i> polygon;
+      for (const auto v : run) polygon.push_back(pixelOf(v));
+      polygon.insert(polygon.end(), path.begin(), path.end());
+      for (std::size_t q = 0; q < polygon.size(); ++q) {
+        const auto& p0 = polygon[q];
+        const auto& p1 = polygon[(q + 1) % polygon.size()];
+        twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
+      }
+      if (twice < 0) return true;
+    }
+    path.clear();
+    return false;
+  };
   const auto addFrameHole = [&](const VertexLoop& run) {
     std::size_t behind = 0;
     for (std::size_t e = 1; e + 1 < run.size(); ++e) behind += behindOccluder(run[e]);
@@ -132,6 +211,17 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     std::vector<OpenMesh::Vec2i> path;
     const bool closed_along_frame = closingPath(run, path);  // (a path may be empty: neighbouring ends)
     if (!closed_along_frame) {
+      // Next along the sky line, over the occluder's outline: before the chord, which cuts
+      // the occluder's part above the run's ends off (and sees no sky behind it).
+      if (skyPath(run, path)) {
+        out.holes.push_back(run);
+        out.chord_closed.push_back(0);
+        out.sky_line_closed.push_back(1);
+        out.frame_paths.push_back(std::move(path));
+        ++out.frame_holes;
+        ++out.frame_holes_sky_line;
+        return;
+      }
       path.clear();
       // Closed by its chord, the run turning the loop's way (positive area) encloses its own
       // sheet: the sheet's faces lie on the polygon's inner side all along the run, so every
@@ -146,12 +236,14 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
         ++out.frame_holes_unclosable;
         out.unclosable_notes.push_back("frame hole of " + std::to_string(run.size()) +
                                        " boundary vertices not filled: it reaches the sky (no closing path along the frame), "
-                                       "and closed by its chord it encloses its own sheet (closing along the sky line is not done)");
+                                       "no closing path along the sky line passes over nearer pixels only, and closed by its "
+                                       "chord it encloses its own sheet");
         return;
       }
     }
     out.holes.push_back(run);
     out.chord_closed.push_back(closed_along_frame ? 0 : 1);
+    out.sky_line_closed.push_back(0);
     out.frame_paths.push_back(std::move(path));
     ++out.frame_holes;
   };
@@ -164,8 +256,9 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     for (std::size_t i = 0; i < n; ++i) {
       const auto a = loop[i], b = loop[(i + 1) % n];
       const OpenMesh::Vec2i pa = pixelOf(a), pb = pixelOf(b);
-      // Vertices a frame hole's patch added along the frame are part of the border.
-      if (mesh.property(m.properties.origin, a) != static_cast<std::uint8_t>(VertexOrigin::pixel) && frameSides(pa) == 0)
+      // Vertices a frame hole's patch added along the frame or the sky line are part of the border.
+      if (mesh.property(m.properties.origin, a) != static_cast<std::uint8_t>(VertexOrigin::pixel) && frameSides(pa) == 0 &&
+          !nextToNoDepth(pa))
         any_pixel_less = true;
       twice_area += double(pa[0]) * pb[1] - double(pb[0]) * pa[1];
       border_edge[i] = (frameSides(pa) & frameSides(pb)) != 0 || (nextToNoDepth(pa) && nextToNoDepth(pb));
@@ -182,6 +275,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
         out.holes.push_back(loop);
         out.frame_paths.emplace_back();
         out.chord_closed.push_back(0);
+        out.sky_line_closed.push_back(0);
         break;
       case LoopKind::sky_opening: ++out.sky_openings; break;
       case LoopKind::silhouette: ++out.silhouettes; break;

@@ -44,6 +44,7 @@ void addLoopCounts(StageReport& report, const std::string& prefix, const DepthLo
   report.add(prefix + "inner_holes", loops.inner_holes);
   report.add(prefix + "frame_holes", loops.frame_holes);
   report.add(prefix + "frame_holes_unclosable", loops.frame_holes_unclosable);
+  report.add(prefix + "frame_holes_sky_line", loops.frame_holes_sky_line);
 }
 
 void addHoleCounts(StageReport& report, const HoleClosing& holes) {
@@ -146,9 +147,21 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
     // its chord crosses the mesh, and every 3D patch failed on such holes (measured on the
     // synthetic 1080p streets: 0 of 11, 506 to 3 689 boundary vertices), after seconds of CGAL.
     std::vector<std::uint8_t> image_space_only(loops.holes.size(), 0);
+    // A frame hole closed along the sky line: its 3D fallbacks close it by its chord, which is
+    // as hopeless when the chord polygon encloses its own sheet (positive area in the image).
+    const auto chordEnclosesSheet = [&](const VertexLoop& run) {
+      double twice = 0;
+      for (std::size_t q = 0; q < run.size(); ++q) {
+        const OpenMesh::Vec2i p0 = mesh.property(m.properties.pixel, run[q]);
+        const OpenMesh::Vec2i p1 = mesh.property(m.properties.pixel, run[(q + 1) % run.size()]);
+        twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
+      }
+      return twice > 0;
+    };
     for (std::size_t i = 0; i < loops.holes.size(); ++i)
-      image_space_only[i] = loops.chord_closed[i] &&
-                            static_cast<int>(loops.holes[i].size()) > options.hole_filling.max_cubic_boundary_vertices;
+      image_space_only[i] = ((loops.chord_closed[i] || loops.sky_line_closed[i]) &&
+                             static_cast<int>(loops.holes[i].size()) > options.hole_filling.max_cubic_boundary_vertices) ||
+                            (loops.sky_line_closed[i] && chordEnclosesSheet(loops.holes[i]));
     PixelMapping mapping{m.properties, m.camera, m.width, m.height, &m.vertex_of_pixel};
     mapping.frame_paths = &loops.frame_paths;
     mapping.image_space_only = &image_space_only;

@@ -59,8 +59,13 @@ class JumpTest {
     const int du = b[0] - a[0], dv = b[1] - a[1];
     const double length_px = std::sqrt(double(du * du + dv * dv));
     const double footprint_m = std::min(za, zb) / focal_px_ * length_px;
-    if (std::abs(za - zb) <= factor * footprint_m) return Edge::kSmall;
-    if (!options_.extrapolation_test) return Edge::kJump;
+    // A jump under the criterion but over small_jump_fraction of it is tested too; it must then
+    // show a step of that many footprints as well (below).
+    const double small_factor = options_.small_jump_fraction * factor;
+    const bool small_jump = std::abs(za - zb) <= factor * footprint_m;
+    if (small_jump && !(options_.small_jump_fraction > 0 && std::abs(za - zb) > small_factor * footprint_m))
+      return Edge::kSmall;
+    if (!options_.extrapolation_test) return small_jump ? Edge::kSmall : Edge::kJump;  // no step test either
     const double wa = 1.0 / za, wb = 1.0 / zb;
     // A side without a pixel behind it (image frame, sky) cannot be extrapolated: only jumps
     // larger than edge_of_data_factor times the criterion are cut there.
@@ -89,12 +94,13 @@ class JumpTest {
     double apart_m = (pa - pb).norm();
     for (int step = 1; step <= 2; ++step) {  // two pixels back too: the first may be a one-pixel sliver
       const OpenMesh::Vec2i a_back(a[0] - step * du, a[1] - step * dv), b_back(b[0] + step * du, b[1] + step * dv);
-      // The one-pixel line is kept unchecked: on side facades whose pixels alternate between
-      // wall and window faces (inverse depth not linear) it still follows the facade within
-      // centimetres, and checking it cost more false positives than it saved (docs/mesh.md).
-      if (step == 1 ? hasVertex(a_back[0], a_back[1]) : isSurfaceLine(a, -step * du, -step * dv))
+      // The one-pixel line is dropped only when it crosses an occlusion (isOccludedLine): on
+      // side facades whose pixels alternate between wall and window faces (inverse depth not
+      // linear, 20-30 footprints a pixel) it still follows the facade within centimetres, and
+      // checking its linearity alone cost more false positives than it saved (docs/mesh.md).
+      if (step == 1 ? !isOccludedLine(a, -du, -dv) : isSurfaceLine(a, -step * du, -step * dv))
         apart_m = std::min(apart_m, distanceToLine(pb, pa, point(a_back[0], a_back[1])));
-      if (step == 1 ? hasVertex(b_back[0], b_back[1]) : isSurfaceLine(b, step * du, step * dv))
+      if (step == 1 ? !isOccludedLine(b, du, dv) : isSurfaceLine(b, step * du, step * dv))
         apart_m = std::min(apart_m, distanceToLine(pa, pb, point(b_back[0], b_back[1])));
     }
     // A line only follows its surface along the edge: where a thin face stands on a surface
@@ -106,7 +112,19 @@ class JumpTest {
       apart_m = std::min(apart_m, distanceToBlockPlanes(a, -du, -dv, pu, pv, pb));
       apart_m = std::min(apart_m, distanceToBlockPlanes(b, du, dv, pu, pv, pa));
     }
-    return apart_m >= options_.min_step_m ? Edge::kJump : Edge::kThinStep;
+    const double min_step_m =
+        small_jump ? std::max(options_.min_step_m, small_factor * footprint_m) : options_.min_step_m;
+    return apart_m >= min_step_m ? Edge::kJump : Edge::kThinStep;
+  }
+
+  /// Whether the line through pixel s and s + (eu, ev) is no surface: no vertex there, or the
+  /// two pixels are no surface line (isSurfaceLine) and jump by more than occluded_line_factor
+  /// footprints (one of them lies far behind the other, on another surface).
+  bool isOccludedLine(const OpenMesh::Vec2i& s, int eu, int ev) const {
+    const OpenMesh::Vec2i t(s[0] + eu, s[1] + ev);
+    if (!hasVertex(t[0], t[1])) return true;
+    return options_.occluded_line_factor > 0 && exceedsFootprints(s, t, options_.occluded_line_factor) &&
+           !isSurfaceLine(s, eu, ev);
   }
 
   /// Whether pixels s and s + (eu, ev) sample one surface: their depths are within the

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 namespace {
 
@@ -156,8 +157,9 @@ TEST(SpuriousFaces, OcclusionStepIsCutExactlyAlongItsEdge) {
 
 TEST(SpuriousFaces, PrecisionAndRecallOnTheDefaultSyntheticScene) {
   // The embedded scene's exact depth, normals and instances (960x540). Measured: precision
-  // 0.955, recall 0.946 of the occlusion criteria (docs/mesh.md; before the block planes and
-  // the line check 0.923 and 0.945 against this ground truth); the target is 0.95.
+  // 0.955, recall 0.9505 of the occlusion criteria, 13 987 of the 14 715 found (docs/mesh.md;
+  // before the small jumps and the occluded-line check 0.955 and 0.946, before the block planes
+  // and the line check 0.923 and 0.945 against this ground truth); the target is 0.95.
   // 912 faces of the 15 627 the per-pixel planes call spurious are sub-pixel window detail of
   // far side facades (the ground truth's exception, spurious_faces.h).
   const solo::Scene truth = solo::loadScene(std::filesystem::path(SOLO_PROJECT_DATA_DIR) / "default/gt/scene.json");
@@ -169,8 +171,9 @@ TEST(SpuriousFaces, PrecisionAndRecallOnTheDefaultSyntheticScene) {
   const solo::DetectionScore score = solo::scoreDetection(occlusion, spurious);
   EXPECT_EQ(score.true_positives + score.false_negatives, 14715);
   EXPECT_GE(score.precision, 0.95);
+  EXPECT_GE(score.recall, 0.95);
   EXPECT_NEAR(score.precision, 0.955, 0.002);
-  EXPECT_NEAR(score.recall, 0.946, 0.002);
+  EXPECT_NEAR(score.recall, 0.9505, 0.002);
 }
 
 /// Exact depth and normals of axis-aligned boxes (and optionally the road plane y = 1.5 m, the
@@ -368,6 +371,106 @@ TEST(SpuriousFaces, ThinObjectBetweenANearAndAFarSurfaceIsCutFromBoth) {
   }
   EXPECT_EQ(interior_bridging, 2 * (camera.height - 9));
   EXPECT_EQ(interior_kept, interior_bridging);
+}
+
+/// Which of `depths_m` (within 1 cm) each vertex of face f lies on; -1 for none.
+std::vector<int> surfacesOfFace(const solo::DepthMesh& m, const cv::Mat& depth_m, OpenMesh::FaceHandle f,
+                                const std::vector<double>& depths_m) {
+  std::vector<int> out;
+  for (const auto v : m.mesh.fv_range(f)) {
+    const OpenMesh::Vec2i p = m.mesh.property(m.properties.pixel, v);
+    const double z = depth_m.at<float>(p[1], p[0]);
+    int which = -1;
+    for (std::size_t k = 0; k < depths_m.size(); ++k)
+      if (std::abs(z - depths_m[k]) < 0.01) which = static_cast<int>(k);
+    out.push_back(which);
+  }
+  return out;
+}
+
+TEST(SpuriousFaces, StepOfAFewFootprintsBetweenParallelFacesIsCut) {
+  // Two camera-facing boxes side by side 26 m ahead, the left one's front 20 cm behind the
+  // right one's (the step of a street light's head or a car's cabin in data/default: 6.9
+  // footprints, under the 8 of the criterion), before a wall at 50 m. Every face spanning two
+  // of the three surfaces is spurious and removed, the 26 of the step included: the step
+  // measured from either side's surface lines and planes is 20 cm, 6.9 footprints (at least
+  // half the criterion, small_jump_fraction, are needed). With small jumps untested those 26 stay.
+  const solo::PinholeCamera camera{890.0, 890.0, 19.5, 9.5, 40, 20};
+  const RayCast scene = castBoxes(camera,
+                                  {{{0.0, -0.2, 25.8}, {1.0, 0.2, 26.5}},
+                                   {{-1.0, -0.2, 26.0}, {0.0, 0.2, 26.5}},
+                                   {{-20.0, -20.0, 50.0}, {20.0, 20.0, 51.0}}},
+                                  false);
+  const solo::DepthMesh m = solo::meshFromDepth(scene.depth_m, camera);
+  const std::vector<std::uint8_t> truth = solo::spuriousFacesFromGroundTruth(m, scene.depth_m, scene.normals);
+  const solo::SpuriousFaceResult r = solo::findSpuriousFaces(m, scene.depth_m, {}, {});
+  solo::SpuriousFaceOptions untested;
+  untested.small_jump_fraction = 0;
+  const solo::SpuriousFaceResult old = solo::findSpuriousFaces(m, scene.depth_m, {}, {}, untested);
+  std::int64_t step_faces = 0, spurious_faces = 0;
+  for (const auto f : m.mesh.faces()) {
+    const std::vector<int> s = surfacesOfFace(m, scene.depth_m, f, {25.8, 26.0, 50.0});
+    ASSERT_EQ(std::count(s.begin(), s.end(), -1), 0);
+    const bool bridges = std::set<int>(s.begin(), s.end()).size() > 1;
+    const bool step = bridges && std::count(s.begin(), s.end(), 2) == 0;
+    EXPECT_EQ(truth[f.idx()] != 0, bridges) << "face " << f.idx();
+    EXPECT_EQ(r.spurious[f.idx()] != 0, bridges) << "face " << f.idx();
+    EXPECT_EQ(old.spurious[f.idx()] != 0, bridges && !step) << "face " << f.idx();
+    step_faces += step;
+    spurious_faces += bridges;
+  }
+  EXPECT_EQ(step_faces, 2 * 13);  // the rows 3 to 16 see the boxes: 13 quads along the step
+  EXPECT_GT(spurious_faces, step_faces);
+}
+
+TEST(SpuriousFaces, LineThroughAOnePixelGapDoesNotExplainTheOcclusion) {
+  // Columns: a pole 9 m ahead up to column 9, a wall 18 m away seen through a one-pixel gap
+  // (column 10), a plate 14 m away from column 11 (a pole before a facade in data/default).
+  // The line through the gap's point and the plate's next to it runs along the viewing rays
+  // (4 m deeper in one pixel) and passes 4 cm from the pole's point: by that line, a thin
+  // step. But those two pixels are no surface (250 footprints apart, inverse depth not linear
+  // over three pixels), so the line does not count and all 22 faces between the pole and the
+  // gap are removed. With the line counted (occluded_line_factor 0) the 18 of them away from
+  // the top and bottom rows stay (there a diagonal edge has no pixel behind it: the
+  // edge-of-data rule cuts it). The faces between the gap and the plate are spurious too but
+  // stay either way, except on the top and bottom rows: the gap, one pixel wide, has no
+  // surface of its own to extrapolate, and its extrapolation from the pole behind it meets the
+  // plate (a miss the docs list).
+  const solo::PinholeCamera camera{890.0, 890.0, 4.5, 5.5, 24, 12};
+  const auto x_at = [&](double u, double z_m) { return (u - camera.cx) / camera.fx * z_m; };
+  const RayCast scene = castBoxes(camera,
+                                  {{{-5.0, -20.0, 9.0}, {x_at(9.5, 9.0), 20.0, 9.01}},
+                                   {{-20.0, -20.0, 18.0}, {20.0, 20.0, 18.01}},
+                                   {{x_at(10.5, 14.0), -20.0, 14.0}, {5.0, 20.0, 14.01}}},
+                                  false);
+  const solo::DepthMesh m = solo::meshFromDepth(scene.depth_m, camera);
+  const std::vector<std::uint8_t> truth = solo::spuriousFacesFromGroundTruth(m, scene.depth_m, scene.normals);
+  const solo::SpuriousFaceResult r = solo::findSpuriousFaces(m, scene.depth_m, {}, {});
+  solo::SpuriousFaceOptions counted;
+  counted.occluded_line_factor = 0;
+  const solo::SpuriousFaceResult old = solo::findSpuriousFaces(m, scene.depth_m, {}, {}, counted);
+  std::int64_t pole_gap = 0, gap_plate = 0, removed = 0, old_kept_pole_gap = 0;
+  for (const auto f : m.mesh.faces()) {
+    const std::vector<int> s = surfacesOfFace(m, scene.depth_m, f, {9.0, 18.0, 14.0});
+    ASSERT_EQ(std::count(s.begin(), s.end(), -1), 0);
+    const bool bridges = std::set<int>(s.begin(), s.end()).size() > 1;
+    const bool pole_and_gap = bridges && std::count(s.begin(), s.end(), 2) == 0;
+    const bool gap_and_plate = bridges && std::count(s.begin(), s.end(), 0) == 0;
+    int top_v = camera.height;
+    for (const auto v : m.mesh.fv_range(f)) top_v = std::min(top_v, m.mesh.property(m.properties.pixel, v)[1]);
+    const bool frame_row = top_v == 0 || top_v == camera.height - 2;
+    EXPECT_EQ(truth[f.idx()] != 0, bridges) << "face " << f.idx();
+    EXPECT_EQ(r.spurious[f.idx()] != 0, pole_and_gap || (gap_and_plate && frame_row)) << "face " << f.idx();
+    EXPECT_EQ(old.spurious[f.idx()] != 0, (pole_and_gap || gap_and_plate) && frame_row) << "face " << f.idx();
+    pole_gap += pole_and_gap;
+    gap_plate += gap_and_plate;
+    removed += r.spurious[f.idx()] != 0;
+    old_kept_pole_gap += pole_and_gap && !old.spurious[f.idx()];
+  }
+  EXPECT_EQ(pole_gap, 2 * 11);
+  EXPECT_EQ(gap_plate, 2 * 11);
+  EXPECT_EQ(removed, 2 * 11 + 2 * 2);
+  EXPECT_EQ(old_kept_pole_gap, 2 * 9);
 }
 
 /// A 10 m wall filling the view, and a car (instance 26001) at 5 m over `rect`.

@@ -400,40 +400,214 @@ TEST(ImageHoleFilling, FarWallSeenAtTheFrameContinuesBehindTheNearWall) {
       }
     EXPECT_GT(fill, 500);  // 40 x 30 pixels less the window, every pixel of the frame
   }
-  // With sky over the top rows the frame between the loop's ends is not all depth: closing
-  // along the sky line is not done, and the chord polygon encloses the far sheet: the frame
-  // hole is reported open with its reason, and no method is tried on it.
+  // With sky over the top rows the frame between the loop's ends is not all depth, and the
+  // chord polygon encloses the far sheet (before, reported unclosable). Closed along the sky
+  // line instead (down the left frame, along the bottom and up the right frame, left along the
+  // near wall's edge against the sky on row 3, down the left frame to the window), the far wall
+  // is continued behind the near wall up to the sky line.
   depth(cv::Rect(0, 0, kCamera.width, 3)).setTo(0.0f);
   solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, {});
   const solo::StageReport r = solo::cleanDepthMesh(m, depth, {}, {});
   EXPECT_EQ(metricInt(r, "found_frame_holes"), 1);
-  EXPECT_EQ(metricInt(r, "found_frame_holes_unclosable"), 1);
-  EXPECT_EQ(metricInt(r, "after_frame_holes"), 1);
-  EXPECT_EQ(metricInt(r, "holes_filled"), 0);
+  EXPECT_EQ(metricInt(r, "found_frame_holes_unclosable"), 0);
+  EXPECT_EQ(metricInt(r, "found_frame_holes_sky_line"), 1);
+  EXPECT_EQ(metricInt(r, "holes_filled_image_space"), 1);
   EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
-  bool noted = false;
-  for (const auto& note : r.notes) noted = noted || note.find("encloses its own sheet") != std::string::npos;
-  EXPECT_TRUE(noted);
+  EXPECT_EQ(metricInt(r, "after_frame_holes"), 0);
+  EXPECT_EQ(metricInt(r, "after_boundary_loops_total"), 2);  // the borders of both walls
+  EXPECT_EQ(metricInt(r, "after_border_loops"), 2);
+  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
+  int fill = 0, on_sky_line = 0;
+  for (const auto v : m.mesh.vertices())
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::hole_fill) {
+      const auto& q = m.mesh.point(v);
+      EXPECT_NEAR(q[2], 30.0, 1e-4);
+      const Eigen::Vector2d uv = kCamera.project(Eigen::Vector3d(q[0], q[1], q[2]));
+      EXPECT_GT(uv.y(), 3.0 - 1e-6);  // nothing over the sky
+      on_sky_line += std::abs(uv.y() - 3.0) < 1e-6;
+      ++fill;
+    }
+  EXPECT_EQ(on_sky_line, kCamera.width);  // the whole of row 3, the first with depth
+  EXPECT_GT(fill, 400);
+}
+
+/// Depth of a far plane (normal . x = d_m) with sky (0) over rows 0..sky_rows-1, and a near
+/// box at box_depth_m over `box` drawn last (it may rise into the sky).
+cv::Mat planeSkyAndBox(const Eigen::Vector3d& normal, double d_m, int sky_rows, const cv::Rect& box, float box_depth_m);
+
+/// Checks the hole-fill vertices of a mesh: on the plane within 1e-5 relative, none over the
+/// sky except behind the box, and those over the box behind it; returns how many there are.
+int checkFillOnPlaneBehindBox(const solo::DepthMesh& m, const Eigen::Vector3d& normal, double d_m, const cv::Rect& box,
+                              double box_depth_m, int sky_rows, int* over_box) {
+  int fill = 0;
+  *over_box = 0;
+  for (const auto v : m.mesh.vertices()) {
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) != solo::VertexOrigin::hole_fill) continue;
+    ++fill;
+    const auto& q = m.mesh.point(v);
+    const Eigen::Vector3d p(q[0], q[1], q[2]);
+    EXPECT_NEAR(normal.dot(p), d_m, 1e-5 * d_m);
+    const Eigen::Vector2d uv = kCamera.project(p);
+    const int u = static_cast<int>(std::lround(uv.x())), row = static_cast<int>(std::lround(uv.y()));
+    EXPECT_NEAR(uv.x(), u, 1e-6);  // on pixel centres
+    EXPECT_NEAR(uv.y(), row, 1e-6);
+    const bool in_box = box.contains(cv::Point(u, row));
+    EXPECT_TRUE(in_box || row >= sky_rows) << u << " " << row;  // over the sky only behind the box
+    if (in_box) {
+      EXPECT_GT(p.z(), box_depth_m + 1.0);
+      ++*over_box;
+    }
+  }
+  return fill;
+}
+
+cv::Mat planeSkyAndBox(const Eigen::Vector3d& normal, double d_m, int sky_rows, const cv::Rect& box, float box_depth_m) {
+  cv::Mat depth = planeDepth(normal, d_m);
+  depth(cv::Rect(0, 0, kCamera.width, sky_rows)).setTo(0.0f);
+  depth(box).setTo(box_depth_m);
+  return depth;
+}
+
+TEST(ImageHoleFilling, FrameHoleBehindABoxRisingIntoTheSkyClosesAlongTheSkyLine) {
+  // A tilted far plane (about 8-12 m) with sky over rows 0..9 and a building at 4 m rising
+  // from the bottom frame at the right frame: columns 26..39 from row 5 (above the plane's sky
+  // line) and, stepping out, columns 22..39 from row 20 down. The plane's run behind it goes
+  // from the sky line down column 25, along row 19 and down column 21 to the bottom frame;
+  // along the frame it would cross the sky at the top right. Closed along the sky line: right
+  // along the bottom frame under the building, up the right frame, left along its top (row 5)
+  // and down its edge against the sky (column 26, rows 5..9): the plane is continued behind
+  // the whole building. (The step makes the run span both image axes: from a straight run
+  // the plane's slope across it could not be known.)
+  const Eigen::Vector3d normal = Eigen::Vector3d(-0.3, -0.2, 1.0).normalized();
+  const double d = 10.0;
+  const cv::Rect box(26, 5, kCamera.width - 26, kCamera.height - 5), step(22, 20, 4, kCamera.height - 20);
+  cv::Mat depth = planeSkyAndBox(normal, d, 10, box, 4.0f);
+  depth(step).setTo(4.0f);
+  solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, {});
+  const solo::StageReport r = solo::cleanDepthMesh(m, depth, {}, {});
+  EXPECT_EQ(metricInt(r, "found_inner_holes"), 0);
+  EXPECT_EQ(metricInt(r, "found_frame_holes"), 1);
+  EXPECT_EQ(metricInt(r, "found_frame_holes_sky_line"), 1);
+  EXPECT_EQ(metricInt(r, "found_frame_holes_unclosable"), 0);
+  EXPECT_EQ(metricInt(r, "holes_filled_image_space"), 1);
+  EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
+  // Left open: the borders of the plane (now frame and sky line, the box's outline against
+  // the sky included) and of the box; no hole of any kind.
+  EXPECT_EQ(metricInt(r, "after_frame_holes"), 0);
+  EXPECT_EQ(metricInt(r, "after_inner_holes"), 0);
+  EXPECT_EQ(metricInt(r, "after_silhouette_loops"), 0);
+  EXPECT_EQ(metricInt(r, "after_border_loops"), 2);
+  EXPECT_EQ(metricInt(r, "after_boundary_loops_total"), 2);
+  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
+  EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0);
+  EXPECT_EQ(metricInt(r, "after_degenerate_faces"), 0);
+  int over_box = 0, over_step = 0;
+  const int fill = checkFillOnPlaneBehindBox(m, normal, d, box, 4.0, 10, &over_box);
+  for (const auto v : m.mesh.vertices())
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::hole_fill) {
+      const auto& q = m.mesh.point(v);
+      const Eigen::Vector2d uv = kCamera.project(Eigen::Vector3d(q[0], q[1], q[2]));
+      if (step.contains(cv::Point(static_cast<int>(std::lround(uv.x())), static_cast<int>(std::lround(uv.y()))))) {
+        EXPECT_GT(q[2], 4.0 + 1.0);
+        ++over_step;
+      }
+    }
+  EXPECT_EQ(fill, metricInt(r, "hole_vertices_added"));
+  EXPECT_EQ(fill, over_box + over_step);  // the region is the building's image
+  // The path: the bottom row (18 pixels), the right column (24 less the corner), the top row
+  // (13 less the corner), the left column above the plane (4): 58; with the interior pixel
+  // centres 2 pixels or more inside, well over 150.
+  EXPECT_GT(fill, 150);
+  EXPECT_GT(over_step, 10);
+}
+
+TEST(ImageHoleFilling, FrameHoleAroundABoxHangingFromTheSkyClosesAlongTheSkyLine) {
+  // A tilted far plane with sky over rows 0..11 and a box at 3 m over columns 14..25, rows
+  // 6..21: it rises into the sky and touches no frame. The plane's run goes from the sky line
+  // down around the box and back up to the sky line. Closed along the sky line (up the box's
+  // right edge against the sky, along its top, down its left edge), not by the chord along
+  // row 12, the patch covers the box's whole image.
+  const Eigen::Vector3d normal = Eigen::Vector3d(0.25, -0.3, 1.0).normalized();
+  const double d = 12.0;
+  const cv::Rect box(14, 6, 12, 16);
+  const cv::Mat depth = planeSkyAndBox(normal, d, 12, box, 3.0f);
+  solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, {});
+  const solo::StageReport r = solo::cleanDepthMesh(m, depth, {}, {});
+  EXPECT_EQ(metricInt(r, "found_frame_holes"), 1);
+  EXPECT_EQ(metricInt(r, "found_frame_holes_sky_line"), 1);
+  EXPECT_EQ(metricInt(r, "holes_filled_image_space"), 1);
+  EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
+  EXPECT_EQ(metricInt(r, "after_frame_holes"), 0);
+  EXPECT_EQ(metricInt(r, "after_inner_holes"), 0);
+  EXPECT_EQ(metricInt(r, "after_border_loops"), 2);  // the plane's and the box's
+  EXPECT_EQ(metricInt(r, "after_boundary_loops_total"), 2);
+  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
+  EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0);
+  int over_box = 0;
+  const int fill = checkFillOnPlaneBehindBox(m, normal, d, box, 3.0, 12, &over_box);
+  EXPECT_EQ(fill, over_box);
+  // Over the sky (rows 6..11): the path along the box's top and sides, and interior centres.
+  int above_sky_line = 0;
+  for (const auto v : m.mesh.vertices())
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::hole_fill) {
+      const auto& q = m.mesh.point(v);
+      above_sky_line += kCamera.project(Eigen::Vector3d(q[0], q[1], q[2])).y() < 11.5;
+    }
+  EXPECT_GE(above_sky_line, 12 + 2 * 5);  // the top row and both sides' rows 7..11
+  EXPECT_GT(fill, 12 * 16 / 2);
+}
+
+TEST(ImageHoleFilling, AnOccluderSplittingThePlaneGetsNoSkyLinePathOverTheOtherSheet) {
+  // The building of the test above in the middle (columns 14..23 from row 5, 12..25 from row
+  // 20), from the bottom frame into the sky: it splits the plane into two sheets, each with a
+  // run behind it. The sky-line contour from one run's end crosses under the building along
+  // the bottom frame and reaches the other sheet, which is not nearer than the run's ends and
+  // lies behind the building: no sky-line path (a region over the other sheet would be wrong;
+  // closing both needs both runs in one hole: not done). Each run is tried with its chord as
+  // before and every patch is rejected: both stay open, reported, and nothing is added.
+  const Eigen::Vector3d normal = Eigen::Vector3d(-0.3, -0.2, 1.0).normalized();
+  cv::Mat depth = planeSkyAndBox(normal, 10.0, 10, cv::Rect(14, 5, 10, kCamera.height - 5), 4.0f);
+  depth(cv::Rect(12, 20, 14, kCamera.height - 20)).setTo(4.0f);
+  solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, {});
+  const solo::StageReport r = solo::cleanDepthMesh(m, depth, {}, {});
+  EXPECT_EQ(metricInt(r, "found_frame_holes"), 2);
+  EXPECT_EQ(metricInt(r, "found_frame_holes_sky_line"), 0);
+  EXPECT_EQ(metricInt(r, "holes_filled"), 0);
+  EXPECT_EQ(metricInt(r, "holes_left_open"), 2);
+  EXPECT_EQ(metricInt(r, "hole_vertices_added"), 0);
+  EXPECT_EQ(metricInt(r, "after_frame_holes"), 2);
+  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
+  int open_notes = 0;
+  for (const auto& note : r.notes) open_notes += note.find("left open") != std::string::npos;
+  EXPECT_EQ(open_notes, 2);
 }
 
 TEST(ImageHoleFilling, DefaultSceneClosesEveryFrameHoleItCanBound) {
-  // data/default/scene.json as `solo mesh from-depth` meshes it. Measured: 1 887 inner holes
-  // and 40 frame holes found (counts of the spurious-face removal of this tree); every inner
+  // data/default/scene.json as `solo mesh from-depth` meshes it. Measured: 1 906 inner holes
+  // and 40 frame holes found (counts of the spurious-face removal of this tree: its small-jump
+  // and occluded-line tests cut 217 more faces of this estimated depth than before, which made
+  // 19 more inner holes, 1 887 before); every inner
   // hole and all 29 frame holes with a region to fill close in image space. The 11 not
-  // attempted end on the sky line or have sky on the frame between their ends, and their chord
-  // polygon encloses their own sheet (a facade behind the trees, drawn up to the sky): bounding
-  // them needs the sky line, which is not done. After the fills and the solids the
-  // classification finds 8 such loops, and no other frame hole.
+  // attempted end on the sky line or have sky on the frame between their ends, their chord
+  // polygon encloses their own sheet, and no closing path along the sky line exists for them:
+  // the outline of the pixels with depth leads from their last vertex onto a surface no nearer
+  // than their ends (9: the next facade along the top frame, their own surface along a side
+  // frame) or onto one itself behind an occluder (2: a car behind a nearer one); these are facades behind trees and cars whose other side
+  // is another sheet of the same facade (closing them needs both sheets' runs in one hole, not
+  // done). Closing along the sky line moved no count here (it closes the sky-line cases of the
+  // tests above). After the fills and the solids the classification finds 8 such loops, and no
+  // other frame hole.
   const solo::Scene scene = solo::loadScene(std::filesystem::path(SOLO_PROJECT_DATA_DIR) / "default/scene.json");
   solo::DepthMeshCleanupOptions options;
   options.evaluate = false;
   solo::StageReport report;
   solo::meshFromScene(scene.depth_m, scene.camera, scene.instances, {}, options, report);
-  EXPECT_EQ(metricInt(report, "found_inner_holes"), 1887);
+  EXPECT_EQ(metricInt(report, "found_inner_holes"), 1906);
   EXPECT_EQ(metricInt(report, "found_frame_holes"), 40);
   EXPECT_EQ(metricInt(report, "found_frame_holes_unclosable"), 11);
-  EXPECT_EQ(metricInt(report, "holes_filled"), 1887 + 40 - 11);
-  EXPECT_EQ(metricInt(report, "holes_filled_image_space"), 1887 + 40 - 11);
+  EXPECT_EQ(metricInt(report, "found_frame_holes_sky_line"), 0);
+  EXPECT_EQ(metricInt(report, "holes_filled"), 1906 + 40 - 11);
+  EXPECT_EQ(metricInt(report, "holes_filled_image_space"), 1906 + 40 - 11);
   EXPECT_EQ(metricInt(report, "holes_left_open"), 0);
   EXPECT_EQ(metricInt(report, "after_inner_holes"), 0);
   EXPECT_EQ(metricInt(report, "after_frame_holes"), 8);

@@ -9,8 +9,9 @@
 //  - inner loop without border edge: a hole behind an occluder -> filled;
 //  - inner loop with border edges: sky seen through a gap -> stays open (sky_opening);
 //  - outer loop with border edges: the border; each run of non-border edges lying behind a
-//    nearer surface (an occluder touching the frame or the sky line) is closed with a chord
-//    between its two ends and filled (frame_hole);
+//    nearer surface (an occluder touching the frame or the sky line) is a frame hole, closed
+//    along the image frame, or along the sky line over the occluder's silhouette, or by the
+//    chord between its two ends, and filled (frame_hole);
 //  - outer loop without border edge: the outline of a floating sheet (silhouette); foreground
 //    things are closed into solids, other sheets stay open and are reported.
 
@@ -38,15 +39,24 @@ struct DepthLoops {
   std::vector<VertexLoop> holes;        ///< closed polylines to fill: inner holes and frame holes
   /// Per hole: for a frame hole closed along the image frame, the frame pixels (u, v) that
   /// close it, in order from the hole's last vertex to its first (both excluded; possibly none
-  /// when the two ends are neighbouring pixels); empty for the others (closed by a chord).
+  /// when the two ends are neighbouring pixels); for one closed along the sky line, the pixels
+  /// of the occluder's outline against the sky (and the frame) that close it, in the same
+  /// order; empty for the others (closed by a chord).
   std::vector<std::vector<OpenMesh::Vec2i>> frame_paths;
   /// Per hole: 1 for a frame hole closed by the chord between its ends (no frame path).
   std::vector<std::uint8_t> chord_closed;
+  /// Per hole: 1 for a frame hole closed along the sky line (its frame_paths entry is that path).
+  std::vector<std::uint8_t> sky_line_closed;
   std::int64_t inner_holes = 0, frame_holes = 0;
   std::int64_t border_loops = 0, sky_openings = 0, silhouettes = 0;
+  /// Frame holes (counted in frame_holes, and in holes) closed along the sky line: no closing
+  /// path along the frame, but the outline of the pixels with depth leads from their last vertex
+  /// back to their first over nearer pixels only (an occluder rising into the sky); tried
+  /// before the chord.
+  std::int64_t frame_holes_sky_line = 0;
   /// Frame holes (counted in frame_holes, not in holes) that cannot be closed: no closing path
-  /// along the frame (sky between their ends, or an end on the sky line) and, closed by their
-  /// chord, they enclose their own sheet. One note each.
+  /// along the frame (sky between their ends, or an end on the sky line), none along the sky
+  /// line, and, closed by their chord, they enclose their own sheet. One note each.
   std::int64_t frame_holes_unclosable = 0;
   std::vector<std::string> unclosable_notes;
 };

@@ -83,12 +83,13 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 /// a depth mesh arrive here as separate simple polygons.
 ///
 /// `closing_path_px` (optional; a frame hole of a depth mesh): pixel positions closing the
-/// polygon from the last boundary point back to the first along the image frame. They become
+/// polygon from the last boundary point back to the first along the image frame, or along the
+/// sky line over an occluder's outline (DepthLoops::frame_paths). They become
 /// new points (new_points[0..size-1], in order; the interior vertices follow) whose inverse
 /// depth is free, extended like the interior's: the boundary's least-squares affine inverse
 /// depth (a plane stays exact) plus the harmonic extension of the residual, with no flux across
 /// the closing path; they are pinned behind obstacles too. The patch's edges along the path
-/// have no face beyond them (the frame). Fails when the extension is not in front of the camera,
+/// have no face beyond them (the frame, the sky). Fails when the extension is not in front of the camera,
 /// or when more than 5 % of the unknown vertices whose pixel holds an obstacle see it more than
 /// 10 % behind the extension (a farther surface is seen there: the region is not behind an
 /// occluder, and a patch pinned behind that surface would be a wall nobody sees).

@@ -43,8 +43,9 @@ struct PixelMapping {
   /// its pixel quad, so one that meets a patch face has a corner within one pixel of the
   /// patch face's projection).
   const std::vector<int>* vertex_of_pixel = nullptr;
-  /// Optional, per hole (DepthLoops::frame_paths): the frame pixels closing a frame hole along
-  /// the image frame (fillHoleInImage's closing path), empty for a hole closed by its own loop.
+  /// Optional, per hole (DepthLoops::frame_paths): the pixels closing a frame hole along the
+  /// image frame or the sky line (fillHoleInImage's closing path), empty for a hole closed by
+  /// its own loop.
   const std::vector<std::vector<OpenMesh::Vec2i>>* frame_paths = nullptr;
   /// Optional, per hole (DepthLoops::image_space_only): non-zero = no 3D fallback after the
   /// image-space fill (a large frame hole closed by its chord, on which every 3D patch fails).

@@ -15,7 +15,12 @@
 //    pixels one and two behind it (the latter only when those pixels sample one surface: a line
 //    across a jump runs along the viewing rays and passes near everything beside them) and from
 //    the planes of the 2x2 pixel blocks behind it (a tyre standing on the road is centimetres
-//    from the road's plane but metres from its line along the edge).
+//    from the road's plane but metres from its line along the edge). The line through a side's
+//    point and the pixel one behind it does not count either when those two are no surface and
+//    jump by more than `occluded_line_factor` footprints (it runs along the viewing rays).
+//    Jumps between `small_jump_fraction` of the criterion and the criterion go through the same
+//    tests and are cut when the step is also at least that many footprints (the 20 cm step
+//    between the parts of a street-light head 26 m away is 6.9 footprints).
 //    Where a side has no pixel behind it (frame, sky) only jumps over `edge_of_data_factor`
 //    times the criterion are cut.
 //  - grazing: the face normal is more than `grazing_angle_deg` from the viewing ray;
@@ -60,6 +65,20 @@ struct SpuriousFaceOptions {
   /// pixels to this fraction of its first step (0 on a plane, 1 for a jump onto a flat
   /// surface; 0.5 measured, docs/mesh.md).
   double surface_line_linearity = 0.5;
+  /// Jumps of more than this fraction of depth_jump_factor footprints are tested too, and cut
+  /// only when the step measured from the surfaces on either side is also at least that many
+  /// footprints (and min_step_m): the 20 cm step between the parts of a street-light head
+  /// 26 m away is 6.9 footprints. The step, not the depth difference, is what a grazing surface
+  /// cannot fake. 0.5 measured; 0 = off (docs/mesh.md).
+  double small_jump_fraction = 0.5;
+  /// The line through a side's point and the pixel behind it does not count when those two
+  /// pixels are no surface line (see surface_line_linearity) and jump by more than this many
+  /// footprints: such a line runs along the viewing rays (a facade seen through a one-pixel gap
+  /// beside a pole, the facade's next pixel 4 m nearer) and passes within centimetres of any
+  /// point beside it. Smaller jumps keep the line (side facades whose pixels alternate between
+  /// wall and window faces, 20-30 footprints: the line follows the facade). 64 measured (twice
+  /// the edge-of-data threshold); 0 = the line always counts (docs/mesh.md).
+  double occluded_line_factor = 64.0;
   double grazing_angle_deg = 90.0;      ///< 90 = criterion off; MeshLab's 75 cuts every road beyond 6 m
   bool use_uncertain_mask = true;
   double uncertain_same_object_span_m = 3.0;
