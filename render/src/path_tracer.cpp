@@ -3,6 +3,7 @@
 #include "solo/render/ggx.h"
 #include "solo/render/ray_caster.h"
 #include "solo/render/sampler.h"
+#include "solo/render/spherical_triangle.h"
 
 #include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
@@ -72,6 +73,97 @@ float powerHeuristic(float a, float b) { return a * a / (a * a + b * b); }
 
 float luminance(const Eigen::Vector3f& xyz) { return xyz.y(); }
 
+// A point on an emitting triangle for next-event estimation from `origin`: by solid angle,
+// warped toward the receiver's cosine (spherical_triangle.h), when the triangle looks large;
+// else by area. `pdf` is per steradian either way; emitterPdf() applies the same rule to a
+// direction that BSDF sampling found, so the MIS weights of both strategies agree.
+struct EmitterSample {
+  bool ok = false;
+  Eigen::Vector3f wi;  // unit, from origin
+  float distance = 0;  // metres, origin to the triangle along wi
+  float cos_light = 0; // |cosine| at the emitter
+  float pdf = 0;       // per steradian, given the triangle
+};
+
+EmitterSample sampleEmitter(const EmissiveTriangle& t, const Eigen::Vector3f& origin, const Eigen::Vector3f& normal,
+                            float u1, float u2, bool by_solid_angle) {
+  EmitterSample s;
+  const Eigen::Vector3d o = origin.cast<double>(), a = t.p0.cast<double>(), b = t.p1.cast<double>(), c = t.p2.cast<double>();
+  const double solid_angle = by_solid_angle ? triangleSolidAngle(o, a, b, c) : 0.0;
+  Eigen::Vector3d w;
+  double pdf = 0;
+  if (solid_angle >= kMinSphericalSolidAngle) {
+    if (!sampleSphericalTriangleCosine(o, normal.cast<double>(), a, b, c, u1, u2, &w, &pdf)) return s;
+    const Eigen::Vector3d triangle_normal = t.normal.cast<double>();
+    const double cos_w = w.dot(triangle_normal);
+    const double distance = (a - o).dot(triangle_normal) / cos_w;
+    if (!(distance > 0) || !std::isfinite(distance)) return s;
+    s.wi = w.cast<float>();
+    s.distance = static_cast<float>(distance);
+    s.cos_light = static_cast<float>(std::abs(cos_w));
+    s.pdf = static_cast<float>(pdf);
+  } else {
+    const float root = std::sqrt(u1);
+    const Eigen::Vector3f q = t.p0 * (1.f - root) + t.p1 * (root * (1.f - u2)) + t.p2 * (root * u2);
+    Eigen::Vector3f wi = q - origin;
+    const float distance2 = wi.squaredNorm();
+    s.distance = std::sqrt(distance2);
+    if (!(s.distance > 0.f)) return s;
+    s.wi = wi / s.distance;
+    s.cos_light = std::abs(t.normal.dot(s.wi));
+    if (!(s.cos_light > 1e-6f)) return s;
+    s.pdf = distance2 / (s.cos_light * t.area);
+  }
+  s.ok = s.pdf > 0.f && std::isfinite(s.pdf) && s.cos_light > 0.f;
+  return s;
+}
+
+// The per-steradian pdf with which sampleEmitter() from `origin` with receiver normal `normal`
+// would have found direction `wi`, which meets the triangle `distance` away at |cosine|
+// `cos_light`.
+float emitterPdf(const EmissiveTriangle& t, const Eigen::Vector3f& origin, const Eigen::Vector3f& normal,
+                 const Eigen::Vector3f& wi, float distance, float cos_light, bool by_solid_angle) {
+  const Eigen::Vector3d o = origin.cast<double>(), a = t.p0.cast<double>(), b = t.p1.cast<double>(), c = t.p2.cast<double>();
+  if (by_solid_angle && triangleSolidAngle(o, a, b, c) >= kMinSphericalSolidAngle)
+    return static_cast<float>(sphericalTriangleCosinePdf(o, normal.cast<double>(), a, b, c, wi.cast<double>()));
+  return distance * distance / (cos_light * t.area);
+}
+
+// One shadow ray per path vertex instead of one per light: the lights' unoccluded contributions
+// stream in, one is kept with probability proportional to its contribution (X + Y + Z), by one
+// uniform number consumed as they come (weighted reservoir sampling), and its contribution is
+// divided by that probability. Unbiased; the only variance it adds is the visibility's (none
+// when one light dominates or none is occluded).
+class OneLightChoice {
+ public:
+  explicit OneLightChoice(float u) : u_(u) {}
+  void offer(const Eigen::Vector3f& contribution, const Eigen::Vector3f& wi, float distance) {
+    const float weight = contribution.sum();
+    if (!(weight > 0.f)) return;
+    total_ += weight;
+    const float p = weight / total_;
+    if (u_ < p) {
+      contribution_ = contribution;
+      wi_ = wi;
+      distance_ = distance;
+      weight_ = weight;
+      u_ = std::min(u_ / p, kOneMinusEpsilon);
+    } else {
+      u_ = std::min((u_ - p) / (1.f - p), kOneMinusEpsilon);
+    }
+  }
+  bool empty() const { return !(weight_ > 0.f); }
+  Eigen::Vector3f contribution() const { return contribution_ * (total_ / weight_); }
+  const Eigen::Vector3f& wi() const { return wi_; }
+  float distance() const { return distance_; }
+
+ private:
+  static constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
+  float u_;
+  float total_ = 0.f, weight_ = 0.f, distance_ = 0.f;
+  Eigen::Vector3f contribution_, wi_;
+};
+
 struct Context {
   const RenderScene& scene;
   const PinholeCamera& camera;
@@ -140,8 +232,9 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
         float weight = 1.f;
         if (tri >= 0 && abs_cos_hit > 0.f) {
           const float select = c.sampler.pmf(previous_point, previous_normal, tri);
-          const float light_pdf = select / c.emissive[static_cast<std::size_t>(tri)].area * hit.distance *
-                                  hit.distance / abs_cos_hit;
+          const float light_pdf =
+              select * emitterPdf(c.emissive[static_cast<std::size_t>(tri)], origin, previous_normal, direction,
+                                          hit.distance, abs_cos_hit, c.options.solid_angle_emitter_sampling);
           weight = powerHeuristic(previous_bsdf_pdf, light_pdf);
         }
         radiance += throughput.cwiseProduct(emitted) * weight;
@@ -159,36 +252,40 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
     if (bounce == c.options.max_bounces) break;
     const Eigen::Vector3f shadow_origin = point + n * offsetFor(hit.distance);
 
-    // Next-event estimation: one emissive triangle, MIS-weighted against BSDF sampling.
+    // Next-event estimation toward the scene's lights: one sample on an emissive triangle
+    // (MIS-weighted against BSDF sampling) and one on each rectangle light (the headlights, not
+    // geometry: light sampling only, weight 1). Their unoccluded contributions are computed
+    // first; then one shadow ray goes to a light chosen in proportion to its contribution
+    // (one_shadow_ray) or one to each.
+    OneLightChoice choice(rng.get1D());
+    const auto offer = [&](const Eigen::Vector3f& contribution, const Eigen::Vector3f& wi, float distance) {
+      if (!contribution.allFinite()) {
+        radiance += contribution;  // the sample is dropped, as any non-finite one
+      } else if (!(contribution.maxCoeff() > 0.f)) {
+        // nothing a shadow ray could add
+      } else if (c.options.one_shadow_ray) {
+        choice.offer(contribution, wi, distance);
+      } else {
+        ++rays;
+        if (!c.caster.occluded(shadow_origin, wi, 0.f, distance * (1.f - 1e-4f))) radiance += contribution;
+      }
+    };
     float pick_pmf = 0.f;
     const int tri = c.sampler.pick(point, n, rng.get1D(), &pick_pmf);
     const auto [su, sv] = rng.get2D();
     if (tri >= 0 && pick_pmf > 0.f) {
       const EmissiveTriangle& t = c.emissive[static_cast<std::size_t>(tri)];
-      const float root = std::sqrt(su);
-      const Eigen::Vector3f q = t.p0 * (1.f - root) + t.p1 * (root * (1.f - sv)) + t.p2 * (root * sv);
-      Eigen::Vector3f wi = q - shadow_origin;
-      const float distance2 = wi.squaredNorm();
-      const float distance = std::sqrt(distance2);
-      wi /= distance;
-      const float cos_surface = n.dot(wi);
-      const float cos_light = std::abs(t.normal.dot(wi));
-      if (cos_surface > 0.f && cos_light > 1e-6f && distance > 0.f) {
-        // The unoccluded contribution first: a shadow ray is cast only where it is not zero
-        // (a black surface, an emitter seen at grazing through its profile).
+      const EmitterSample sample = sampleEmitter(t, shadow_origin, n, su, sv, c.options.solid_angle_emitter_sampling);
+      const float cos_surface = n.dot(sample.wi);
+      if (sample.ok && cos_surface > 0.f) {
         const Emitter& e = c.scene.emitters[static_cast<std::size_t>(c.scene.face_emitter[t.face])];
-        const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, cos_light);
-        const float light_pdf = pick_pmf / t.area * distance2 / cos_light;
-        const float weight = powerHeuristic(light_pdf, bsdf.pdf(wi));
-        const Eigen::Vector3f contribution =
-            throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(emitted) * (cos_surface * weight / light_pdf);
-        if (contribution.maxCoeff() > 0.f || !contribution.allFinite()) {
-          ++rays;
-          if (!c.caster.occluded(shadow_origin, wi, 0.f, distance * (1.f - 1e-4f))) radiance += contribution;
-        }
+        const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, sample.cos_light);
+        const float light_pdf = pick_pmf * sample.pdf;
+        const float weight = powerHeuristic(light_pdf, bsdf.pdf(sample.wi));
+        offer(throughput.cwiseProduct(bsdf.eval(sample.wi)).cwiseProduct(emitted) * (cos_surface * weight / light_pdf),
+              sample.wi, sample.distance);
       }
     }
-    // Rectangle lights (headlights) are not geometry: light sampling only, weight 1.
     for (std::size_t l = 0; l < c.scene.rectangle_lights.size(); ++l) {
       const RectangleLight& light = c.scene.rectangle_lights[l];
       const float area = c.rectangle_area[l];
@@ -203,11 +300,12 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       const float cos_light = light.normal.dot(-wi);
       if (cos_surface <= 0.f || cos_light <= c.rectangle_cos_half_spread[l]) continue;
       const float pdf = distance2 / (cos_light * area);
-      const Eigen::Vector3f contribution = throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(light.radiance) * (cos_surface / pdf);
-      if (!(contribution.maxCoeff() > 0.f) && contribution.allFinite()) continue;  // nothing a shadow ray could add
+      offer(throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(light.radiance) * (cos_surface / pdf), wi, distance);
+    }
+    if (!choice.empty()) {
       ++rays;
-      if (c.caster.occluded(shadow_origin, wi, 0.f, distance * (1.f - 1e-4f))) continue;
-      radiance += contribution;
+      if (!c.caster.occluded(shadow_origin, choice.wi(), 0.f, choice.distance() * (1.f - 1e-4f)))
+        radiance += choice.contribution();
     }
     // Sky: a cosine-weighted direction, MIS-weighted against BSDF sampling.
     constexpr float kInfinity = std::numeric_limits<float>::infinity();
@@ -399,6 +497,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     std::array<int, kMaxReplicates> replicate_count{};
     int n = 0, taken = 0;  // finite samples, samples taken
     bool done = false;
+    double stopped_variance = -1;  // variance of the mean when the target stopped it
     // Variance of the mean as if the samples were independent: sample variance / n.
     double independentVariance() const { return n > 1 ? m2_y / (n - 1) / n : 0.0; }
     // Variance of the mean from the spread of the replicate means (unbiased for any sampler).
@@ -474,15 +573,22 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
         const float absolute = options.absolute_error.empty() ? 0.f : options.absolute_error.at<float>(p.y, p.x);
         double target = std::max(options.relative_error * std::abs(p.mean_y), static_cast<double>(absolute));
         if (options.noise_sigma) target = std::max(target, options.noise_factor * options.noise_sigma(p.mean_y));
-        if (p.taken >= max_samples || std::sqrt(variance(p, gain)) <= target) p.done = true;
-        else active = true;
+        const double v = variance(p, gain);
+        if (std::sqrt(v) <= target) {
+          p.done = true;
+          p.stopped_variance = v;  // the estimate it stopped on; the tile's gain moves on later
+        } else if (p.taken >= max_samples) {
+          p.done = true;
+        } else {
+          active = true;
+        }
       }
       if (!active) break;
       for (PixelState& p : pixels)
         for (int k = 0; k < 8 && !p.done && p.taken < max_samples; ++k) takeSample(p);
     }
     for (const PixelState& p : pixels) {
-      double standard_error = std::sqrt(variance(p, gain));
+      double standard_error = std::sqrt(p.stopped_variance >= 0 ? p.stopped_variance : variance(p, gain));
       if (!std::isfinite(standard_error)) standard_error = std::sqrt(p.independentVariance());
       samples_taken += p.taken;
       const Eigen::Vector3d mean = p.n > 0 ? Eigen::Vector3d(p.sum / p.n) : Eigen::Vector3d::Zero();

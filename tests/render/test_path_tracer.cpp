@@ -139,6 +139,108 @@ TEST(PathTracer, SmallEmitterFallsOffWithTheInverseSquare) {
   EXPECT_NEAR(measured[0] / measured[1], 4.0, 0.12);
 }
 
+// Per-pixel mean and variance (of Y) over renders with seeds 1..seeds.
+struct PixelStatistics {
+  double mean, variance;
+};
+PixelStatistics pixelStatistics(const solo::RenderScene& s, solo::PathTracerOptions o, int seeds, int x, int y) {
+  double sum = 0, squares = 0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    o.seed = static_cast<std::uint64_t>(seed);
+    const double v = solo::renderPathTraced(s, o).radiance.at<cv::Vec3f>(y, x)[1];
+    sum += v;
+    squares += v * v;
+  }
+  const double mean = sum / seeds;
+  return {mean, (squares - seeds * mean * mean) / (seeds - 1)};
+}
+
+TEST(PathTracer, EmitterBesideTheShadedPointIsSampledBySolidAngle) {
+  // An emitting triangle standing on a plane 1 cm beside the shaded point (as a lamp's faces
+  // stand beside its neighbours in a depth mesh): by area its samples weigh up to
+  // 1 / (1 cm)^2; by solid angle they are bounded. Both must give Lambert's closed form; solid
+  // angle with far less variance.
+  solo::RenderScene s;
+  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
+  s.emitters.push_back({Eigen::Vector3f::Constant(10.f), false, 3});
+  // In the plane x = 1, base y in [0.9, 1.1] on the plane, apex 20 cm toward the camera: camera
+  // rays to x < 1 on the plane pass beside it.
+  const auto base = static_cast<std::uint32_t>(s.vertices.size());
+  s.vertices.insert(s.vertices.end(), {{1.f, 0.9f, 5.f}, {1.f, 1.1f, 5.f}, {1.f, 1.f, 4.8f}});
+  s.faces.push_back({base, base + 1, base + 2});
+  s.face_reflectance.push_back(Eigen::Vector3f::Zero());
+  s.face_emitter.push_back(0);
+  s.camera = cameraLookingAt(1, 4000, 0.99 / 5, 1.0 / 5);  // (0.99, 1, 5), a 1.25 mm pixel
+  const double irradiance =
+      solo::test::polygonIrradiance({0.99, 1, 5}, {0, 0, -1}, {{1, 0.9, 5}, {1, 1.1, 5}, {1, 1, 4.8}});
+  const double expected = 0.5 / kPi * 10 * irradiance;
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.max_bounces = 1;
+  o.min_samples = o.max_samples = 16;
+  o.sampler = solo::SamplerKind::Independent;
+  o.progress = false;
+  PixelStatistics by[2];
+  for (int k = 0; k < 2; ++k) {
+    o.solid_angle_emitter_sampling = k == 0;
+    by[k] = pixelStatistics(s, o, 400, 0, 0);
+    EXPECT_NEAR(by[k].mean, expected, 4 * std::sqrt(by[k].variance / 400)) << (k == 0 ? "solid angle" : "area");
+  }
+  std::printf("16-spp pixel variance: by solid angle %.3g, by area %.3g (ratio %.1f), mean %.4f vs %.4f closed form\n",
+              by[0].variance, by[1].variance, by[1].variance / by[0].variance, by[0].mean, expected);
+  EXPECT_LT(by[0].variance, 0.3 * by[1].variance);  // measured 1/4.5
+  EXPECT_NEAR(by[0].mean, expected, 0.01 * expected);
+}
+
+TEST(PathTracer, OneShadowRayPerVertexKeepsTheMeanOfSeveralLights) {
+  // A plane under two rectangle lights and an emitting quad, one bounce: the closed form is the
+  // sum of the three. One shadow ray per vertex to a light chosen by its contribution gives the
+  // same mean with one shadow ray per vertex instead of three (unoccluded: the same value);
+  // with a black plate shading part of one light, still the closed form.
+  solo::RenderScene s;
+  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
+  for (const float x : {-0.5f, 0.7f}) {
+    solo::RectangleLight light;
+    light.centre = {x, 0, 4};
+    light.normal = {0, 0, 1};
+    light.edge_u = {0.4f, 0, 0};
+    light.edge_v = {0, 0.4f, 0};
+    light.radiance = Eigen::Vector3f::Constant(x < 0 ? 3.f : 1.f);
+    s.rectangle_lights.push_back(light);
+  }
+  s.emitters.push_back({Eigen::Vector3f::Constant(2.f), false, 5});
+  addQuad(s, {-0.2f, 0.6f, 4.5f}, {0.4f, 0, 0}, {0, 0.4f, 0}, 0.f, 0);
+  s.camera = cameraLookingAt(1, 4000, 0, 0);  // the plane point (0, 0, 5)
+  const double irradiance = 3 * rectangleIntegral(-0.7, -0.3, -0.2, 0.2, 1) + 1 * rectangleIntegral(0.5, 0.9, -0.2, 0.2, 1) +
+                            2 * rectangleIntegral(-0.2, 0.2, 0.6, 1.0, 0.5);
+  const double expected = 0.5 / kPi * irradiance;
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.max_bounces = 1;
+  o.min_samples = o.max_samples = 64;
+  o.sampler = solo::SamplerKind::Independent;
+  o.progress = false;
+  for (const bool one : {true, false}) {
+    o.one_shadow_ray = one;
+    const PixelStatistics p = pixelStatistics(s, o, 100, 0, 0);
+    EXPECT_NEAR(p.mean, expected, std::max(4 * std::sqrt(p.variance / 100), 1e-4 * expected)) << one;
+    o.seed = 1;
+    const auto out = solo::renderPathTraced(s, o);
+    EXPECT_EQ(std::get<std::int64_t>(*out.report.find("rays")), 64 * (one ? 3 : 5));  // camera, bounce and shadow rays
+  }
+  // A black plate at z = 4.5 over x in [-0.4, -0.25] hides the brighter light's half x < -0.5.
+  addQuad(s, {-0.4f, -0.3f, 4.5f}, {0.15f, 0, 0}, {0, 0.6f, 0}, 0.f);
+  const double shaded = expected - 0.5 / kPi * 3 * rectangleIntegral(-0.7, -0.5, -0.2, 0.2, 1);
+  PixelStatistics p[2];
+  for (const bool one : {true, false}) {
+    o.one_shadow_ray = one;
+    p[one ? 0 : 1] = pixelStatistics(s, o, 100, 0, 0);
+    EXPECT_NEAR(p[one ? 0 : 1].mean, shaded, 4 * std::sqrt(p[one ? 0 : 1].variance / 100)) << one;
+  }
+  std::printf("half shaded: one shadow ray %.5f (variance %.3g), one per light %.5f (%.3g), closed form %.5f\n",
+              p[0].mean, p[0].variance, p[1].mean, p[1].variance, shaded);
+}
+
 TEST(PathTracer, DirectionalProfileMatchesG) {
   // A small profiled emitter seen by a plane point at angle theta off its normal:
   // E = L g(cos theta) cos theta cos theta_r A / d^2.

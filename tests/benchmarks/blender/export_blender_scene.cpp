@@ -15,9 +15,12 @@
 //       settings: wall and CPU seconds, relative RMSE; each image as solo_<settings>.exr) for
 //       each per-sample sampler in SAMPLERS ("sobol,independent" by default; "sobol" alone
 //       halves the time). Prints the reference's own noise from its per-pixel standard errors.
-//   export_blender_scene runs SCENE OUT_DIR [WIDTHxHEIGHT] [-] [SAMPLERS]
+//   export_blender_scene runs SCENE OUT_DIR [WIDTHxHEIGHT] [-] [SAMPLERS] [nee]
 //       The solo runs again against the reference already in OUT_DIR (solo_runs_again.csv); the
-//       exported scene files stay as they are.
+//       exported scene files stay as they are. With `nee` (either command), also the
+//       next-event-estimation A/B at 16 and 64 spp with the first sampler: emitters sampled by
+//       area instead of solid angle, one shadow ray per light instead of one per vertex, and
+//       both (the tracer before these two).
 //   export_blender_scene compare OUT_DIR IMAGE.exr
 //       Relative RMSE of IMAGE's Y (second channel) against the reference on the pixels where no
 //       emitter is seen, the ratio of their means there, the share of the squared error in the
@@ -209,7 +212,7 @@ double relativeRmse(const cv::Mat& image, const cv::Mat& reference, const cv::Ma
 
 int exportScene(int argc, char** argv, bool reuse_reference) {
   if (argc < 4)
-    throw std::runtime_error("usage: export_blender_scene export|runs SCENE OUT_DIR [WxH] [REFERENCE_SPP] [SAMPLERS]");
+    throw std::runtime_error("usage: export_blender_scene export|runs SCENE OUT_DIR [WxH] [REFERENCE_SPP] [SAMPLERS] [nee]");
   const std::string name = argv[2];
   const fs::path dir = argv[3];
   int width = 480, height = 270, reference_spp = 4096;
@@ -221,6 +224,7 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     std::stringstream list(argv[6]);
     for (std::string item; std::getline(list, item, ',');) samplers.push_back(solo::parseSamplerKind(item));
   }
+  const bool nee_variants = argc > 7 && std::string(argv[7]) == "nee";
   solo::RenderScene scene;
   if (name == "night") scene = nightStreet(width, height);
   else if (name == "plane-area") scene = litPlane(width, height, false);
@@ -302,6 +306,19 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     defaults.diffuse = solo::DiffuseModel::Lambert;
     defaults.sampler = kind;
     run("default adaptive" + suffix, defaults);
+  }
+  if (nee_variants) {
+    const std::string suffix = std::string(" ") + solo::samplerKindName(samplers.front());
+    for (int spp : {16, 64})
+      for (int variant = 1; variant < 4; ++variant) {
+        solo::PathTracerOptions fixed = o;
+        fixed.min_samples = fixed.max_samples = spp;
+        fixed.sampler = samplers.front();
+        fixed.solid_angle_emitter_sampling = (variant & 1) == 0;
+        fixed.one_shadow_ray = (variant & 2) == 0;
+        const char* names[] = {"", " area-emitters", " ray-per-light", " area+ray-per-light"};
+        run("fixed " + std::to_string(spp) + suffix + names[variant], fixed);
+      }
   }
   return 0;
 }

@@ -49,6 +49,15 @@ struct PathTracerOptions {
   /// that, more samples buy little that can be seen.
   double noise_factor = 0.5;
   int max_bounces = 12;
+  /// One shadow ray per path vertex, to one light chosen among the emitter sample and the
+  /// rectangle lights in proportion to their unoccluded contributions (unbiased; adds only
+  /// visibility variance); false: one shadow ray to each.
+  bool one_shadow_ray = true;
+  /// Next-event estimation samples an emitting triangle that looks large from the shading point
+  /// (solid angle >= kMinSphericalSolidAngle) by solid angle, warped toward the receiver's
+  /// cosine (spherical_triangle.h), which bounds the contribution next to an emitter; false:
+  /// always by area.
+  bool solid_angle_emitter_sampling = true;
   int russian_roulette_after = 3;  ///< bounces before roulette starts
   LightSamplerKind light_sampler = LightSamplerKind::Hierarchy;
   /// Where the per-sample random numbers come from (sampler.h): scrambled Sobol points,
