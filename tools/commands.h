@@ -69,6 +69,9 @@ struct NightOptions {
   /// (bilinear; light ids and depth nearest) before post-processing. Draft's cheaper render.
   int render_downsample = 1;
   int max_bounces = 12;  ///< path length limit of the tracer (Russian roulette after 3)
+  /// A sample's indirect luminance is clamped to this (cd/m2, PathTracerOptions::indirect_clamp);
+  /// 0 = off, unbiased.
+  double indirect_clamp_cd_m2 = 0;
   std::optional<std::filesystem::path> contact_sheet;  ///< PNG grid of the stages' pictures
   std::optional<std::filesystem::path> write_config;   ///< the effective configuration (TOML)
 };

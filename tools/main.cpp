@@ -57,6 +57,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   night_cmd->add_option("--max-bounces", night.max_bounces, "Path length limit of the tracer (preset)")
       ->capture_default_str()->check(CLI::Range(1, 64));
+  night_cmd->add_option("--indirect-clamp", night.indirect_clamp_cd_m2,
+                        "Clamp a sample's indirect luminance to this, cd/m2 (biased, removes fireflies); 0 = off")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   night_cmd->add_option("--mesh-downsample", night.mesh_downsample,
                         "Make the mesh from the depth downsampled by this factor (preset)")
       ->capture_default_str()->check(CLI::Range(1, 8));

@@ -148,6 +148,7 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   tracer.max_samples = o.max_samples;
   tracer.relative_error = o.relative_error;
   tracer.max_bounces = o.max_bounces;
+  tracer.indirect_clamp = static_cast<float>(o.indirect_clamp_cd_m2);
   const PinholeCamera image_camera = night.scene.camera;
   const PinholeCamera render_camera =
       o.render_downsample > 1 ? image_camera.scaledTo(std::max(16, image_camera.width / o.render_downsample),

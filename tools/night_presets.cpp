@@ -132,6 +132,7 @@ std::string nightConfigText(const NightOptions& o) {
   flag("noise-target", o.noise_target);
   line("noise-factor", number(o.noise_factor));
   line("max-bounces", std::to_string(o.max_bounces));
+  line("indirect-clamp", number(o.indirect_clamp_cd_m2));
   line("mesh-downsample", std::to_string(o.mesh_downsample));
   line("render-downsample", std::to_string(o.render_downsample));
   flag("glare", o.glare);

@@ -187,7 +187,8 @@ struct FirstHit {
 float offsetFor(float distance) { return 1e-4f * std::max(1.f, distance); }
 
 // One path sample from the camera through (px, py). Returns XYZ radiance.
-Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, FirstHit* first, std::int64_t& rays) {
+Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, FirstHit* first, std::int64_t& rays,
+                          std::int64_t& clamped) {
   const PinholeCamera& cam = c.camera;
   Eigen::Vector3f direction(static_cast<float>((px - cam.cx) / cam.fx), static_cast<float>((py - cam.cy) / cam.fy), 1.f);
   const float z_per_distance = 1.f / direction.norm();
@@ -198,6 +199,8 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
   Eigen::Vector3f previous_point = origin, previous_normal = Eigen::Vector3f::UnitZ();
   const bool has_roughness = !c.scene.face_roughness.empty();
 
+  // Radiance after at most one scattering; NaN until the second vertex is reached.
+  Eigen::Vector3f direct = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
   for (int bounce = 0; bounce <= c.options.max_bounces; ++bounce) {
     const RayHit hit = c.caster.intersect(origin, direction);
     ++rays;
@@ -240,6 +243,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
         radiance += throughput.cwiseProduct(emitted) * weight;
       }
     }
+    if (bounce == 1) direct = radiance;  // light scattered at most once; the rest is indirect
     const Eigen::Vector3f wo = -direction;
     const SurfaceBsdf bsdf(n, wo, c.scene.face_reflectance[face], has_roughness ? c.scene.face_roughness[face] : 0.5f,
                            c.options.diffuse, has_roughness);
@@ -358,6 +362,14 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
     origin = shadow_origin;
     direction = wi;
   }
+  if (c.options.indirect_clamp > 0.f && !std::isnan(direct.x())) {
+    Eigen::Vector3f indirect = radiance - direct;
+    if (indirect.y() > c.options.indirect_clamp) {
+      indirect *= c.options.indirect_clamp / indirect.y();
+      ++clamped;
+    }
+    return direct + indirect;
+  }
   return radiance;
 }
 
@@ -471,7 +483,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   constexpr int kTile = 16;
   const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
   ProgressBar progress(options.progress, tiles_x * tiles_y);
-  std::atomic<std::int64_t> total_rays{0}, total_samples{0}, dropped{0};
+  std::atomic<std::int64_t> total_rays{0}, total_samples{0}, dropped{0}, total_clamped{0};
   const bool adaptive = std::max(2, options.min_samples) < options.max_samples;
   // Replicates (sampler.h) only where stopping decisions are made: a fixed sample count keeps
   // the single, best stratified point set.
@@ -515,7 +527,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   };
 
   tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
-    std::int64_t rays = 0, samples_taken = 0, nonfinite = 0;
+    std::int64_t rays = 0, samples_taken = 0, nonfinite = 0, clamped = 0;
     const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
     std::vector<PixelState> pixels;
     pixels.reserve(kTile * kTile);
@@ -529,7 +541,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
       p.rng.startSample(static_cast<std::uint32_t>(p.taken));
       const auto [jx, jy] = p.rng.get2D();
       const Eigen::Vector3f value = tracePath(context, static_cast<float>(p.x) + jx - 0.5f, static_cast<float>(p.y) + jy - 0.5f, p.rng,
-                                              p.taken == 0 ? &p.first : nullptr, rays);
+                                              p.taken == 0 ? &p.first : nullptr, rays, clamped);
       const int replicate = p.taken % replicates;
       ++p.taken;
       if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
@@ -604,6 +616,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     total_rays += rays;
     total_samples += samples_taken;
     dropped += nonfinite;
+    total_clamped += clamped;
     progress.tick();
   });
 
@@ -622,6 +635,12 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   r.add("light_sampler", std::string(lightSamplerName(options.light_sampler)));
   r.add("sampler", std::string(samplerKindName(options.sampler)));
   r.add("nonfinite_samples_dropped", dropped.load());
+  if (options.indirect_clamp > 0.f) {
+    r.add("indirect_clamp", static_cast<double>(options.indirect_clamp), "cd/m2");
+    r.add("indirect_samples_clamped", static_cast<double>(total_clamped.load()) / static_cast<double>(std::max<std::int64_t>(1, total_samples.load())));
+    r.notes.push_back("indirect light clamped at " + std::to_string(options.indirect_clamp) +
+                      " cd/m2 per sample: fewer fireflies, biased darker");
+  }
   // Noise estimate: median relative standard error over pixels that received light.
   std::vector<float> relative;
   for (int y = 0; y < height; ++y)

@@ -241,6 +241,29 @@ TEST(PathTracer, OneShadowRayPerVertexKeepsTheMeanOfSeveralLights) {
               p[0].mean, p[0].variance, p[1].mean, p[1].variance, shaded);
 }
 
+TEST(PathTracer, IndirectClampBoundsOnlyLightScatteredTwice) {
+  // The furnace with two scatterings at most: direct 1 + a, indirect a^2 (a = 0.5, emission 1).
+  // Clamping each sample's indirect luminance at 0.1 leaves the direct part and at most 0.1.
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.max_bounces = 2;
+  o.russian_roulette_after = 100;
+  o.min_samples = o.max_samples = 64;
+  o.progress = false;
+  const auto unclamped = solo::renderPathTraced(furnace(0.5f), o);
+  EXPECT_NEAR(meanY(unclamped.radiance), 1.75, 0.01);
+  EXPECT_EQ(unclamped.report.find("indirect_clamp"), nullptr);
+  o.indirect_clamp = 1e6f;  // above every sample: the same image
+  EXPECT_EQ(cv::norm(solo::renderPathTraced(furnace(0.5f), o).radiance, unclamped.radiance, cv::NORM_INF), 0.0);
+  o.indirect_clamp = 0.1f;
+  const auto clamped = solo::renderPathTraced(furnace(0.5f), o);
+  EXPECT_GE(meanY(clamped.radiance), 1.5 - 0.01);
+  EXPECT_LE(meanY(clamped.radiance), 1.5 + 0.1 + 0.01);
+  const auto* share = clamped.report.find("indirect_samples_clamped");
+  ASSERT_NE(share, nullptr);
+  EXPECT_GT(std::get<double>(*share), 0.9);  // a^2 = 0.25 > 0.1 on nearly every sample
+}
+
 TEST(PathTracer, DirectionalProfileMatchesG) {
   // A small profiled emitter seen by a plane point at angle theta off its normal:
   // E = L g(cos theta) cos theta cos theta_r A / d^2.

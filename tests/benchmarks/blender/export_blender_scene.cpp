@@ -225,6 +225,7 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     for (std::string item; std::getline(list, item, ',');) samplers.push_back(solo::parseSamplerKind(item));
   }
   const bool nee_variants = argc > 7 && std::string(argv[7]) == "nee";
+  const bool clamp_variants = argc > 7 && std::string(argv[7]) == "clamp";
   solo::RenderScene scene;
   if (name == "night") scene = nightStreet(width, height);
   else if (name == "plane-area") scene = litPlane(width, height, false);
@@ -306,6 +307,17 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     defaults.diffuse = solo::DiffuseModel::Lambert;
     defaults.sampler = kind;
     run("default adaptive" + suffix, defaults);
+  }
+  if (clamp_variants) {
+    const std::string suffix = std::string(" ") + solo::samplerKindName(samplers.front());
+    for (int spp : {16, 64})
+      for (float clamp : {30.f, 100.f, 300.f, 1000.f, 3000.f}) {
+        solo::PathTracerOptions fixed = o;
+        fixed.min_samples = fixed.max_samples = spp;
+        fixed.sampler = samplers.front();
+        fixed.indirect_clamp = clamp;
+        run("fixed " + std::to_string(spp) + suffix + " clamp " + std::to_string(static_cast<int>(clamp)), fixed);
+      }
   }
   if (nee_variants) {
     const std::string suffix = std::string(" ") + solo::samplerKindName(samplers.front());

@@ -1,7 +1,11 @@
 """Renders a scene exported by export_blender_scene with Blender's Cycles on the CPU.
 
     blender -b --factory-startup -P render_cycles.py -- SCENE_DIR/scene.json OUT.exr \
-        --samples N[,N2,...] [--threads 2] [--seed 1]
+        --samples N[,N2,...] [--threads 2] [--seed 1] [--blender-defaults 1]
+
+--blender-defaults 1 keeps Blender 3.4's factory light-path settings instead of the unbiased ones
+below: indirect clamping at 10, light sampling threshold 0.01, 4 diffuse and 4 glossy bounces,
+caustics off (what a user who only sets the sample count renders with).
 
 Writes a linear 32-bit EXR (no view transform, no denoising, no clamping, box pixel filter, fixed
 sample count) whose channels are the scene's XYZ-relative-to-E triples rendered channel by channel
@@ -46,11 +50,11 @@ def parse_args():
     if len(argv) < 2:
         raise SystemExit("usage: blender -b -P render_cycles.py -- scene.json out.exr --samples N[,N2...] "
                          "[--threads T] [--seed S]")
-    options = {"scene": argv[0], "output": argv[1], "samples": [16], "threads": 2, "seed": 1}
+    options = {"scene": argv[0], "output": argv[1], "samples": [16], "threads": 2, "seed": 1, "blender-defaults": 0}
     rest = argv[2:]
     for i in range(0, len(rest), 2):
         key = rest[i].lstrip("-")
-        if key not in ("samples", "threads", "seed") or i + 1 >= len(rest):
+        if key not in ("samples", "threads", "seed", "blender-defaults") or i + 1 >= len(rest):
             raise SystemExit("render_cycles.py: unknown or incomplete option " + rest[i])
         options[key] = [int(n) for n in rest[i + 1].split(",")] if key == "samples" else int(rest[i + 1])
     if len(options["samples"]) > 1 and "{n}" not in options["output"]:
@@ -208,19 +212,24 @@ def main():
     cycles.use_adaptive_sampling = False
     cycles.use_denoising = False
     cycles.seed = options["seed"]
-    bounces = int(spec.get("max_bounces", 12))
-    cycles.max_bounces = bounces
-    cycles.diffuse_bounces = bounces
-    cycles.glossy_bounces = bounces
-    cycles.transmission_bounces = bounces
-    cycles.transparent_max_bounces = bounces
-    cycles.sample_clamp_direct = 0.0
-    cycles.sample_clamp_indirect = 0.0
-    cycles.light_sampling_threshold = 0.0
+    if not options["blender-defaults"]:
+        bounces = int(spec.get("max_bounces", 12))
+        cycles.max_bounces = bounces
+        cycles.diffuse_bounces = bounces
+        cycles.glossy_bounces = bounces
+        cycles.transmission_bounces = bounces
+        cycles.transparent_max_bounces = bounces
+        cycles.sample_clamp_direct = 0.0
+        cycles.sample_clamp_indirect = 0.0
+        cycles.light_sampling_threshold = 0.0
+        cycles.caustics_reflective = True
+        cycles.caustics_refractive = True
+    print("cycles light paths: max %d diffuse %d glossy %d, clamp direct %g indirect %g, light threshold %g, "
+          "caustics %s" % (cycles.max_bounces, cycles.diffuse_bounces, cycles.glossy_bounces,
+                           cycles.sample_clamp_direct, cycles.sample_clamp_indirect,
+                           cycles.light_sampling_threshold, cycles.caustics_reflective))
     cycles.pixel_filter_type = "BOX"
     cycles.filter_width = 1.0
-    cycles.caustics_reflective = True
-    cycles.caustics_refractive = True
     scene.render.threads_mode = "FIXED"
     scene.render.threads = options["threads"]
     scene.render.resolution_x, scene.render.resolution_y = w, h

@@ -58,6 +58,11 @@ struct PathTracerOptions {
   /// cosine (spherical_triangle.h), which bounds the contribution next to an emitter; false:
   /// always by area.
   bool solid_angle_emitter_sampling = true;
+  /// When > 0, a sample's indirect radiance (light scattered twice or more) is scaled down so
+  /// that its luminance Y is at most this, render units (Cycles' "clamp indirect"). Biased
+  /// (darker), but it removes the fireflies of paths that find the bright surroundings of a
+  /// lamp by chance. 0 = off.
+  float indirect_clamp = 0.f;
   int russian_roulette_after = 3;  ///< bounces before roulette starts
   LightSamplerKind light_sampler = LightSamplerKind::Hierarchy;
   /// Where the per-sample random numbers come from (sampler.h): scrambled Sobol points,
