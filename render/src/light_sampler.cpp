@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numeric>
 #include <stdexcept>
 
@@ -31,31 +32,59 @@ class UniformSampler final : public LightSampler {
   std::size_t count_;
 };
 
+// Picks in proportion to power in constant time with Walker's alias table (built by Vose's
+// method): u selects a column, its fraction decides between the column's triangle and its alias.
+// A binary search over a cumulative table of 200 000 triangles missed the cache at every step
+// (5 % of a 1080p night render's time in a profile).
 class PowerSampler final : public LightSampler {
  public:
   explicit PowerSampler(const std::vector<EmissiveTriangle>& triangles) {
-    cdf_.reserve(triangles.size());
+    const std::size_t n = triangles.size();
     double total = 0;
-    for (const auto& t : triangles) cdf_.push_back(total += t.power);
-    total_ = total;
+    for (const auto& t : triangles) total += t.power;
+    if (n == 0 || !(total > 0)) return;
+    pmf_.reserve(n);
     for (const auto& t : triangles) pmf_.push_back(static_cast<float>(t.power / total));
+    columns_.resize(n);
+    std::vector<double> scaled(n);
+    std::vector<std::uint32_t> small, large;
+    for (std::size_t i = 0; i < n; ++i) {
+      scaled[i] = triangles[i].power / total * static_cast<double>(n);
+      (scaled[i] < 1.0 ? small : large).push_back(static_cast<std::uint32_t>(i));
+    }
+    while (!small.empty() && !large.empty()) {
+      const std::uint32_t s = small.back(), l = large.back();
+      small.pop_back();
+      columns_[s] = {static_cast<float>(scaled[s]), l};
+      scaled[l] -= 1.0 - scaled[s];
+      if (scaled[l] < 1.0) {
+        large.pop_back();
+        small.push_back(l);
+      }
+    }
+    for (const std::uint32_t i : large) columns_[i] = {1.f, i};  // rounding leftovers: full columns
+    for (const std::uint32_t i : small) columns_[i] = {1.f, i};
   }
   int pick(const Eigen::Vector3f&, const Eigen::Vector3f&, float u, float* pmf) const override {
-    if (cdf_.empty() || !(total_ > 0)) return -1;
-    const double target = static_cast<double>(u) * total_;
-    auto it = std::upper_bound(cdf_.begin(), cdf_.end(), target);
-    const int index = static_cast<int>(std::min<std::ptrdiff_t>(it - cdf_.begin(), static_cast<std::ptrdiff_t>(cdf_.size()) - 1));
-    *pmf = pmf_[static_cast<std::size_t>(index)];
-    return index;
+    if (columns_.empty()) return -1;
+    const double scaled = static_cast<double>(u) * static_cast<double>(columns_.size());
+    const std::size_t column = std::min(static_cast<std::size_t>(scaled), columns_.size() - 1);
+    const Column& c = columns_[column];
+    const auto index = static_cast<std::size_t>(scaled - static_cast<double>(column) < c.keep ? column : c.alias);
+    *pmf = pmf_[index];
+    return static_cast<int>(index);
   }
   float pmf(const Eigen::Vector3f&, const Eigen::Vector3f&, int triangle) const override {
-    return pmf_[static_cast<std::size_t>(triangle)];
+    return pmf_.empty() ? 0.f : pmf_[static_cast<std::size_t>(triangle)];
   }
 
  private:
-  std::vector<double> cdf_;
+  struct Column {
+    float keep = 1.f;         // probability of the column's own triangle
+    std::uint32_t alias = 0;  // the other triangle
+  };
+  std::vector<Column> columns_;
   std::vector<float> pmf_;
-  double total_ = 0;
 };
 
 // A binary hierarchy over the triangles, one triangle per leaf. Each node stores its bounds

@@ -351,6 +351,23 @@ TEST(PathTracer, SamplersAgreeAndPmfsMatchPicks) {
     ++counts[static_cast<std::size_t>(t)];
   }
   for (int t = 0; t < 80; ++t) EXPECT_NEAR(counts[static_cast<std::size_t>(t)] / double(draws), hierarchy->pmf(p, n, t), 2e-3);
+  // The power sampler (an alias table): pmfs are power shares, and stratified draws land on
+  // each triangle in that proportion.
+  const auto power = solo::makeLightSampler(solo::LightSamplerKind::Power, triangles);
+  double total_power = 0;
+  for (const auto& t : triangles) total_power += t.power;
+  std::fill(counts.begin(), counts.end(), 0);
+  for (int i = 0; i < draws; ++i) {
+    float pmf = 0;
+    const int t = power->pick(p, n, (i + 0.5f) / draws, &pmf);
+    ASSERT_GE(t, 0);
+    ASSERT_EQ(pmf, power->pmf(p, n, t));
+    ++counts[static_cast<std::size_t>(t)];
+  }
+  for (int t = 0; t < 80; ++t) {
+    EXPECT_NEAR(power->pmf(p, n, t), triangles[static_cast<std::size_t>(t)].power / total_power, 1e-6);
+    EXPECT_NEAR(counts[static_cast<std::size_t>(t)] / double(draws), power->pmf(p, n, t), 2e-4);
+  }
 }
 
 TEST(PathTracer, MeanOfLowSampleRendersEqualsAHighSampleRender) {
