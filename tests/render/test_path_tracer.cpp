@@ -445,6 +445,37 @@ TEST(PathTracer, NoNanOrInfReachesTheImage) {
   EXPECT_TRUE(cv::checkRange(out.std_error));
 }
 
+TEST(PathTracer, EmittersTouchingTheReceiverStayFiniteAndBelowThePhysicalBound) {
+  // Emitting quads standing on the plane (sharing its points), one 1 mm wide and 1e6 bright,
+  // and one lying in the plane itself: shading points at distance zero from an emitter's edge.
+  // Direct light on a Lambertian surface of albedo a from emitters of radiance up to L is at
+  // most a L, so no pixel may exceed it, and no sample may be dropped as non-finite.
+  solo::RenderScene s;
+  addQuad(s, {-2, -2, 3}, {0, 4, 0}, {4, 0, 0}, 0.5f);
+  s.emitters.push_back({Eigen::Vector3f::Constant(100.f), false, 1});
+  s.emitters.push_back({Eigen::Vector3f::Constant(1e6f), true, 2});
+  addQuad(s, {0.1f, -0.5f, 3}, {0, 1, 0}, {0, 0, -0.3f}, 0.f, 0);     // a wall standing on the plane
+  addQuad(s, {-0.3f, 0.f, 3}, {0, 0.001f, 0}, {0, 0, -0.001f}, 0.f, 1);  // 1 mm, very bright
+  addQuad(s, {-0.2f, -0.5f, 3}, {0.1f, 0, 0}, {0, 0.3f, 0}, 0.f, 0);    // in the plane, coplanar
+  s.camera = camera(48, 60);
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.max_bounces = 1;
+  o.min_samples = o.max_samples = 32;
+  o.progress = false;
+  const auto out = solo::renderPathTraced(s, o);
+  EXPECT_TRUE(cv::checkRange(out.radiance));
+  EXPECT_EQ(std::get<std::int64_t>(*out.report.find("nonfinite_samples_dropped")), 0);
+  double low = 0, high = 0;
+  cv::Mat y;
+  cv::extractChannel(out.radiance, y, 1);
+  cv::Mat lit_by_emitters = out.light_id == 0;  // pixels that see the plane, not an emitter
+  cv::minMaxLoc(y, &low, &high, nullptr, nullptr, lit_by_emitters);
+  EXPECT_GE(low, 0.0);
+  EXPECT_LE(high, 0.5 * 1e6 * 1.001);
+  EXPECT_GT(high, 0.5 * 100 * 0.05);  // the wall lights its foot
+}
+
 TEST(PathTracer, AdaptiveSamplingStopsEarlyWhereTheImageIsSmooth) {
   solo::PathTracerOptions o;
   o.diffuse = solo::DiffuseModel::Lambert;
