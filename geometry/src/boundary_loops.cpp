@@ -204,6 +204,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     path.clear();
     return false;
   };
+  std::vector<VertexLoop> pending;  // frame-hole runs with no closing path of their own
   const auto addFrameHole = [&](const VertexLoop& run) {
     std::size_t behind = 0;
     for (std::size_t e = 1; e + 1 < run.size(); ++e) behind += behindOccluder(run[e]);
@@ -218,11 +219,27 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
         out.chord_closed.push_back(0);
         out.sky_line_closed.push_back(1);
         out.frame_paths.push_back(std::move(path));
+        out.path_after.emplace_back();
+        out.merged.push_back(0);
         ++out.frame_holes;
         ++out.frame_holes_sky_line;
         return;
       }
-      path.clear();
+      // Perhaps it closes together with the runs of other sheets around the same occluder
+      // (decided once every run is known), else by its chord.
+      pending.push_back(run);
+      return;
+    }
+    out.holes.push_back(run);
+    out.chord_closed.push_back(0);
+    out.sky_line_closed.push_back(0);
+    out.frame_paths.push_back(std::move(path));
+    out.path_after.emplace_back();
+    out.merged.push_back(0);
+    ++out.frame_holes;
+  };
+  const auto addChordOrUnclosable = [&](const VertexLoop& run) {
+    {
       // Closed by its chord, the run turning the loop's way (positive area) encloses its own
       // sheet: the sheet's faces lie on the polygon's inner side all along the run, so every
       // patch over that polygon lies on the sheet. Not attempted: reported open.
@@ -236,16 +253,154 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
         ++out.frame_holes_unclosable;
         out.unclosable_notes.push_back("frame hole of " + std::to_string(run.size()) +
                                        " boundary vertices not filled: it reaches the sky (no closing path along the frame), "
-                                       "no closing path along the sky line passes over nearer pixels only, and closed by its "
-                                       "chord it encloses its own sheet");
+                                       "no closing path along the sky line passes over nearer pixels only, none joins it to "
+                                       "the runs of other sheets around the occluder, and closed by its chord it encloses "
+                                       "its own sheet");
         return;
       }
     }
     out.holes.push_back(run);
-    out.chord_closed.push_back(closed_along_frame ? 0 : 1);
+    out.chord_closed.push_back(1);
     out.sky_line_closed.push_back(0);
-    out.frame_paths.push_back(std::move(path));
+    out.frame_paths.emplace_back();
+    out.path_after.emplace_back();
+    out.merged.push_back(0);
     ++out.frame_holes;
+  };
+
+  // Runs of several sheets around one occluder (a far facade split by a tree crown or a car
+  // that touches the frame or the sky line): none closes alone, since the outline of the pixels
+  // with depth leads from its end onto the next sheet. Followed the same way as the sky-line
+  // path (counter-clockwise, over nearer pixels only), it may reach the first vertex of
+  // another such run; that run is taken in and the outline followed on from its last vertex,
+  // until it comes back to the first run's first vertex. The runs (known depth) and the paths
+  // between them (new vertices, depth extended) are one hole: the occluder's image behind it.
+  // Each path pixel must be nearer than 0.99 x both runs' ends it joins, and no vertex behind
+  // an occluder; the polygon must be simple with a hole's orientation. Runs left over keep
+  // the chord (or are unclosable).
+  const auto closeMergedRuns = [&](std::vector<VertexLoop>& runs) {
+    constexpr std::size_t kMaxRunsPerHole = 16;
+    const auto key = [&](const OpenMesh::Vec2i& p) { return std::int64_t(p[1]) * w + p[0]; };
+    std::unordered_map<std::int64_t, std::size_t> first_at, vertex_run;
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+      first_at.emplace(key(pixelOf(runs[r].front())), r);
+      for (const auto v : runs[r]) vertex_run.emplace(key(pixelOf(v)), r);
+    }
+    std::vector<std::uint8_t> used(runs.size(), 0);
+    const std::int64_t max_steps = 4 * std::int64_t(w) * h + 8;
+    // From the last vertex of run `from`: the path to the first vertex of an unused run
+    // (returned; `in_chain` excluded except `closing`, the chain's first run), or -1.
+    const auto trace = [&](std::size_t from, std::size_t closing, const std::vector<std::uint8_t>& in_chain,
+                           std::vector<OpenMesh::Vec2i>& path) -> std::ptrdiff_t {
+      const OpenMesh::Vec2i a = pixelOf(runs[from].back());
+      const double start_limit_m = 0.99 * depth_m.at<float>(a[1], a[0]);
+      std::unordered_map<std::int64_t, std::size_t> on_path;
+      for (int start = 0; start < 8; ++start) {
+        const int before = (start + 7) % 8;
+        if (hasDepth(a[0] + kDu[start], a[1] + kDv[start]) || !hasDepth(a[0] + kDu[before], a[1] + kDv[before])) continue;
+        path.clear();
+        on_path.clear();
+        double farthest_m = 0;
+        OpenMesh::Vec2i current = a;
+        int back = start;
+        for (std::int64_t step = 0; step < max_steps; ++step) {
+          int k = -1;
+          for (int turn = 1; turn < 8 && k < 0; ++turn) {
+            const int d = ((back - turn) % 8 + 8) % 8;
+            if (hasDepth(current[0] + kDu[d], current[1] + kDv[d])) k = d;
+          }
+          if (k < 0) break;
+          const int behind = (k + 1) % 8;
+          const OpenMesh::Vec2i next(current[0] + kDu[k], current[1] + kDv[k]);
+          back = directionOf(current[0] + kDu[behind] - next[0], current[1] + kDv[behind] - next[1]);
+          const auto on_run = vertex_run.find(key(next));
+          if (on_run != vertex_run.end()) {
+            const auto first = first_at.find(key(next));
+            if (first == first_at.end()) break;  // inside a run: not its start
+            const std::size_t target = first->second;
+            if (target != closing && (used[target] || in_chain[target])) break;
+            if (!(farthest_m < 0.99 * depth_m.at<float>(next[1], next[0]))) break;
+            return static_cast<std::ptrdiff_t>(target);
+          }
+          if (next == a || back < 0) break;
+          const double z = depth_m.at<float>(next[1], next[0]);
+          if (!(z < start_limit_m)) break;
+          const int q = m.vertexAt(next[0], next[1]);
+          if (q >= 0 && !mesh.status(OpenMesh::VertexHandle(q)).deleted() && behindOccluder(OpenMesh::VertexHandle(q))) break;
+          const auto seen = on_path.find(key(next));
+          if (seen != on_path.end()) {
+            for (std::size_t j = seen->second + 1; j < path.size(); ++j) on_path.erase(key(path[j]));
+            path.resize(seen->second + 1);
+          } else {
+            on_path.emplace(key(next), path.size());
+            path.push_back(next);
+          }
+          farthest_m = std::max(farthest_m, z);
+          current = next;
+        }
+      }
+      path.clear();
+      return -1;
+    };
+    std::vector<std::uint8_t> in_chain(runs.size(), 0);
+    for (std::size_t r0 = 0; r0 < runs.size(); ++r0) {
+      if (used[r0]) continue;
+      std::vector<std::size_t> chain{r0};
+      std::vector<std::vector<OpenMesh::Vec2i>> paths;
+      in_chain[r0] = 1;
+      bool closed = false;
+      while (chain.size() < kMaxRunsPerHole) {
+        std::vector<OpenMesh::Vec2i> path;
+        const std::ptrdiff_t target = trace(chain.back(), r0, in_chain, path);
+        if (target < 0) break;
+        paths.push_back(std::move(path));
+        if (static_cast<std::size_t>(target) == r0) {
+          closed = true;
+          break;
+        }
+        chain.push_back(static_cast<std::size_t>(target));
+        in_chain[chain.back()] = 1;
+      }
+      for (const std::size_t r : chain) in_chain[r] = 0;
+      if (!closed || chain.size() < 2) continue;
+      // One simple polygon with a hole's orientation: every pixel once, negative area.
+      VertexLoop hole;
+      std::vector<OpenMesh::Vec2i> hole_path, polygon;
+      std::vector<int> after;
+      for (std::size_t j = 0; j < chain.size(); ++j) {
+        for (const auto v : runs[chain[j]]) {
+          hole.push_back(v);
+          polygon.push_back(pixelOf(v));
+        }
+        for (const auto& p : paths[j]) {
+          hole_path.push_back(p);
+          after.push_back(static_cast<int>(hole.size()) - 1);
+          polygon.push_back(p);
+        }
+      }
+      std::unordered_map<std::int64_t, char> once;
+      bool simple = true;
+      double twice = 0;
+      for (std::size_t q = 0; q < polygon.size(); ++q) {
+        simple = simple && once.emplace(key(polygon[q]), 1).second;
+        const auto& p0 = polygon[q];
+        const auto& p1 = polygon[(q + 1) % polygon.size()];
+        twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
+      }
+      if (!simple || !(twice < 0)) continue;
+      for (const std::size_t r : chain) used[r] = 1;
+      out.holes.push_back(std::move(hole));
+      out.chord_closed.push_back(0);
+      out.sky_line_closed.push_back(0);
+      out.frame_paths.push_back(std::move(hole_path));
+      out.path_after.push_back(std::move(after));
+      out.merged.push_back(1);
+      ++out.frame_holes;
+      ++out.frame_holes_merged;
+      out.frame_hole_runs_merged += static_cast<std::int64_t>(chain.size());
+    }
+    for (std::size_t r = 0; r < runs.size(); ++r)
+      if (used[r]) runs[r].clear();
   };
 
   for (const VertexLoop& loop : out.loops) {
@@ -276,6 +431,8 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
         out.frame_paths.emplace_back();
         out.chord_closed.push_back(0);
         out.sky_line_closed.push_back(0);
+        out.path_after.emplace_back();
+        out.merged.push_back(0);
         break;
       case LoopKind::sky_opening: ++out.sky_openings; break;
       case LoopKind::silhouette: ++out.silhouettes; break;
@@ -305,6 +462,9 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       }
     }
   }
+  closeMergedRuns(pending);
+  for (std::size_t r = 0; r < pending.size(); ++r)
+    if (!pending[r].empty()) addChordOrUnclosable(pending[r]);
   return out;
 }
 

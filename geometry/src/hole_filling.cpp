@@ -306,7 +306,8 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 
 HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const PinholeCamera& camera,
                           const HoleFillOptions& options, const std::function<double(int, int)>& obstacle_depth_m,
-                          const std::vector<Eigen::Vector2d>& closing_path_px) {
+                          const std::vector<Eigen::Vector2d>& closing_path_px,
+                          const std::vector<int>& closing_path_after) {
   HolePatch patch;
   const int n = static_cast<int>(boundary.size());  // points of known depth
   const int f = static_cast<int>(closing_path_px.size());
@@ -314,6 +315,26 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
   if (polygon_size < 3 || n < 2) {
     patch.failure = "boundary has fewer than 3 vertices";
     return patch;
+  }
+  // The polygon's order of the points (index i < n: boundary[i]; n + k: closing_path_px[k]).
+  std::vector<int> order;
+  order.reserve(polygon_size);
+  if (closing_path_after.empty()) {
+    for (int i = 0; i < polygon_size; ++i) order.push_back(i);
+  } else {
+    if (static_cast<int>(closing_path_after.size()) != f) {
+      patch.failure = "closing path positions do not match the closing path";
+      return patch;
+    }
+    int k = 0;
+    for (int i = 0; i < n; ++i) {
+      order.push_back(i);
+      for (; k < f && closing_path_after[k] == i; ++k) order.push_back(n + k);
+    }
+    if (k != f) {
+      patch.failure = "closing path positions are not increasing boundary indices";
+      return patch;
+    }
   }
   std::vector<Point2> uv;
   uv.reserve(polygon_size);
@@ -332,9 +353,12 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
     }
     uv.emplace_back(q.x(), q.y());
   }
+  std::vector<Point2> polygon_uv;
+  for (const int i : order) polygon_uv.push_back(uv[i]);
   double twice_area = 0;
   for (int i = 0; i < polygon_size; ++i)
-    twice_area += uv[i].x() * uv[(i + 1) % polygon_size].y() - uv[(i + 1) % polygon_size].x() * uv[i].y();
+    twice_area += polygon_uv[i].x() * polygon_uv[(i + 1) % polygon_size].y() -
+                  polygon_uv[(i + 1) % polygon_size].x() * polygon_uv[i].y();
   if (!(std::abs(twice_area) > 0)) {
     patch.failure = "the hole's image polygon has no area";
     return patch;
@@ -345,7 +369,7 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
     // A polygon that touches itself (two vertices on one pixel position, a vertex on an edge)
     // has no triangulation in the image without a degenerate triangle, and one that crosses
     // itself none without overlap: both are left to the 3D methods.
-    if (!CGAL::is_simple_2(uv.begin(), uv.end(), Kernel())) {
+    if (!CGAL::is_simple_2(polygon_uv.begin(), polygon_uv.end(), Kernel())) {
       patch.failure = "the hole's image polygon touches or crosses itself";
       return patch;
     }
@@ -355,11 +379,12 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
       handles[i] = cdt.insert(uv[i], i == 0 ? Cdt::Face_handle() : handles[i - 1]->face());
       handles[i]->info() = i;
     }
-    for (int i = 0; i < polygon_size; ++i) cdt.insert_constraint(handles[i], handles[(i + 1) % polygon_size]);
+    for (int i = 0; i < polygon_size; ++i)
+      cdt.insert_constraint(handles[order[i]], handles[order[(i + 1) % polygon_size]]);
     markNesting(cdt);
     // The unknowns: the closing path's points (free: their depth comes from the extension too),
     // then the interior pixel centres; index polygon_size + k is interior[k].
-    const std::vector<Point2> interior = interiorPixelCentres(uv, cdt, options.max_image_interior_vertices);
+    const std::vector<Point2> interior = interiorPixelCentres(polygon_uv, cdt, options.max_image_interior_vertices);
     const int m_interior = static_cast<int>(interior.size());
     Cdt::Vertex_handle last = handles[polygon_size - 1];
     for (int k = 0; k < m_interior; ++k) {

@@ -45,6 +45,8 @@ void addLoopCounts(StageReport& report, const std::string& prefix, const DepthLo
   report.add(prefix + "frame_holes", loops.frame_holes);
   report.add(prefix + "frame_holes_unclosable", loops.frame_holes_unclosable);
   report.add(prefix + "frame_holes_sky_line", loops.frame_holes_sky_line);
+  report.add(prefix + "frame_holes_merged", loops.frame_holes_merged);
+  report.add(prefix + "frame_hole_runs_merged", loops.frame_hole_runs_merged);
 }
 
 void addHoleCounts(StageReport& report, const HoleClosing& holes) {
@@ -161,9 +163,11 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
     for (std::size_t i = 0; i < loops.holes.size(); ++i)
       image_space_only[i] = ((loops.chord_closed[i] || loops.sky_line_closed[i]) &&
                              static_cast<int>(loops.holes[i].size()) > options.hole_filling.max_cubic_boundary_vertices) ||
-                            (loops.sky_line_closed[i] && chordEnclosesSheet(loops.holes[i]));
+                            (loops.sky_line_closed[i] && chordEnclosesSheet(loops.holes[i])) ||
+                            loops.merged[i];  // its runs belong to several sheets: no chord closes it
     PixelMapping mapping{m.properties, m.camera, m.width, m.height, &m.vertex_of_pixel};
     mapping.frame_paths = &loops.frame_paths;
+    mapping.frame_path_after = &loops.path_after;
     mapping.image_space_only = &image_space_only;
     holes = closeHoles(mesh, loops.holes, options.hole_filling, mapping);
     addHoleCounts(report, holes);

@@ -338,8 +338,11 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
         std::vector<Eigen::Vector2d> closing_path;
         if (method_of[hole] == HoleFillMethod::image_space && pixels->frame_paths && hole < pixels->frame_paths->size())
           for (const auto& p : (*pixels->frame_paths)[hole]) closing_path.emplace_back(p[0], p[1]);
+        std::vector<int> closing_after;
+        if (!closing_path.empty() && pixels->frame_path_after && hole < pixels->frame_path_after->size())
+          closing_after = (*pixels->frame_path_after)[hole];
         tries[i].patch = method_of[hole] == HoleFillMethod::image_space
-                             ? fillHoleInImage(boundary, pixels->camera, options, obstacleDepth, closing_path)
+                             ? fillHoleInImage(boundary, pixels->camera, options, obstacleDepth, closing_path, closing_after)
                              : fillHolePolyline(boundary, method_of[hole], options);
       }
     });

@@ -10,8 +10,9 @@
 //  - inner loop with border edges: sky seen through a gap -> stays open (sky_opening);
 //  - outer loop with border edges: the border; each run of non-border edges lying behind a
 //    nearer surface (an occluder touching the frame or the sky line) is a frame hole, closed
-//    along the image frame, or along the sky line over the occluder's silhouette, or by the
-//    chord between its two ends, and filled (frame_hole);
+//    along the image frame, or along the sky line over the occluder's silhouette, or joined
+//    with the runs of other sheets around the same occluder (paths along its outline between
+//    them), or by the chord between its two ends, and filled (frame_hole);
 //  - outer loop without border edge: the outline of a floating sheet (silhouette); foreground
 //    things are closed into solids, other sheets stay open and are reported.
 
@@ -58,6 +59,16 @@ struct DepthLoops {
   /// along the frame (sky between their ends, or an end on the sky line), none along the sky
   /// line, and, closed by their chord, they enclose their own sheet. One note each.
   std::int64_t frame_holes_unclosable = 0;
+  /// Per hole: for a frame hole joining the runs of several sheets around one occluder, the
+  /// index in `holes[i]` of the vertex after which each pixel of frame_paths[i] goes (the
+  /// paths between the runs); empty for the others (the whole path follows the last vertex).
+  std::vector<std::vector<int>> path_after;
+  /// Per hole: 1 for a frame hole joining several sheets' runs (no chord: it spans sheets).
+  std::vector<std::uint8_t> merged;
+  /// Frame holes (counted in frame_holes, and in holes) made of the runs of several sheets
+  /// around one occluder, none closable alone, joined by paths along the occluder's outline
+  /// over nearer pixels only (tried last, before the chord); and how many runs they hold.
+  std::int64_t frame_holes_merged = 0, frame_hole_runs_merged = 0;
   std::vector<std::string> unclosable_notes;
 };
 

@@ -93,10 +93,14 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 /// or when more than 5 % of the unknown vertices whose pixel holds an obstacle see it more than
 /// 10 % behind the extension (a farther surface is seen there: the region is not behind an
 /// occluder, and a patch pinned behind that surface would be a wall nobody sees).
+/// `closing_path_after` (optional, one per closing-path point, non-decreasing): the boundary
+/// index each point follows in the polygon, so that the path may come in several pieces
+/// between known runs (a hole joining several sheets' runs); empty: all after the last.
 HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const PinholeCamera& camera,
                           const HoleFillOptions& options = {},
                           const std::function<double(int, int)>& obstacle_depth_m = {},
-                          const std::vector<Eigen::Vector2d>& closing_path_px = {});
+                          const std::vector<Eigen::Vector2d>& closing_path_px = {},
+                          const std::vector<int>& closing_path_after = {});
 
 /// For each face of `candidates`, whether it intersects a face of `candidates` or of `others`
 /// other than in what they share by index (the rules of evaluateMesh: no shared vertex, any

@@ -47,6 +47,9 @@ struct PixelMapping {
   /// image frame or the sky line (fillHoleInImage's closing path), empty for a hole closed by
   /// its own loop.
   const std::vector<std::vector<OpenMesh::Vec2i>>* frame_paths = nullptr;
+  /// Optional, per hole (DepthLoops::path_after): where each frame_paths pixel goes in the
+  /// polygon (after that loop index), for a hole joining several runs; empty: after the last.
+  const std::vector<std::vector<int>>* frame_path_after = nullptr;
   /// Optional, per hole (DepthLoops::image_space_only): non-zero = no 3D fallback after the
   /// image-space fill (a large frame hole closed by its chord, on which every 3D patch fails).
   const std::vector<std::uint8_t>* image_space_only = nullptr;
