@@ -89,7 +89,7 @@ int main(int argc, char** argv) {
     const solo::RayCaster caster(std::move(vertices), std::move(indices));
     double load_before[3] = {0, 0, 0}, load_after[3] = {0, 0, 0};
     getloadavg(load_before, 3);
-    std::vector<double> raw, power, hierarchy, power_samples, hierarchy_samples;
+    std::vector<double> raw, power, hierarchy, power_samples, hierarchy_samples, per_light, per_light_samples;
     for (int repeat = 0; repeat < 5; ++repeat) {
       raw.push_back(rawEmbreeRaysPerSecond(scene, caster));
       tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
@@ -105,15 +105,27 @@ int main(int argc, char** argv) {
         (kind == solo::LightSamplerKind::Power ? power : hierarchy).push_back(rate);
         (kind == solo::LightSamplerKind::Power ? power_samples : hierarchy_samples).push_back(samples);
       }
+      // The power sampler with a shadow ray per light (the tracer before one_shadow_ray): more,
+      // cheaper rays per sample, so more rays per second for fewer samples per second.
+      solo::PathTracerOptions t;
+      t.progress = false;
+      t.min_samples = t.max_samples = 4;
+      t.seed = 11;
+      t.light_sampler = solo::LightSamplerKind::Power;
+      t.one_shadow_ray = false;
+      const solo::RenderOutput out = solo::renderPathTraced(scene, t);
+      per_light.push_back(std::get<double>(*out.report.find("rays_per_second")));
+      per_light_samples.push_back(4.0 * width * height / out.report.seconds);
     }
     getloadavg(load_after, 3);
     const double raw_median = median(raw);
     std::printf("efficiency, 1 thread, 4 spp, median of 5 (load average %.1f before, %.1f after): raw Embree %.3f Mrays/s; "
                 "tracer power %.3f Mrays/s (%.1f %% of raw, %.3f M samples/s), hierarchy %.3f Mrays/s (%.1f %%, %.3f M "
-                "samples/s)\n",
+                "samples/s), power with a shadow ray per light %.3f Mrays/s (%.1f %%, %.3f M samples/s)\n",
                 load_before[0], load_after[0], raw_median / 1e6, median(power) / 1e6, 100 * median(power) / raw_median,
                 median(power_samples) / 1e6, median(hierarchy) / 1e6, 100 * median(hierarchy) / raw_median,
-                median(hierarchy_samples) / 1e6);
+                median(hierarchy_samples) / 1e6, median(per_light) / 1e6, 100 * median(per_light) / raw_median,
+                median(per_light_samples) / 1e6);
   }
 
   solo::PathTracerOptions o;
@@ -143,6 +155,28 @@ int main(int argc, char** argv) {
     std::printf("sampler cost, 16 spp, median of 5: sobol %.3f Mrays/s (relative RMSE %.4f), independent %.3f Mrays/s "
                 "(%.4f): sobol/independent rays/s %.3f\n",
                 median(rate[0]), error[0][0], median(rate[1]), error[1][0], median(rate[0]) / median(rate[1]));
+  }
+
+  // Next-event estimation (docs/rendering.md, Integrator): the default (one shadow ray per
+  // vertex, solid-angle sampling of close emitters) against a shadow ray per light and against
+  // emitters sampled by area, 16-spp renders alternated five times; medians of the seconds.
+  {
+    std::vector<double> seconds[3], error[3];
+    for (int repeat = 0; repeat < 5; ++repeat)
+      for (int k = 0; k < 3; ++k) {
+        solo::PathTracerOptions s = o;
+        s.min_samples = s.max_samples = 16;
+        s.seed = 7;
+        s.one_shadow_ray = k != 1;
+        s.solid_angle_emitter_sampling = k != 2;
+        const solo::RenderOutput out = solo::renderPathTraced(scene, s);
+        seconds[k].push_back(out.report.seconds);
+        error[k].push_back(relativeRmse(out.radiance, reference.radiance, reference.light_id));
+      }
+    std::printf("next-event estimation, 16 spp, median of 5: default %.3f s (relative RMSE %.4f), a shadow ray per light "
+                "%.3f s (%.4f), emitters by area %.3f s (%.4f): default/per-light time %.3f, default/area time %.3f\n",
+                median(seconds[0]), error[0][0], median(seconds[1]), error[1][0], median(seconds[2]), error[2][0],
+                median(seconds[0]) / median(seconds[1]), median(seconds[0]) / median(seconds[2]));
   }
 
   // Adaptive stopping (relative error 5 %, 16 to 256 samples) with the Sobol sampler: the
