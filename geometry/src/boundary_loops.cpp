@@ -4,6 +4,21 @@
 #include <unordered_map>
 
 namespace solo {
+namespace {
+
+// Twice the signed area of a polygon of pixel positions (shoelace); in the image's y-down frame a
+// hole's orientation (the border loop's opposite) is negative.
+double twiceSignedArea(const std::vector<OpenMesh::Vec2i>& polygon) {
+  double twice = 0;
+  for (std::size_t q = 0; q < polygon.size(); ++q) {
+    const auto& p0 = polygon[q];
+    const auto& p1 = polygon[(q + 1) % polygon.size()];
+    twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
+  }
+  return twice;
+}
+
+}  // namespace
 
 std::vector<VertexLoop> findBoundaryLoops(const SurfaceMesh& mesh) {
   std::vector<VertexLoop> loops;
@@ -114,16 +129,10 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       if (!had_depth.at<std::uint8_t>(p[1], p[0])) return false;
       path.push_back(p);
     }
-    double twice = 0;
     std::vector<OpenMesh::Vec2i> polygon;
     for (const auto v : run) polygon.push_back(pixelOf(v));
     polygon.insert(polygon.end(), path.begin(), path.end());
-    for (std::size_t q = 0; q < polygon.size(); ++q) {
-      const auto& p0 = polygon[q];
-      const auto& p1 = polygon[(q + 1) % polygon.size()];
-      twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
-    }
-    return twice < 0;
+    return twiceSignedArea(polygon) < 0;
   };
   // Closing along the sky line: from the run's last pixel the outer contour of the pixels with
   // depth (the frame counting as their edge) is followed the way the border loop does not go,
@@ -190,16 +199,10 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       const int before = (start + 7) % 8;
       if (hasDepth(a[0] + kDu[start], a[1] + kDv[start]) || !hasDepth(a[0] + kDu[before], a[1] + kDv[before])) continue;
       if (!trace(start)) continue;
-      double twice = 0;
       std::vector<OpenMesh::Vec2i> polygon;
       for (const auto v : run) polygon.push_back(pixelOf(v));
       polygon.insert(polygon.end(), path.begin(), path.end());
-      for (std::size_t q = 0; q < polygon.size(); ++q) {
-        const auto& p0 = polygon[q];
-        const auto& p1 = polygon[(q + 1) % polygon.size()];
-        twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
-      }
-      if (twice < 0) return true;
+      if (twiceSignedArea(polygon) < 0) return true;
     }
     path.clear();
     return false;
@@ -243,12 +246,9 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       // Closed by its chord, the run turning the loop's way (positive area) encloses its own
       // sheet: the sheet's faces lie on the polygon's inner side all along the run, so every
       // patch over that polygon lies on the sheet. Not attempted: reported open.
-      double twice = 0;
-      for (std::size_t q = 0; q < run.size(); ++q) {
-        const OpenMesh::Vec2i p0 = pixelOf(run[q]), p1 = pixelOf(run[(q + 1) % run.size()]);
-        twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
-      }
-      if (twice > 0) {
+      std::vector<OpenMesh::Vec2i> polygon;
+      for (const auto v : run) polygon.push_back(pixelOf(v));
+      if (twiceSignedArea(polygon) > 0) {
         ++out.frame_holes;
         ++out.frame_holes_unclosable;
         out.unclosable_notes.push_back("frame hole of " + std::to_string(run.size()) +
@@ -380,14 +380,8 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       }
       std::unordered_map<std::int64_t, char> once;
       bool simple = true;
-      double twice = 0;
-      for (std::size_t q = 0; q < polygon.size(); ++q) {
-        simple = simple && once.emplace(key(polygon[q]), 1).second;
-        const auto& p0 = polygon[q];
-        const auto& p1 = polygon[(q + 1) % polygon.size()];
-        twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
-      }
-      if (!simple || !(twice < 0)) continue;
+      for (const auto& p : polygon) simple = simple && once.emplace(key(p), 1).second;
+      if (!simple || !(twiceSignedArea(polygon) < 0)) continue;
       for (const std::size_t r : chain) used[r] = 1;
       out.holes.push_back(std::move(hole));
       out.chord_closed.push_back(0);
