@@ -20,7 +20,8 @@
 //       exported scene files stay as they are. With `nee` (either command), also the
 //       next-event-estimation A/B at 16 and 64 spp with the first sampler: emitters sampled by
 //       area instead of solid angle, one shadow ray per light instead of one per vertex, and
-//       both (the tracer before these two).
+//       both (the tracer before these two); with `clamp` the indirect clamp at 30 to 3000 cd/m^2;
+//       with `roulette` Russian roulette from bounce 1, 2 and 4 (the default is 3).
 //   export_blender_scene compare OUT_DIR IMAGE.exr
 //       Relative RMSE of IMAGE's Y (second channel) against the reference on the pixels where no
 //       emitter is seen, the ratio of their means there, the share of the squared error in the
@@ -226,6 +227,7 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
   }
   const bool nee_variants = argc > 7 && std::string(argv[7]) == "nee";
   const bool clamp_variants = argc > 7 && std::string(argv[7]) == "clamp";
+  const bool roulette_variants = argc > 7 && std::string(argv[7]) == "roulette";
   solo::RenderScene scene;
   if (name == "night") scene = nightStreet(width, height);
   else if (name == "plane-area") scene = litPlane(width, height, false);
@@ -307,6 +309,17 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     defaults.diffuse = solo::DiffuseModel::Lambert;
     defaults.sampler = kind;
     run("default adaptive" + suffix, defaults);
+  }
+  if (roulette_variants) {
+    const std::string suffix = std::string(" ") + solo::samplerKindName(samplers.front());
+    for (int spp : {16, 64})
+      for (int after : {1, 2, 4}) {
+        solo::PathTracerOptions fixed = o;
+        fixed.min_samples = fixed.max_samples = spp;
+        fixed.sampler = samplers.front();
+        fixed.russian_roulette_after = after;
+        run("fixed " + std::to_string(spp) + suffix + " roulette after " + std::to_string(after), fixed);
+      }
   }
   if (clamp_variants) {
     const std::string suffix = std::string(" ") + solo::samplerKindName(samplers.front());
