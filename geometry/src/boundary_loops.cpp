@@ -150,13 +150,49 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       if (kDu[k] == du && kDv[k] == dv) return k;
     return -1;
   };
+  const auto key = [&](const OpenMesh::Vec2i& p) { return std::int64_t(p[1]) * w + p[0]; };
+  // Whether direction `start` from pixel a begins an arc of background around it (the trace
+  // of the contour has one start per such arc).
+  const auto startsBackgroundArc = [&](const OpenMesh::Vec2i& a, int start) {
+    const int before = (start + 7) % 8;
+    return !hasDepth(a[0] + kDu[start], a[1] + kDv[start]) && hasDepth(a[0] + kDu[before], a[1] + kDv[before]);
+  };
+  // One step along the outer contour of the pixels with depth: from `current`, whose background
+  // neighbour lies in direction `back`, to the first neighbour with depth turning toward the
+  // front (counter-clockwise in the image), so the depth lies on the left; `back` becomes the
+  // last background neighbour as seen from `next` (-1 if not adjacent). False: no neighbour
+  // has depth.
+  const auto contourStep = [&](const OpenMesh::Vec2i& current, int& back, OpenMesh::Vec2i& next) {
+    int k = -1;
+    for (int turn = 1; turn < 8 && k < 0; ++turn) {
+      const int d = ((back - turn) % 8 + 8) % 8;
+      if (hasDepth(current[0] + kDu[d], current[1] + kDv[d])) k = d;
+    }
+    if (k < 0) return false;
+    const int behind = (k + 1) % 8;
+    next = OpenMesh::Vec2i(current[0] + kDu[k], current[1] + kDv[k]);
+    back = directionOf(current[0] + kDu[behind] - next[0], current[1] + kDv[behind] - next[1]);
+    return true;
+  };
+  // Appends `next` to a path kept simple: a pixel reached again closes an excursion (a spike or
+  // a lobe behind a one-pixel neck), which is dropped. `on_path` maps pixels to path indices.
+  const auto appendSimple = [&](std::vector<OpenMesh::Vec2i>& path, std::unordered_map<std::int64_t, std::size_t>& on_path,
+                                const OpenMesh::Vec2i& next) {
+    const auto seen = on_path.find(key(next));
+    if (seen != on_path.end()) {
+      for (std::size_t j = seen->second + 1; j < path.size(); ++j) on_path.erase(key(path[j]));
+      path.resize(seen->second + 1);
+    } else {
+      on_path.emplace(key(next), path.size());
+      path.push_back(next);
+    }
+  };
   const auto skyPath = [&](const VertexLoop& run, std::vector<OpenMesh::Vec2i>& path) {
     path.clear();
     const OpenMesh::Vec2i a = pixelOf(run.back()), b = pixelOf(run.front());
     const double nearer_than_m = 0.99 * std::min(depth_m.at<float>(a[1], a[0]), depth_m.at<float>(b[1], b[0]));
     std::unordered_map<std::int64_t, std::size_t> on_path;  // pixel -> index in path
     std::unordered_map<std::int64_t, char> on_run;
-    const auto key = [&](const OpenMesh::Vec2i& p) { return std::int64_t(p[1]) * w + p[0]; };
     for (const auto v : run) on_run.emplace(key(pixelOf(v)), 1);
     const std::int64_t max_steps = 4 * std::int64_t(w) * h + 8;
     const auto trace = [&](int back) {
@@ -164,41 +200,21 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       on_path.clear();
       OpenMesh::Vec2i current = a;
       for (std::int64_t step = 0; step < max_steps; ++step) {
-        // The next contour pixel: the first with depth turning from the background neighbour
-        // towards the front (counter-clockwise in the image), so the depth lies on the left.
-        int k = -1;
-        for (int turn = 1; turn < 8 && k < 0; ++turn) {
-          const int d = ((back - turn) % 8 + 8) % 8;
-          if (hasDepth(current[0] + kDu[d], current[1] + kDv[d])) k = d;
-        }
-        if (k < 0) return false;
-        const int behind = (k + 1) % 8;  // the last background neighbour, seen from the next pixel
-        const OpenMesh::Vec2i next(current[0] + kDu[k], current[1] + kDv[k]);
-        back = directionOf(current[0] + kDu[behind] - next[0], current[1] + kDv[behind] - next[1]);
+        OpenMesh::Vec2i next;
+        if (!contourStep(current, back, next)) return false;
         if (next == b) return true;
         if (next == a || on_run.count(key(next)) || back < 0) return false;
         if (!(depth_m.at<float>(next[1], next[0]) < nearer_than_m)) return false;
         const int q = m.vertexAt(next[0], next[1]);
         if (q >= 0 && !mesh.status(OpenMesh::VertexHandle(q)).deleted() && behindOccluder(OpenMesh::VertexHandle(q))) return false;
-        // A pixel reached again closes an excursion (a spike or a lobe behind a one-pixel
-        // neck): it is dropped, so the path stays simple.
-        const auto seen = on_path.find(key(next));
-        if (seen != on_path.end()) {
-          for (std::size_t j = seen->second + 1; j < path.size(); ++j) on_path.erase(key(path[j]));
-          path.resize(seen->second + 1);
-        } else {
-          on_path.emplace(key(next), path.size());
-          path.push_back(next);
-        }
+        appendSimple(path, on_path, next);
         current = next;
       }
       return false;
     };
     // One try per arc of background around the run's end (the trace's first step differs).
     for (int start = 0; start < 8; ++start) {
-      const int before = (start + 7) % 8;
-      if (hasDepth(a[0] + kDu[start], a[1] + kDv[start]) || !hasDepth(a[0] + kDu[before], a[1] + kDv[before])) continue;
-      if (!trace(start)) continue;
+      if (!startsBackgroundArc(a, start) || !trace(start)) continue;
       std::vector<OpenMesh::Vec2i> polygon;
       for (const auto v : run) polygon.push_back(pixelOf(v));
       polygon.insert(polygon.end(), path.begin(), path.end());
@@ -280,7 +296,6 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
   // the chord (or are unclosable).
   const auto closeMergedRuns = [&](std::vector<VertexLoop>& runs) {
     constexpr std::size_t kMaxRunsPerHole = 16;
-    const auto key = [&](const OpenMesh::Vec2i& p) { return std::int64_t(p[1]) * w + p[0]; };
     std::unordered_map<std::int64_t, std::size_t> first_at, vertex_run;
     for (std::size_t r = 0; r < runs.size(); ++r) {
       first_at.emplace(key(pixelOf(runs[r].front())), r);
@@ -296,23 +311,15 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       const double start_limit_m = 0.99 * depth_m.at<float>(a[1], a[0]);
       std::unordered_map<std::int64_t, std::size_t> on_path;
       for (int start = 0; start < 8; ++start) {
-        const int before = (start + 7) % 8;
-        if (hasDepth(a[0] + kDu[start], a[1] + kDv[start]) || !hasDepth(a[0] + kDu[before], a[1] + kDv[before])) continue;
+        if (!startsBackgroundArc(a, start)) continue;
         path.clear();
         on_path.clear();
         double farthest_m = 0;
         OpenMesh::Vec2i current = a;
         int back = start;
         for (std::int64_t step = 0; step < max_steps; ++step) {
-          int k = -1;
-          for (int turn = 1; turn < 8 && k < 0; ++turn) {
-            const int d = ((back - turn) % 8 + 8) % 8;
-            if (hasDepth(current[0] + kDu[d], current[1] + kDv[d])) k = d;
-          }
-          if (k < 0) break;
-          const int behind = (k + 1) % 8;
-          const OpenMesh::Vec2i next(current[0] + kDu[k], current[1] + kDv[k]);
-          back = directionOf(current[0] + kDu[behind] - next[0], current[1] + kDv[behind] - next[1]);
+          OpenMesh::Vec2i next;
+          if (!contourStep(current, back, next)) break;
           const auto on_run = vertex_run.find(key(next));
           if (on_run != vertex_run.end()) {
             const auto first = first_at.find(key(next));
@@ -327,14 +334,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
           if (!(z < start_limit_m)) break;
           const int q = m.vertexAt(next[0], next[1]);
           if (q >= 0 && !mesh.status(OpenMesh::VertexHandle(q)).deleted() && behindOccluder(OpenMesh::VertexHandle(q))) break;
-          const auto seen = on_path.find(key(next));
-          if (seen != on_path.end()) {
-            for (std::size_t j = seen->second + 1; j < path.size(); ++j) on_path.erase(key(path[j]));
-            path.resize(seen->second + 1);
-          } else {
-            on_path.emplace(key(next), path.size());
-            path.push_back(next);
-          }
+          appendSimple(path, on_path, next);
           farthest_m = std::max(farthest_m, z);
           current = next;
         }
