@@ -85,26 +85,32 @@ struct EmitterSample {
   float pdf = 0;       // per steradian, given the triangle
 };
 
-// A cheap test before the solid angle: a triangle within a sphere of radius r seen from more
-// than 20 r subtends at most 2 pi (1 - cos(asin(1 / 20))) = 0.0079 sr, below the threshold, so
-// the decision (and the MIS weight) is the same without computing it.
-static_assert(kMinSphericalSolidAngle >= 0.0079, "mayLookLarge assumes the threshold is at least 0.0079 sr");
-bool mayLookLarge(const EmissiveTriangle& t, const Eigen::Vector3f& origin) {
+// The rule both sampleEmitter() and emitterPdf() follow: by solid angle when the triangle
+// subtends at least kMinSphericalSolidAngle from `origin`. A cheap test comes first: a triangle
+// within a sphere of radius r seen from more than 20 r subtends at most
+// 2 pi (1 - cos(asin(1 / 20))) = 0.0079 sr, below the threshold, so most triangles need no
+// solid angle at all.
+static_assert(kMinSphericalSolidAngle >= 0.0079, "the bounding-sphere test assumes a threshold of at least 0.0079 sr");
+bool sampledBySolidAngle(const EmissiveTriangle& t, const Eigen::Vector3f& origin, bool by_solid_angle) {
+  if (!by_solid_angle) return false;
   const Eigen::Vector3f centre = (t.p0 + t.p1 + t.p2) / 3.f;
   const float radius2 =
       std::max({(t.p0 - centre).squaredNorm(), (t.p1 - centre).squaredNorm(), (t.p2 - centre).squaredNorm()});
-  return (origin - centre).squaredNorm() < 400.f * radius2;
+  if (!((origin - centre).squaredNorm() < 400.f * radius2)) return false;
+  return triangleSolidAngle(origin.cast<double>(), t.p0.cast<double>(), t.p1.cast<double>(), t.p2.cast<double>()) >=
+         kMinSphericalSolidAngle;
 }
 
 EmitterSample sampleEmitter(const EmissiveTriangle& t, const Eigen::Vector3f& origin, const Eigen::Vector3f& normal,
                             float u1, float u2, bool by_solid_angle) {
   EmitterSample s;
-  const Eigen::Vector3d o = origin.cast<double>(), a = t.p0.cast<double>(), b = t.p1.cast<double>(), c = t.p2.cast<double>();
-  const double solid_angle = by_solid_angle && mayLookLarge(t, origin) ? triangleSolidAngle(o, a, b, c) : 0.0;
-  Eigen::Vector3d w;
-  double pdf = 0;
-  if (solid_angle >= kMinSphericalSolidAngle) {
-    if (!sampleSphericalTriangleCosine(o, normal.cast<double>(), a, b, c, u1, u2, &w, &pdf)) return s;
+  if (sampledBySolidAngle(t, origin, by_solid_angle)) {
+    const Eigen::Vector3d o = origin.cast<double>(), a = t.p0.cast<double>();
+    Eigen::Vector3d w;
+    double pdf = 0;
+    if (!sampleSphericalTriangleCosine(o, normal.cast<double>(), a, t.p1.cast<double>(), t.p2.cast<double>(), u1, u2, &w,
+                                       &pdf))
+      return s;
     const Eigen::Vector3d triangle_normal = t.normal.cast<double>();
     const double cos_w = w.dot(triangle_normal);
     const double distance = (a - o).dot(triangle_normal) / cos_w;
@@ -134,9 +140,9 @@ EmitterSample sampleEmitter(const EmissiveTriangle& t, const Eigen::Vector3f& or
 // `cos_light`.
 float emitterPdf(const EmissiveTriangle& t, const Eigen::Vector3f& origin, const Eigen::Vector3f& normal,
                  const Eigen::Vector3f& wi, float distance, float cos_light, bool by_solid_angle) {
-  const Eigen::Vector3d o = origin.cast<double>(), a = t.p0.cast<double>(), b = t.p1.cast<double>(), c = t.p2.cast<double>();
-  if (by_solid_angle && mayLookLarge(t, origin) && triangleSolidAngle(o, a, b, c) >= kMinSphericalSolidAngle)
-    return static_cast<float>(sphericalTriangleCosinePdf(o, normal.cast<double>(), a, b, c, wi.cast<double>()));
+  if (sampledBySolidAngle(t, origin, by_solid_angle))
+    return static_cast<float>(sphericalTriangleCosinePdf(origin.cast<double>(), normal.cast<double>(), t.p0.cast<double>(),
+                                                         t.p1.cast<double>(), t.p2.cast<double>(), wi.cast<double>()));
   return distance * distance / (cos_light * t.area);
 }
 
