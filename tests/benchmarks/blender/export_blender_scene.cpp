@@ -51,6 +51,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <sstream>
 #include <sys/resource.h>
@@ -310,41 +311,32 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     defaults.sampler = kind;
     run("default adaptive" + suffix, defaults);
   }
-  if (roulette_variants) {
-    const std::string suffix = std::string(" ") + solo::samplerKindName(samplers.front());
-    for (int spp : {16, 64})
-      for (int after : {1, 2, 4}) {
-        solo::PathTracerOptions fixed = o;
-        fixed.min_samples = fixed.max_samples = spp;
-        fixed.sampler = samplers.front();
-        fixed.russian_roulette_after = after;
-        run("fixed " + std::to_string(spp) + suffix + " roulette after " + std::to_string(after), fixed);
-      }
-  }
-  if (clamp_variants) {
-    const std::string suffix = std::string(" ") + solo::samplerKindName(samplers.front());
-    for (int spp : {16, 64})
-      for (float clamp : {30.f, 100.f, 300.f, 1000.f, 3000.f}) {
-        solo::PathTracerOptions fixed = o;
-        fixed.min_samples = fixed.max_samples = spp;
-        fixed.sampler = samplers.front();
-        fixed.indirect_clamp = clamp;
-        run("fixed " + std::to_string(spp) + suffix + " clamp " + std::to_string(static_cast<int>(clamp)), fixed);
-      }
-  }
+  // A/B runs at 16 and 64 spp with the first sampler: `name` labels a variant that `set` makes.
+  using Variant = std::pair<std::string, std::function<void(solo::PathTracerOptions&)>>;
+  std::vector<Variant> variants;
+  if (roulette_variants)
+    for (int after : {1, 2, 4})
+      variants.push_back({" roulette after " + std::to_string(after), [after](auto& t) { t.russian_roulette_after = after; }});
+  if (clamp_variants)
+    for (float clamp : {30.f, 100.f, 300.f, 1000.f, 3000.f})
+      variants.push_back({" clamp " + std::to_string(static_cast<int>(clamp)), [clamp](auto& t) { t.indirect_clamp = clamp; }});
   if (nee_variants) {
-    const std::string suffix = std::string(" ") + solo::samplerKindName(samplers.front());
-    for (int spp : {16, 64})
-      for (int variant = 1; variant < 4; ++variant) {
-        solo::PathTracerOptions fixed = o;
-        fixed.min_samples = fixed.max_samples = spp;
-        fixed.sampler = samplers.front();
-        fixed.solid_angle_emitter_sampling = (variant & 1) == 0;
-        fixed.one_shadow_ray = (variant & 2) == 0;
-        const char* names[] = {"", " area-emitters", " ray-per-light", " area+ray-per-light"};
-        run("fixed " + std::to_string(spp) + suffix + names[variant], fixed);
-      }
+    variants.push_back({" area-emitters", [](auto& t) { t.solid_angle_emitter_sampling = false; }});
+    variants.push_back({" ray-per-light", [](auto& t) { t.one_shadow_ray = false; }});
+    variants.push_back({" area+ray-per-light", [](auto& t) {
+                          t.solid_angle_emitter_sampling = false;
+                          t.one_shadow_ray = false;
+                        }});
   }
+  const std::string suffix = std::string(" ") + solo::samplerKindName(samplers.front());
+  for (int spp : {16, 64})
+    for (const auto& [name, set] : variants) {
+      solo::PathTracerOptions fixed = o;
+      fixed.min_samples = fixed.max_samples = spp;
+      fixed.sampler = samplers.front();
+      set(fixed);
+      run("fixed " + std::to_string(spp) + suffix + name, fixed);
+    }
   return 0;
 }
 
