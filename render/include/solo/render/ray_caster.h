@@ -1,6 +1,8 @@
 #pragma once
 // Ray casting against a triangle mesh with Embree. The mesh buffers are shared with
-// Embree, not copied: the caster owns them for its lifetime.
+// Embree, not copied: the caster owns them for its lifetime. Consecutive triangles that share
+// an edge go to Embree as one quad (fewer primitives, faster traversal); hits still name the
+// input triangle and its barycentrics.
 
 #include <Eigen/Core>
 
@@ -38,6 +40,9 @@ class RayCaster {
   bool occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near, float t_far) const;
 
   std::size_t triangleCount() const;
+  /// Primitives in Embree's BVH: triangles that share an edge with the next one in the input
+  /// (the two halves of a pixel quad) are handed over as one quad.
+  std::size_t primitiveCount() const;
 
  private:
   struct Impl;
