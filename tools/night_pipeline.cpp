@@ -156,8 +156,8 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
                               : image_camera;
   const PreparedRenderScene prepared(night.scene);  // one BVH for the preview and the render
   // --noise-target: stop where render noise is below noise_factor x the sensor noise the pixel
-  // will get. That needs the exposure first, so auto exposure meters a small preview at
-  // min_samples spp (meteringPreviewSize) before the full render.
+  // will get. That needs the exposure first, so auto exposure meters a small preview
+  // (meteringPreviewSize, kMeteringSamplesPerPixel) before the full render.
   double preview_white = 0;
   double preview_seconds = 0;
   std::string noise_target_note;
@@ -169,7 +169,7 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
     const int preview_width = preview_size.width, preview_height = preview_size.height;
     if (!(preview_white > 0)) {
       PathTracerOptions preview = tracer;
-      preview.max_samples = preview.min_samples;
+      preview.min_samples = preview.max_samples = kMeteringSamplesPerPixel;
       preview.progress = false;
       const RenderOutput metered =
           renderPathTraced(prepared, full_camera.scaledTo(preview_width, preview_height), preview);
@@ -188,7 +188,7 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
       std::snprintf(note, sizeof note,
                     "noise-matched target: standard error <= %.2f x sensor noise sigma; exposure metered on a %dx%d "
                     "preview at %d spp (%.2f s), sensor white %.6g cd/m2",
-                    o.noise_factor, preview_width, preview_height, std::max(2, o.min_samples), preview_clock.seconds(),
+                    o.noise_factor, preview_width, preview_height, kMeteringSamplesPerPixel, preview_clock.seconds(),
                     preview_white);
     noise_target_note = note;
     if (!(o.sensor_white_cd_m2 > 0)) preview_seconds = preview_clock.seconds();

@@ -64,15 +64,19 @@ class PowerSampler final : public LightSampler {
     }
     for (const std::uint32_t i : large) columns_[i] = {1.f, i};  // rounding leftovers: full columns
     for (const std::uint32_t i : small) columns_[i] = {1.f, i};
+    for (std::size_t i = 0; i < n; ++i) {  // both probabilities in the column: one cache line per pick
+      columns_[i].own_pmf = pmf_[i];
+      columns_[i].alias_pmf = pmf_[columns_[i].alias];
+    }
   }
   int pick(const Eigen::Vector3f&, const Eigen::Vector3f&, float u, float* pmf) const override {
     if (columns_.empty()) return -1;
     const double scaled = static_cast<double>(u) * static_cast<double>(columns_.size());
     const std::size_t column = std::min(static_cast<std::size_t>(scaled), columns_.size() - 1);
     const Column& c = columns_[column];
-    const auto index = static_cast<std::size_t>(scaled - static_cast<double>(column) < c.keep ? column : c.alias);
-    *pmf = pmf_[index];
-    return static_cast<int>(index);
+    const bool own = scaled - static_cast<double>(column) < c.keep;
+    *pmf = own ? c.own_pmf : c.alias_pmf;
+    return static_cast<int>(own ? column : c.alias);
   }
   float pmf(const Eigen::Vector3f&, const Eigen::Vector3f&, int triangle) const override {
     return pmf_.empty() ? 0.f : pmf_[static_cast<std::size_t>(triangle)];
@@ -82,6 +86,7 @@ class PowerSampler final : public LightSampler {
   struct Column {
     float keep = 1.f;         // probability of the column's own triangle
     std::uint32_t alias = 0;  // the other triangle
+    float own_pmf = 0.f, alias_pmf = 0.f;  // their probabilities of being picked at all
   };
   std::vector<Column> columns_;
   std::vector<float> pmf_;

@@ -648,6 +648,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   r.add("samples_per_pixel_max", static_cast<std::int64_t>(max_spp));
   r.add("rays", total_rays.load()).add("rays_per_second", static_cast<double>(total_rays.load()) / seconds);
   r.add("bvh_build", build_seconds, "s");
+  r.add("bvh_primitives", static_cast<std::int64_t>(p.caster->primitiveCount()));
   r.add("emissive_triangles", static_cast<std::int64_t>(emissive.size()));
   r.add("light_sampler", std::string(lightSamplerName(options.light_sampler)));
   r.add("sampler", std::string(samplerKindName(options.sampler)));

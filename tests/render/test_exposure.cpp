@@ -54,10 +54,10 @@ TEST(Exposure, MeteringPutsThe95thPercentileOfTheStreetAt80PercentOfWhite) {
             1.0);
 }
 
-TEST(Exposure, ThePreviewIsAQuarterOfEachSideUnlessThatExceeds40000Pixels) {
-  EXPECT_EQ(solo::meteringPreviewSize(960, 540), cv::Size(240, 135));   // 32 400 pixels: a quarter
-  EXPECT_EQ(solo::meteringPreviewSize(1920, 1080), cv::Size(240, 135)); // a quarter: 129 600; an eighth
-  EXPECT_EQ(solo::meteringPreviewSize(3840, 2160), cv::Size(240, 135)); // a sixteenth
+TEST(Exposure, ThePreviewIsAQuarterOfEachSideUnlessThatExceeds10000Pixels) {
+  EXPECT_EQ(solo::meteringPreviewSize(960, 540), cv::Size(120, 67));   // a quarter: 32 400 pixels; an eighth
+  EXPECT_EQ(solo::meteringPreviewSize(1920, 1080), cv::Size(120, 67)); // a sixteenth
+  EXPECT_EQ(solo::meteringPreviewSize(3840, 2160), cv::Size(120, 67)); // a thirty-second
   EXPECT_EQ(solo::meteringPreviewSize(128, 72), cv::Size(32, 18));
   EXPECT_EQ(solo::meteringPreviewSize(40, 30), cv::Size(16, 16));       // never below 16 x 16
   EXPECT_EQ(solo::meteringPreviewSize(1000, 1000, 1000000), cv::Size(250, 250));

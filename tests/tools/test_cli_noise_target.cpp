@@ -51,17 +51,23 @@ TEST(NightNoiseTarget, MetersAPreviewStopsAtTheSensorNoiseAndReportsTheShareReac
   const double below = metric(render, "pixels_below_noise_target");
   EXPECT_GT(below, 0.0);
   EXPECT_LE(below, 1.0);
-  // The note names the preview (a quarter of 128x72, at min-spp) and the sensor white it
-  // metered, which is the one the post-process used.
+  // The note names the preview (a quarter of 128x72, at kMeteringSamplesPerPixel) and the
+  // sensor white it metered, which is the one the post-process used.
   const std::string note =
       noteStartingWith(render, "noise-matched target: standard error <= 0.50 x sensor noise sigma");
   ASSERT_FALSE(note.empty()) << render.dump(2);
-  EXPECT_NE(note.find("preview at 4 spp"), std::string::npos) << note;
+  EXPECT_NE(note.find("preview at 32 spp"), std::string::npos) << note;
   EXPECT_NE(note.find("32x18"), std::string::npos) << note;
   const auto at = note.find("sensor white ");
   ASSERT_NE(at, std::string::npos);
   const double metered = std::strtod(note.c_str() + at + 13, nullptr);
   EXPECT_NEAR(metric(stage(report, "post"), "sensor_white"), metered, 1e-5 * metered);
+  // The preview's samples are its own: another min-spp meters the very same exposure.
+  const auto fewer = runSolo("night " + q(dir / "street" / "scene.json") +
+                             " --no-optimize --no-solids --min-spp 2 --max-spp 8 --noise-target -o " + q(dir / "f.png"));
+  ASSERT_EQ(fewer.exit_code, 0) << fewer.output;
+  EXPECT_EQ(metric(stage(nlohmann::json::parse(readText(dir / "f.report.json")), "post"), "sensor_white"),
+            metric(stage(report, "post"), "sensor_white"));
 
   // A given sensor white needs no preview; with the sensor noise off the target cannot apply.
   const auto given = runSolo(base + " --noise-target --sensor-white 5 -o " + q(dir / "g.png"));
