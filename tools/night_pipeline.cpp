@@ -155,43 +155,41 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
                                                       std::max(16, image_camera.height / o.render_downsample))
                               : image_camera;
   const PreparedRenderScene prepared(night.scene);  // one BVH for the preview and the render
-  // --noise-target: stop where render noise is below noise_factor x the sensor noise the pixel
-  // will get. That needs the exposure first, so auto exposure meters a small preview
-  // (meteringPreviewSize, kMeteringSamplesPerPixel) before the full render.
-  double preview_white = 0;
+  // Auto exposure meters a small preview (meteringPreviewSize, kMeteringSamplesPerPixel) before
+  // the full render, whatever the preset: the exposure does not depend on the render's samples
+  // (a few-sample render meters low), and --noise-target sets its target from it.
+  const bool auto_white = !(o.sensor_white_cd_m2 > 0);
+  double sensor_white = o.sensor_white_cd_m2;
   double preview_seconds = 0;
-  std::string noise_target_note;
-  if (o.noise_target && o.noise) {
+  std::string exposure_note;
+  if (auto_white) {
     Stopwatch preview_clock;
-    preview_white = o.sensor_white_cd_m2;
-    const PinholeCamera& full_camera = render_camera;
-    const cv::Size preview_size = meteringPreviewSize(full_camera.width, full_camera.height);
-    const int preview_width = preview_size.width, preview_height = preview_size.height;
-    if (!(preview_white > 0)) {
-      PathTracerOptions preview = tracer;
-      preview.min_samples = preview.max_samples = kMeteringSamplesPerPixel;
-      preview.progress = false;
-      const RenderOutput metered =
-          renderPathTraced(prepared, full_camera.scaledTo(preview_width, preview_height), preview);
-      preview_white = meteredSensorWhite(metered.radiance, metered.light_id);
-    }
+    const cv::Size preview_size = meteringPreviewSize(render_camera.width, render_camera.height);
+    PathTracerOptions preview = tracer;
+    preview.min_samples = preview.max_samples = kMeteringSamplesPerPixel;
+    preview.progress = false;
+    const RenderOutput metered =
+        renderPathTraced(prepared, render_camera.scaledTo(preview_size.width, preview_size.height), preview);
+    sensor_white = meteredSensorWhite(metered.radiance, metered.light_id);
+    preview_seconds = preview_clock.seconds();
+    char note[160];
+    std::snprintf(note, sizeof note, "exposure metered on a %dx%d preview at %d spp (%.2f s), sensor white %.6g cd/m2",
+                  preview_size.width, preview_size.height, kMeteringSamplesPerPixel, preview_seconds, sensor_white);
+    exposure_note = note;
+  }
+  // --noise-target: stop where render noise is below noise_factor x the sensor noise the pixel
+  // will get at that exposure.
+  std::string render_note = exposure_note;
+  if (o.noise_target && o.noise) {
     const double exposure = exposureScale(PostProcessOptions{}.exposure_options);
-    tracer.noise_sigma = sensorNoiseSigma(1.0 / (preview_white * exposure), exposure, PostProcessOptions{}.noise_options);
+    tracer.noise_sigma = sensorNoiseSigma(1.0 / (sensor_white * exposure), exposure, PostProcessOptions{}.noise_options);
     tracer.noise_factor = o.noise_factor;
     tracer.relative_error = 0;  // the sensor's noise is the target now; max_samples still caps
-    char note[256];
-    if (o.sensor_white_cd_m2 > 0)
-      std::snprintf(note, sizeof note,
-                    "noise-matched target: standard error <= %.2f x sensor noise sigma; sensor white given, %.6g cd/m2",
-                    o.noise_factor, preview_white);
-    else
-      std::snprintf(note, sizeof note,
-                    "noise-matched target: standard error <= %.2f x sensor noise sigma; exposure metered on a %dx%d "
-                    "preview at %d spp (%.2f s), sensor white %.6g cd/m2",
-                    o.noise_factor, preview_width, preview_height, kMeteringSamplesPerPixel, preview_clock.seconds(),
-                    preview_white);
-    noise_target_note = note;
-    if (!(o.sensor_white_cd_m2 > 0)) preview_seconds = preview_clock.seconds();
+    char note[128];
+    std::snprintf(note, sizeof note, "noise-matched target: standard error <= %.2f x sensor noise sigma; ", o.noise_factor);
+    char given[64];
+    std::snprintf(given, sizeof given, "sensor white given, %.6g cd/m2", sensor_white);
+    render_note = note + (auto_white ? exposure_note : std::string(given));
   }
   r.rendered = renderPathTraced(prepared, render_camera, tracer);
   RenderOutput& rendered = r.rendered;
@@ -212,7 +210,7 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
                   o.render_downsample);
     stages.back().notes.push_back(note);
   }
-  if (!noise_target_note.empty()) stages.back().notes.push_back(noise_target_note);
+  if (!render_note.empty()) stages.back().notes.push_back(render_note);
   if (o.noise_target && !o.noise)
     stages.back().notes.push_back(
         "noise-matched target skipped: sensor noise is off (--no-noise), the relative-error target applies");
@@ -223,10 +221,6 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   post.glare = o.glare;
   post.noise = o.noise;
   post.noise_options.seed = o.seed;
-  const bool auto_white = !(o.sensor_white_cd_m2 > 0);
-  const double sensor_white = preview_white > 0 ? preview_white  // the exposure the noise target was set for
-                              : auto_white      ? meteredSensorWhite(rendered.radiance, rendered.light_id)
-                                                : o.sensor_white_cd_m2;
   const double calibration = 1.0 / (sensor_white * exposureScale(post.exposure_options));
   post.glare_options.threshold = o.glare_threshold >= 0 ? o.glare_threshold : 1.0 / exposureScale(post.exposure_options);
   cv::Mat xyz = rendered.radiance * calibration;

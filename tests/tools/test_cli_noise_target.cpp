@@ -88,6 +88,11 @@ TEST(NightNoiseTarget, MetersAPreviewStopsAtTheSensorNoiseAndReportsTheShareReac
   ASSERT_EQ(plain.exit_code, 0) << plain.output;
   const auto plain_report = nlohmann::json::parse(readText(dir / "p.report.json"));
   EXPECT_TRUE(noteStartingWith(stage(plain_report, "render"), "noise-matched target").empty());
+  // Without the noise target the exposure still comes from the preview, not from the render's
+  // own few samples: the same sensor white.
+  EXPECT_FALSE(noteStartingWith(stage(plain_report, "render"), "exposure metered on a 32x18 preview at 32 spp").empty())
+      << stage(plain_report, "render").dump(2);
+  EXPECT_EQ(metric(stage(plain_report, "post"), "sensor_white"), metric(stage(report, "post"), "sensor_white"));
   EXPECT_FALSE(stage(plain_report, "render")["metrics"].contains("pixels_below_noise_target"));
   const auto by_default = runSolo(base + " -o " + q(dir / "d.png"));
   ASSERT_EQ(by_default.exit_code, 0) << by_default.output;
