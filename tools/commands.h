@@ -47,7 +47,7 @@ struct NightOptions {
   double headlight_flux_lm = 1200;
   std::string light_sampler = "power";
   std::string sampler = "sobol";  ///< per-sample numbers: sobol (scrambled, stratified) or independent
-  int min_samples = 2, max_samples = 16;  ///< per pixel
+  int min_samples = 2, max_samples = 8;  ///< per pixel
   double relative_error = 0.1;            ///< adaptive sampling target on each pixel's luminance
   /// Stop sampling a pixel once its standard error is below noise_factor x the sensor noise's
   /// sigma there (instead of the relative error); docs/rendering.md.

@@ -34,7 +34,7 @@ struct PresetValues {
 //                                spp     rel.err sampler  opt   iter  tol   eval   glare noise  n.target factor
 //                                bounces mesh/ render/
 constexpr PresetValues kDraft = {1, 2, 0.3, "power", true, 3, 1e-6, false, true, true, false, 0.5, 12, 2, 2};
-constexpr PresetValues kDefault = {2, 16, 0.1, "power", true, 10, 1e-9, false, true, true, true, 0.5, 12, 1, 1};
+constexpr PresetValues kDefault = {2, 8, 0.1, "power", true, 10, 1e-9, false, true, true, true, 0.5, 12, 1, 1};
 constexpr PresetValues kFinal = {8, 64, 0.03, "power", true, 10, 1e-9, true, true, true, true, 0.25, 12, 1, 1};
 
 struct Knob {

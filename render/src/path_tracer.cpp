@@ -591,6 +591,28 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
       if (replicates == 1) return p.independentVariance();
       return pooled ? gain * p.independentVariance() : p.replicateVariance(replicates);
     };
+    // stop_on_neighbours: the mean and per-sample variance of Y over the pixel's neighbours in
+    // the tile (3x3, itself excluded), so that whether a pixel stops does not depend on its own
+    // samples; false when it has no neighbour with two samples.
+    const int tile_width = std::min(x0 + kTile, width) - x0;
+    const int tile_rows = static_cast<int>(pixels.size()) / tile_width;
+    const auto neighbours = [&](std::size_t k, double* mean_y, double* sample_variance) {
+      const int i = static_cast<int>(k) % tile_width, j = static_cast<int>(k) / tile_width;
+      double sum_mean = 0, sum_variance = 0;
+      int count = 0;
+      for (int jj = std::max(0, j - 1); jj <= std::min(tile_rows - 1, j + 1); ++jj)
+        for (int ii = std::max(0, i - 1); ii <= std::min(tile_width - 1, i + 1); ++ii) {
+          const PixelState& q = pixels[static_cast<std::size_t>(jj * tile_width + ii)];
+          if ((ii == i && jj == j) || q.n < 2) continue;
+          sum_mean += q.mean_y;
+          sum_variance += q.m2_y / (q.n - 1);
+          ++count;
+        }
+      if (count == 0) return false;
+      *mean_y = sum_mean / count;
+      *sample_variance = sum_variance / count;
+      return true;
+    };
     for (PixelState& p : pixels)
       while (p.taken < min_samples) takeSample(p);
     double gain = 1.0;
@@ -599,10 +621,13 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
       bool active = false;
       for (PixelState& p : pixels) {
         if (p.done) continue;
+        double mean_y = p.mean_y, v = variance(p, gain), neighbour_variance = 0;
+        if (options.stop_on_neighbours && p.n > 0 &&
+            neighbours(static_cast<std::size_t>(&p - pixels.data()), &mean_y, &neighbour_variance))
+          v = (replicates > 1 && pooled ? gain : 1.0) * neighbour_variance / p.n;
         const float absolute = options.absolute_error.empty() ? 0.f : options.absolute_error.at<float>(p.y, p.x);
-        double target = std::max(options.relative_error * std::abs(p.mean_y), static_cast<double>(absolute));
-        if (options.noise_sigma) target = std::max(target, options.noise_factor * options.noise_sigma(p.mean_y));
-        const double v = variance(p, gain);
+        double target = std::max(options.relative_error * std::abs(mean_y), static_cast<double>(absolute));
+        if (options.noise_sigma) target = std::max(target, options.noise_factor * options.noise_sigma(mean_y));
         if (std::sqrt(v) <= target) {
           p.done = true;
           p.stopped_variance = v;  // the estimate it stopped on; the tile's gain moves on later

@@ -192,6 +192,55 @@ TEST(PathTracer, EmitterBesideTheShadedPointIsSampledBySolidAngle) {
   EXPECT_NEAR(by[0].mean, expected, 0.01 * expected);
 }
 
+// Adaptive sampling must not bias a pixel's mean. Area sampling of an emitting triangle 1-8 mm
+// beside the shaded points gives heavy-tailed samples (rare, huge 1 / r^2 weights): a pixel that
+// decides to stop from its own few samples stops most often before a huge one has appeared, so
+// its mean is too dark. Deciding from the neighbours' samples (stop_on_neighbours, the
+// default) leaves each pixel's mean that of a fixed sample count: the image's mean over many
+// seeds matches a fixed-count render's.
+TEST(PathTracer, StoppingOnTheNeighboursLeavesTheMeanUnbiased) {
+  solo::RenderScene s;
+  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
+  s.emitters.push_back({Eigen::Vector3f::Constant(10.f), false, 3});
+  const auto base = static_cast<std::uint32_t>(s.vertices.size());
+  s.vertices.insert(s.vertices.end(), {{1.f, 0.9f, 5.f}, {1.f, 1.1f, 5.f}, {1.f, 1.f, 4.8f}});
+  s.faces.push_back({base, base + 1, base + 2});
+  s.face_reflectance.push_back(Eigen::Vector3f::Zero());
+  s.face_emitter.push_back(0);
+  s.camera = cameraLookingAt(6, 4000, 0.995 / 5, 1.0 / 5);  // 6x6 pixels of 1.25 mm, x in [0.991, 0.999]
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.max_bounces = 1;
+  o.solid_angle_emitter_sampling = false;
+  o.sampler = solo::SamplerKind::Independent;
+  o.relative_error = 0;  // a fixed target, as the sensor-noise target nearly is
+  o.absolute_error = cv::Mat(6, 6, CV_32F, cv::Scalar(0.8));  // about a third of the mean
+  o.progress = false;
+  const auto imageMean = [&](int seeds, bool neighbours, int min_spp, int max_spp, double* spp) {
+    o.stop_on_neighbours = neighbours;
+    o.min_samples = min_spp;
+    o.max_samples = max_spp;
+    double sum = 0, samples = 0;
+    for (int seed = 1; seed <= seeds; ++seed) {
+      o.seed = static_cast<std::uint64_t>(seed);
+      const auto out = solo::renderPathTraced(s, o);
+      sum += meanY(out.radiance);
+      samples += cv::mean(out.samples)[0];
+    }
+    if (spp) *spp = samples / seeds;
+    return sum / seeds;
+  };
+  double spp_own = 0, spp_neighbours = 0;
+  const double fixed = imageMean(100, true, 64, 64, nullptr);
+  const double own = imageMean(400, false, 2, 64, &spp_own);
+  const double neighbours = imageMean(400, true, 2, 64, &spp_neighbours);
+  std::printf("image mean: fixed 64 spp %.4f; adaptive 2-64 spp stopping on own samples %.4f (%.1f spp), on the "
+              "neighbours' %.4f (%.1f spp)\n", fixed, own, spp_own, neighbours, spp_neighbours);
+  EXPECT_LT(own, 0.95 * fixed) << "the own-sample rule is biased dark here (measured 0.90)";
+  EXPECT_NEAR(neighbours, fixed, 0.03 * fixed);  // measured 1.005
+  EXPECT_LT(spp_neighbours, 32) << "and it still stops early";
+}
+
 TEST(PathTracer, OneShadowRayPerVertexKeepsTheMeanOfSeveralLights) {
   // A plane under two rectangle lights and an emitting quad, one bounce: the closed form is the
   // sum of the three. One shadow ray per vertex to a light chosen by its contribution gives the
@@ -479,6 +528,7 @@ TEST(PathTracer, EmittersTouchingTheReceiverStayFiniteAndBelowThePhysicalBound) 
 TEST(PathTracer, AdaptiveSamplingStopsEarlyWhereTheImageIsSmooth) {
   solo::PathTracerOptions o;
   o.diffuse = solo::DiffuseModel::Lambert;
+  o.stop_on_neighbours = false;  // the promise below is the pixel's own estimate's
   o.min_samples = 16;
   o.max_samples = 1024;
   o.relative_error = 0.05;
@@ -609,6 +659,7 @@ TEST(PathTracer, NoiseMatchedTargetStopsAtThePredictedSampleCount) {
 
 TEST(PathTracer, AHighNoiseFloorTakesFewerSamplesThanTheRelativeTargetAlone) {
   solo::PathTracerOptions o;
+  o.stop_on_neighbours = false;  // "every pixel below" is the pixel's own estimate's promise
   o.diffuse = solo::DiffuseModel::Lambert;
   o.min_samples = 16;
   o.max_samples = 2048;
