@@ -155,21 +155,27 @@ PixelStatistics pixelStatistics(const solo::RenderScene& s, solo::PathTracerOpti
   return {mean, (squares - seeds * mean * mean) / (seeds - 1)};
 }
 
-TEST(PathTracer, EmitterBesideTheShadedPointIsSampledBySolidAngle) {
-  // An emitting triangle standing on a plane 1 cm beside the shaded point (as a lamp's faces
-  // stand beside its neighbours in a depth mesh): by area its samples weigh up to
-  // 1 / (1 cm)^2; by solid angle they are bounded. Both must give Lambert's closed form; solid
-  // angle with far less variance.
+// A plane z = 5 of reflectance 0.5 and, standing on it, an emitting triangle (radiance 10) in
+// the plane x = 1: base y in [0.9, 1.1] on the plane, apex 20 cm toward the camera, so camera
+// rays to x < 1 on the plane pass beside it.
+solo::RenderScene planeWithEmitterStandingOnIt() {
   solo::RenderScene s;
   addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
   s.emitters.push_back({Eigen::Vector3f::Constant(10.f), false, 3});
-  // In the plane x = 1, base y in [0.9, 1.1] on the plane, apex 20 cm toward the camera: camera
-  // rays to x < 1 on the plane pass beside it.
   const auto base = static_cast<std::uint32_t>(s.vertices.size());
   s.vertices.insert(s.vertices.end(), {{1.f, 0.9f, 5.f}, {1.f, 1.1f, 5.f}, {1.f, 1.f, 4.8f}});
   s.faces.push_back({base, base + 1, base + 2});
   s.face_reflectance.push_back(Eigen::Vector3f::Zero());
   s.face_emitter.push_back(0);
+  return s;
+}
+
+TEST(PathTracer, EmitterBesideTheShadedPointIsSampledBySolidAngle) {
+  // An emitting triangle standing on a plane 1 cm beside the shaded point (as a lamp's faces
+  // stand beside its neighbours in a depth mesh): by area its samples weigh up to
+  // 1 / (1 cm)^2; by solid angle they are bounded. Both must give Lambert's closed form; solid
+  // angle with far less variance.
+  solo::RenderScene s = planeWithEmitterStandingOnIt();
   s.camera = cameraLookingAt(1, 4000, 0.99 / 5, 1.0 / 5);  // (0.99, 1, 5), a 1.25 mm pixel
   const double irradiance =
       solo::test::polygonIrradiance({0.99, 1, 5}, {0, 0, -1}, {{1, 0.9, 5}, {1, 1.1, 5}, {1, 1, 4.8}});
@@ -199,14 +205,7 @@ TEST(PathTracer, EmitterBesideTheShadedPointIsSampledBySolidAngle) {
 // default) leaves each pixel's mean that of a fixed sample count: the image's mean over many
 // seeds matches a fixed-count render's.
 TEST(PathTracer, StoppingOnTheNeighboursLeavesTheMeanUnbiased) {
-  solo::RenderScene s;
-  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
-  s.emitters.push_back({Eigen::Vector3f::Constant(10.f), false, 3});
-  const auto base = static_cast<std::uint32_t>(s.vertices.size());
-  s.vertices.insert(s.vertices.end(), {{1.f, 0.9f, 5.f}, {1.f, 1.1f, 5.f}, {1.f, 1.f, 4.8f}});
-  s.faces.push_back({base, base + 1, base + 2});
-  s.face_reflectance.push_back(Eigen::Vector3f::Zero());
-  s.face_emitter.push_back(0);
+  solo::RenderScene s = planeWithEmitterStandingOnIt();
   s.camera = cameraLookingAt(6, 4000, 0.995 / 5, 1.0 / 5);  // 6x6 pixels of 1.25 mm, x in [0.991, 0.999]
   solo::PathTracerOptions o;
   o.diffuse = solo::DiffuseModel::Lambert;
