@@ -18,6 +18,22 @@ double twiceSignedArea(const std::vector<OpenMesh::Vec2i>& polygon) {
   return twice;
 }
 
+// How a hole in DepthLoops::holes is to be closed: by its frame_paths entry (along the frame, or
+// nothing to add for an inner hole), by the chord between its ends, along the sky line, or as
+// the joined runs of several sheets (with its path_after entry).
+enum class ClosedBy { path, chord, sky_line, joined_runs };
+
+// Appends a hole with its entry in every per-hole array of DepthLoops, which stay aligned.
+void appendHole(DepthLoops& out, VertexLoop hole, ClosedBy by, std::vector<OpenMesh::Vec2i> path = {},
+                std::vector<int> after = {}) {
+  out.holes.push_back(std::move(hole));
+  out.frame_paths.push_back(std::move(path));
+  out.path_after.push_back(std::move(after));
+  out.chord_closed.push_back(by == ClosedBy::chord);
+  out.sky_line_closed.push_back(by == ClosedBy::sky_line);
+  out.merged.push_back(by == ClosedBy::joined_runs);
+}
+
 }  // namespace
 
 std::vector<VertexLoop> findBoundaryLoops(const SurfaceMesh& mesh) {
@@ -234,12 +250,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       // Next along the sky line, over the occluder's outline: before the chord, which cuts
       // the occluder's part above the run's ends off (and sees no sky behind it).
       if (skyPath(run, path)) {
-        out.holes.push_back(run);
-        out.chord_closed.push_back(0);
-        out.sky_line_closed.push_back(1);
-        out.frame_paths.push_back(std::move(path));
-        out.path_after.emplace_back();
-        out.merged.push_back(0);
+        appendHole(out, run, ClosedBy::sky_line, std::move(path));
         ++out.frame_holes;
         ++out.frame_holes_sky_line;
         return;
@@ -249,12 +260,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       pending.push_back(run);
       return;
     }
-    out.holes.push_back(run);
-    out.chord_closed.push_back(0);
-    out.sky_line_closed.push_back(0);
-    out.frame_paths.push_back(std::move(path));
-    out.path_after.emplace_back();
-    out.merged.push_back(0);
+    appendHole(out, run, ClosedBy::path, std::move(path));
     ++out.frame_holes;
   };
   const auto addChordOrUnclosable = [&](const VertexLoop& run) {
@@ -275,12 +281,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
         return;
       }
     }
-    out.holes.push_back(run);
-    out.chord_closed.push_back(1);
-    out.sky_line_closed.push_back(0);
-    out.frame_paths.emplace_back();
-    out.path_after.emplace_back();
-    out.merged.push_back(0);
+    appendHole(out, run, ClosedBy::chord);
     ++out.frame_holes;
   };
 
@@ -383,12 +384,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       for (const auto& p : polygon) simple = simple && once.emplace(key(p), 1).second;
       if (!simple || !(twiceSignedArea(polygon) < 0)) continue;
       for (const std::size_t r : chain) used[r] = 1;
-      out.holes.push_back(std::move(hole));
-      out.chord_closed.push_back(0);
-      out.sky_line_closed.push_back(0);
-      out.frame_paths.push_back(std::move(hole_path));
-      out.path_after.push_back(std::move(after));
-      out.merged.push_back(1);
+      appendHole(out, std::move(hole), ClosedBy::joined_runs, std::move(hole_path), std::move(after));
       ++out.frame_holes;
       ++out.frame_holes_merged;
       out.frame_hole_runs_merged += static_cast<std::int64_t>(chain.size());
@@ -421,12 +417,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     switch (kind) {
       case LoopKind::hole:
         ++out.inner_holes;
-        out.holes.push_back(loop);
-        out.frame_paths.emplace_back();
-        out.chord_closed.push_back(0);
-        out.sky_line_closed.push_back(0);
-        out.path_after.emplace_back();
-        out.merged.push_back(0);
+        appendHole(out, loop, ClosedBy::path);
         break;
       case LoopKind::sky_opening: ++out.sky_openings; break;
       case LoopKind::silhouette: ++out.silhouettes; break;
