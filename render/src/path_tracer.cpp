@@ -500,7 +500,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   constexpr int kTile = 16;
   const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
   ProgressBar progress(options.progress, tiles_x * tiles_y);
-  std::atomic<std::int64_t> total_rays{0}, total_samples{0}, dropped{0}, total_clamped{0};
+  std::atomic<std::int64_t> total_rays{0}, total_samples{0}, dropped{0}, total_clamped{0}, stopped_by_target{0};
   const bool adaptive = std::max(2, options.min_samples) < options.max_samples;
   // Replicates (sampler.h) only where stopping decisions are made: a fixed sample count keeps
   // the single, best stratified point set.
@@ -621,10 +621,11 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
       bool active = false;
       for (PixelState& p : pixels) {
         if (p.done) continue;
-        double mean_y = p.mean_y, v = variance(p, gain), neighbour_variance = 0;
-        if (options.stop_on_neighbours && p.n > 0 &&
-            neighbours(static_cast<std::size_t>(&p - pixels.data()), &mean_y, &neighbour_variance))
-          v = (replicates > 1 && pooled ? gain : 1.0) * neighbour_variance / p.n;
+        double mean_y = p.mean_y, neighbour_variance = 0;
+        const bool from_neighbours = options.stop_on_neighbours && p.n > 0 &&
+                                     neighbours(static_cast<std::size_t>(&p - pixels.data()), &mean_y, &neighbour_variance);
+        const double v = from_neighbours ? (replicates > 1 && pooled ? gain : 1.0) * neighbour_variance / p.n
+                                         : variance(p, gain);
         const float absolute = options.absolute_error.empty() ? 0.f : options.absolute_error.at<float>(p.y, p.x);
         double target = std::max(options.relative_error * std::abs(mean_y), static_cast<double>(absolute));
         if (options.noise_sigma) target = std::max(target, options.noise_factor * options.noise_sigma(mean_y));
@@ -642,6 +643,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
         for (int k = 0; k < 8 && !p.done && p.taken < max_samples; ++k) takeSample(p);
     }
     for (const PixelState& p : pixels) {
+      if (p.stopped_variance >= 0) ++stopped_by_target;
       double standard_error = std::sqrt(p.stopped_variance >= 0 ? p.stopped_variance : variance(p, gain));
       if (!std::isfinite(standard_error)) standard_error = std::sqrt(p.independentVariance());
       samples_taken += p.taken;
@@ -696,15 +698,10 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     r.add("relative_std_error_median", static_cast<double>(relative[relative.size() / 2]));
   }
   if (options.noise_sigma) {
-    // The promise of the noise-matched target: the share of pixels whose render noise ended
-    // below noise_factor x the sensor noise they will get (the rest hit max_samples).
-    std::int64_t below = 0;
-    for (int y = 0; y < height; ++y)
-      for (int x = 0; x < width; ++x)
-        if (out.std_error.at<float>(y, x) <= options.noise_factor * options.noise_sigma(out.radiance.at<cv::Vec3f>(y, x)[1]) * (1 + 1e-6))
-          ++below;
+    // The promise of the noise-matched target: the share of pixels it stopped, their estimated
+    // render noise below noise_factor x the sensor noise they will get (the rest hit max_samples).
     r.add("noise_factor", options.noise_factor);
-    r.add("pixels_below_noise_target", static_cast<double>(below) / pixels);
+    r.add("pixels_below_noise_target", static_cast<double>(stopped_by_target.load()) / pixels);
   }
   if (context.sun.on) {
     r.add("sun_illuminance_y", static_cast<double>(scene.sun.illuminance.y()));
