@@ -26,6 +26,22 @@ std::int64_t metricInt(const solo::StageReport& report, const std::string& name)
   return v ? std::get<std::int64_t>(*v) : -1;
 }
 
+// After cleanup only border loops are left (the frame, the sky line and the outlines of
+// separate sheets), `borders` of them, in a mesh without self-intersection, non-manifold part
+// or degenerate face.
+void expectOnlyBorderLoopsLeft(const solo::StageReport& r, std::int64_t borders) {
+  EXPECT_EQ(metricInt(r, "after_frame_holes"), 0);
+  EXPECT_EQ(metricInt(r, "after_inner_holes"), 0);
+  EXPECT_EQ(metricInt(r, "after_silhouette_loops"), 0);
+  EXPECT_EQ(metricInt(r, "after_sky_openings"), 0);
+  EXPECT_EQ(metricInt(r, "after_border_loops"), borders);
+  EXPECT_EQ(metricInt(r, "after_boundary_loops_total"), borders);
+  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
+  EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0);
+  EXPECT_EQ(metricInt(r, "after_non_manifold_vertices"), 0);
+  EXPECT_EQ(metricInt(r, "after_degenerate_faces"), 0);
+}
+
 double twiceSignedArea(const std::vector<Eigen::Vector2d>& polygon) {
   double a = 0;
   for (std::size_t i = 0; i < polygon.size(); ++i) {
@@ -493,14 +509,7 @@ TEST(ImageHoleFilling, FrameHoleBehindABoxRisingIntoTheSkyClosesAlongTheSkyLine)
   EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
   // Left open: the borders of the plane (now frame and sky line, the box's outline against
   // the sky included) and of the box; no hole of any kind.
-  EXPECT_EQ(metricInt(r, "after_frame_holes"), 0);
-  EXPECT_EQ(metricInt(r, "after_inner_holes"), 0);
-  EXPECT_EQ(metricInt(r, "after_silhouette_loops"), 0);
-  EXPECT_EQ(metricInt(r, "after_border_loops"), 2);
-  EXPECT_EQ(metricInt(r, "after_boundary_loops_total"), 2);
-  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
-  EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0);
-  EXPECT_EQ(metricInt(r, "after_degenerate_faces"), 0);
+  expectOnlyBorderLoopsLeft(r, 2);
   int over_box = 0, over_step = 0;
   const int fill = checkFillOnPlaneBehindBox(m, normal, d, box, 4.0, 10, &over_box);
   for (const auto v : m.mesh.vertices())
@@ -537,12 +546,7 @@ TEST(ImageHoleFilling, FrameHoleAroundABoxHangingFromTheSkyClosesAlongTheSkyLine
   EXPECT_EQ(metricInt(r, "found_frame_holes_sky_line"), 1);
   EXPECT_EQ(metricInt(r, "holes_filled_image_space"), 1);
   EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
-  EXPECT_EQ(metricInt(r, "after_frame_holes"), 0);
-  EXPECT_EQ(metricInt(r, "after_inner_holes"), 0);
-  EXPECT_EQ(metricInt(r, "after_border_loops"), 2);  // the plane's and the box's
-  EXPECT_EQ(metricInt(r, "after_boundary_loops_total"), 2);
-  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
-  EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0);
+  expectOnlyBorderLoopsLeft(r, 2);
   int over_box = 0;
   const int fill = checkFillOnPlaneBehindBox(m, normal, d, box, 3.0, 12, &over_box);
   EXPECT_EQ(fill, over_box);
@@ -587,16 +591,7 @@ TEST(ImageHoleFilling, AnOccluderSplittingThePlaneClosesWithTheRunsOfBothSheetsI
   EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
   // Left open: the border of the plane (now one sheet: frame, sky line and the building's
   // outline against the sky) and the building's; no hole of any kind.
-  EXPECT_EQ(metricInt(r, "after_frame_holes"), 0);
-  EXPECT_EQ(metricInt(r, "after_inner_holes"), 0);
-  EXPECT_EQ(metricInt(r, "after_silhouette_loops"), 0);
-  EXPECT_EQ(metricInt(r, "after_sky_openings"), 0);
-  EXPECT_EQ(metricInt(r, "after_border_loops"), 2);
-  EXPECT_EQ(metricInt(r, "after_boundary_loops_total"), 2);
-  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
-  EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0);
-  EXPECT_EQ(metricInt(r, "after_non_manifold_vertices"), 0);
-  EXPECT_EQ(metricInt(r, "after_degenerate_faces"), 0);
+  expectOnlyBorderLoopsLeft(r, 2);
   // Every patch vertex on the plane (1e-5 relative: the boundary's least-squares affine
   // inverse depth is exact on a plane, see FrameHoleBehindACornerOccluderClosesAlongTheFrame),
   // on a pixel centre, over the building's image only and behind it.
