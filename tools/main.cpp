@@ -2,6 +2,7 @@
 // each subcommand fills an options struct (commands.h) and calls its run function.
 
 #include "commands.h"
+#include "large_buffer_allocator.h"
 #include "night_presets.h"
 
 #include <solo/geometry/error.h>
@@ -13,6 +14,7 @@
 
 int main(int argc, char** argv) {
   using namespace solo::tools;
+  keepFreedLargeBuffersForReuse();
   CLI::App app{"solo: turns a daytime street photo into a physically based night image"};
   app.require_subcommand(1);
   app.set_version_flag("--version", [] { return versionText(); }, "Print solo's version and its libraries' versions");
