@@ -17,7 +17,7 @@ struct BlockFootprint {
   std::size_t kept_free_after = 0;
 };
 
-BlockFootprint allocateAndFree() {
+[[maybe_unused]] BlockFootprint allocateAndFree() {
   void* block = std::malloc(kBlockBytes);
   if (block == nullptr) return {};
   BlockFootprint footprint;
