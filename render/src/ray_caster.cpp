@@ -78,7 +78,7 @@ void pairIntoQuads(const std::vector<std::uint32_t>& triangles, std::vector<std:
 
 struct RayCaster::Impl {
   std::vector<float> vertices;  // padded by one float: Embree reads 16 bytes per vertex
-  std::vector<std::uint32_t> triangles;
+  std::size_t triangle_count = 0;  // the input's; its index array is not kept (the quads replace it)
   std::vector<std::uint32_t> quads;  // four indices each, handed to Embree
   std::vector<QuadSource> quad_sources;
   RTCDevice device = nullptr;
@@ -99,8 +99,8 @@ RayCaster::RayCaster(std::vector<float> vertices, std::vector<std::uint32_t> tri
     if (index >= vertex_count) throw std::invalid_argument("RayCaster: triangle index out of range");
   impl_->vertices = std::move(vertices);
   impl_->vertices.push_back(0.f);
-  impl_->triangles = std::move(triangles);
-  pairIntoQuads(impl_->triangles, impl_->quads, impl_->quad_sources);
+  impl_->triangle_count = triangles.size() / 3;
+  pairIntoQuads(triangles, impl_->quads, impl_->quad_sources);
 
   impl_->device = rtcNewDevice(nullptr);
   if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
@@ -123,7 +123,7 @@ RayCaster::RayCaster(std::vector<float> vertices, std::vector<std::uint32_t> tri
 
 RayCaster::~RayCaster() = default;
 
-std::size_t RayCaster::triangleCount() const { return impl_->triangles.size() / 3; }
+std::size_t RayCaster::triangleCount() const { return impl_->triangle_count; }
 
 std::size_t RayCaster::primitiveCount() const { return impl_->quad_sources.size(); }
 

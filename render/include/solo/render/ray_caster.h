@@ -1,8 +1,9 @@
 #pragma once
-// Ray casting against a triangle mesh with Embree. The mesh buffers are shared with
-// Embree, not copied: the caster owns them for its lifetime. Consecutive triangles that share
-// an edge go to Embree as one quad (fewer primitives, faster traversal); hits still name the
-// input triangle and its barycentrics.
+// Ray casting against a triangle mesh with Embree. The vertex buffer is shared with Embree, not
+// copied: the caster owns it for its lifetime. Consecutive triangles that share an edge go to
+// Embree as one quad (fewer primitives, faster traversal), in an index buffer the caster builds
+// and owns instead of the triangles' (not kept); hits still name the input triangle and its
+// barycentrics.
 
 #include <Eigen/Core>
 
