@@ -69,10 +69,13 @@ class PowerSampler final : public LightSampler {
       columns_[i].alias_pmf = pmf_[columns_[i].alias];
     }
   }
+  void prefetch(float u) const override {
+    if (!columns_.empty()) __builtin_prefetch(&columns_[columnOf(u)]);
+  }
   int pick(const Eigen::Vector3f&, const Eigen::Vector3f&, float u, float* pmf) const override {
     if (columns_.empty()) return -1;
     const double scaled = static_cast<double>(u) * static_cast<double>(columns_.size());
-    const std::size_t column = std::min(static_cast<std::size_t>(scaled), columns_.size() - 1);
+    const std::size_t column = columnOf(u);
     const Column& c = columns_[column];
     const bool own = scaled - static_cast<double>(column) < c.keep;
     *pmf = own ? c.own_pmf : c.alias_pmf;
@@ -83,6 +86,10 @@ class PowerSampler final : public LightSampler {
   }
 
  private:
+  std::size_t columnOf(float u) const {
+    const double scaled = static_cast<double>(u) * static_cast<double>(columns_.size());
+    return std::min(static_cast<std::size_t>(scaled), columns_.size() - 1);
+  }
   struct Column {
     float keep = 1.f;         // probability of the column's own triangle
     std::uint32_t alias = 0;  // the other triangle
@@ -276,6 +283,7 @@ std::vector<EmissiveTriangle> collectEmissiveTriangles(const RenderScene& scene)
     if (!(emitter.radiance.maxCoeff() > 0.f) || !std::isfinite(emitter.radiance.sum())) continue;
     EmissiveTriangle t;
     t.face = static_cast<std::uint32_t>(f);
+    t.emitter = static_cast<std::uint32_t>(e);
     t.p0 = scene.vertices[scene.faces[f][0]];
     t.p1 = scene.vertices[scene.faces[f][1]];
     t.p2 = scene.vertices[scene.faces[f][2]];

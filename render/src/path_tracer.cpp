@@ -205,7 +205,18 @@ float offsetFor(float distance) { return 1e-4f * std::max(1.f, distance); }
 
 // One path sample from the camera through (px, py). Returns XYZ radiance.
 Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, FirstHit* first, std::int64_t& rays,
-                          std::int64_t& clamped) {
+                          std::int64_t& clamped, std::vector<RecordedRay>* log) {
+  // Every ray goes through these two: counted, and recorded when a log is kept.
+  const auto closestHit = [&](const Eigen::Vector3f& o, const Eigen::Vector3f& d) {
+    ++rays;
+    if (log) log->push_back({o, d, std::numeric_limits<float>::infinity(), false});
+    return c.caster.intersect(o, d);
+  };
+  const auto occluded = [&](const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t_far) {
+    ++rays;
+    if (log) log->push_back({o, d, t_far, true});
+    return c.caster.occluded(o, d, 0.f, t_far);
+  };
   const PinholeCamera& cam = c.camera;
   Eigen::Vector3f direction(static_cast<float>((px - cam.cx) / cam.fx), static_cast<float>((py - cam.cy) / cam.fy), 1.f);
   const float z_per_distance = 1.f / direction.norm();
@@ -219,8 +230,12 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
   // Radiance after at most one scattering; NaN until the second vertex is reached.
   Eigen::Vector3f direct = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
   for (int bounce = 0; bounce <= c.options.max_bounces; ++bounce) {
-    const RayHit hit = c.caster.intersect(origin, direction);
-    ++rays;
+    // The vertex's first two numbers (its light choice and its light pick) are drawn before the
+    // ray, so that the light sampler can prefetch while Embree traverses. A path that ends here
+    // draws two numbers it does not use; that moves only the pixel's later independent numbers.
+    const float u_choice = rng.get1D(), u_pick = rng.get1D();
+    c.sampler.prefetch(u_pick);
+    const RayHit hit = closestHit(origin, direction);
     if (!hit.hit) {
       // Sky and sun: MIS-weighted against their next-event estimation after the first bounce.
       if (c.sky_on) {
@@ -240,6 +255,10 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
     const float cos_hit = n.dot(-direction);
     if (cos_hit < 0.f) n = -n;
     const float abs_cos_hit = std::abs(cos_hit);
+    // The light pick comes first, so that its triangle loads while the face's data does.
+    float pick_pmf = 0.f;
+    const int tri = bounce < c.options.max_bounces ? c.sampler.pick(point, n, u_pick, &pick_pmf) : -1;
+    if (tri >= 0) __builtin_prefetch(&c.emissive[static_cast<std::size_t>(tri)]);
 
     const int emitter_index = c.scene.face_emitter.empty() ? -1 : c.scene.face_emitter[face];
     if (emitter_index >= 0) {
@@ -248,12 +267,12 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       if (bounce == 0) {
         radiance += emitted;
       } else {
-        const int tri = c.face_to_emissive[face];
+        const int hit_triangle = c.face_to_emissive[face];
         float weight = 1.f;
-        if (tri >= 0 && abs_cos_hit > 0.f) {
-          const float select = c.sampler.pmf(previous_point, previous_normal, tri);
+        if (hit_triangle >= 0 && abs_cos_hit > 0.f) {
+          const float select = c.sampler.pmf(previous_point, previous_normal, hit_triangle);
           const float light_pdf =
-              select * emitterPdf(c.emissive[static_cast<std::size_t>(tri)], origin, previous_normal, direction,
+              select * emitterPdf(c.emissive[static_cast<std::size_t>(hit_triangle)], origin, previous_normal, direction,
                                           hit.distance, abs_cos_hit, c.options.solid_angle_emitter_sampling);
           weight = powerHeuristic(previous_bsdf_pdf, light_pdf);
         }
@@ -278,7 +297,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
     // geometry: light sampling only, weight 1). Their unoccluded contributions are computed
     // first; then one shadow ray goes to a light chosen in proportion to its contribution
     // (one_shadow_ray) or one to each.
-    OneLightChoice choice(rng.get1D());
+    OneLightChoice choice(u_choice);
     const auto offer = [&](const Eigen::Vector3f& contribution, const Eigen::Vector3f& wi, float distance) {
       if (!contribution.allFinite()) {
         radiance += contribution;  // the sample is dropped, as any non-finite one
@@ -287,19 +306,16 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       } else if (c.options.one_shadow_ray) {
         choice.offer(contribution, wi, distance);
       } else {
-        ++rays;
-        if (!c.caster.occluded(shadow_origin, wi, 0.f, distance * (1.f - 1e-4f))) radiance += contribution;
+        if (!occluded(shadow_origin, wi, distance * (1.f - 1e-4f))) radiance += contribution;
       }
     };
-    float pick_pmf = 0.f;
-    const int tri = c.sampler.pick(point, n, rng.get1D(), &pick_pmf);
     const auto [su, sv] = rng.get2D();
     if (tri >= 0 && pick_pmf > 0.f) {
       const EmissiveTriangle& t = c.emissive[static_cast<std::size_t>(tri)];
       const EmitterSample sample = sampleEmitter(t, shadow_origin, n, su, sv, c.options.solid_angle_emitter_sampling);
       const float cos_surface = n.dot(sample.wi);
       if (sample.ok && cos_surface > 0.f) {
-        const Emitter& e = c.scene.emitters[static_cast<std::size_t>(c.scene.face_emitter[t.face])];
+        const Emitter& e = c.scene.emitters[t.emitter];
         const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, sample.cos_light);
         const float light_pdf = pick_pmf * sample.pdf;
         const float weight = powerHeuristic(light_pdf, bsdf.pdf(sample.wi));
@@ -324,8 +340,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       offer(throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(light.radiance) * (cos_surface / pdf), wi, distance);
     }
     if (!choice.empty()) {
-      ++rays;
-      if (!c.caster.occluded(shadow_origin, choice.wi(), 0.f, choice.distance() * (1.f - 1e-4f)))
+      if (!occluded(shadow_origin, choice.wi(), choice.distance() * (1.f - 1e-4f)))
         radiance += choice.contribution();
     }
     // Sky: a cosine-weighted direction, MIS-weighted against BSDF sampling.
@@ -335,8 +350,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       const Eigen::Vector3f wi = cosineSample(n, u1, u2);
       const float cos_surface = n.dot(wi);
       if (cos_surface > 1e-7f) {
-        ++rays;
-        if (!c.caster.occluded(shadow_origin, wi, 0.f, kInfinity)) {
+        if (!occluded(shadow_origin, wi, kInfinity)) {
           const float sky_pdf = cos_surface / kPi;
           const float weight = powerHeuristic(sky_pdf, bsdf.pdf(wi));
           radiance += throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(skyRadiance(c.scene, wi)) * (cos_surface * weight / sky_pdf);
@@ -349,8 +363,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       const Eigen::Vector3f wi = c.sun.sample(u1, u2);
       const float cos_surface = n.dot(wi);
       if (cos_surface > 0.f) {
-        ++rays;
-        if (!c.caster.occluded(shadow_origin, wi, 0.f, kInfinity)) {
+        if (!occluded(shadow_origin, wi, kInfinity)) {
           const float weight = powerHeuristic(c.sun.pdf, bsdf.pdf(wi));
           radiance += throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(c.sun.radiance) *
                       (cos_surface * weight / c.sun.pdf);
@@ -500,6 +513,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   constexpr int kTile = 16;
   const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
   ProgressBar progress(options.progress, tiles_x * tiles_y);
+  std::mutex ray_log_mutex;
   std::atomic<std::int64_t> total_rays{0}, total_samples{0}, dropped{0}, total_clamped{0}, stopped_by_target{0};
   const bool adaptive = std::max(2, options.min_samples) < options.max_samples;
   // Replicates (sampler.h) only where stopping decisions are made: a fixed sample count keeps
@@ -545,6 +559,8 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
 
   tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
     std::int64_t rays = 0, samples_taken = 0, nonfinite = 0, clamped = 0;
+    std::vector<RecordedRay> tile_rays;
+    std::vector<RecordedRay>* log = options.ray_log ? &tile_rays : nullptr;
     const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
     std::vector<PixelState> pixels;
     pixels.reserve(kTile * kTile);
@@ -558,7 +574,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
       p.rng.startSample(static_cast<std::uint32_t>(p.taken));
       const auto [jx, jy] = p.rng.get2D();
       const Eigen::Vector3f value = tracePath(context, static_cast<float>(p.x) + jx - 0.5f, static_cast<float>(p.y) + jy - 0.5f, p.rng,
-                                              p.taken == 0 ? &p.first : nullptr, rays, clamped);
+                                              p.taken == 0 ? &p.first : nullptr, rays, clamped, log);
       const int replicate = p.taken % replicates;
       ++p.taken;
       if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
@@ -658,6 +674,10 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
       out.std_error.at<float>(y, x) = static_cast<float>(standard_error);
     }
     total_rays += rays;
+    if (log) {
+      const std::lock_guard<std::mutex> lock(ray_log_mutex);
+      options.ray_log->insert(options.ray_log->end(), tile_rays.begin(), tile_rays.end());
+    }
     total_samples += samples_taken;
     dropped += nonfinite;
     total_clamped += clamped;

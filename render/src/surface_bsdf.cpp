@@ -26,6 +26,8 @@ SurfaceBsdf::SurfaceBsdf(const Eigen::Vector3f& n, const Eigen::Vector3f& wo, co
   orthonormalBasis(n_, t_, b_);
   wo_local_ = toLocal(wo_);
   cos_o_ = std::max(0.f, wo_local_.z());
+  const float m = 1.f - cos_o_;
+  one_minus_cos_o_pow5_ = m * m * m * m * m;
   if (specular_) {
     alpha_ = ggxAlpha(roughness_);
     const float e_o = ggxDirectionalAlbedo(cos_o_, alpha_);
@@ -38,15 +40,13 @@ SurfaceBsdf::SurfaceBsdf(const Eigen::Vector3f& n, const Eigen::Vector3f& wo, co
 
 Eigen::Vector3f SurfaceBsdf::diffuseShape(const Eigen::Vector3f& wi, float cos_i) const {
   if (diffuse_ == DiffuseModel::Lambert) return Eigen::Vector3f::Constant(1.f / kPi);
-  const Eigen::Vector3f h = wi + wo_;
-  const float h_norm = h.norm();
-  const float cos_d = h_norm > 1e-6f ? std::clamp(wi.dot(h / h_norm), 0.f, 1.f) : 0.f;
-  const float fd90 = 0.5f + 2.f * roughness_ * cos_d * cos_d;
-  const auto schlick = [fd90](float c) {
-    const float m = 1.f - c;
-    return 1.f + (fd90 - 1.f) * m * m * m * m * m;
-  };
-  return Eigen::Vector3f::Constant(schlick(cos_i) * schlick(cos_o_) / kPi);
+  // cos_d, the cosine between wi and the half vector, enters squared: for unit wi and wo,
+  // cos_d^2 = (1 + wi.wo) / 2, with no half vector to normalise.
+  const float cos_d2 = std::clamp(0.5f * (1.f + wi.dot(wo_)), 0.f, 1.f);
+  const float fd90_minus_1 = 2.f * roughness_ * cos_d2 - 0.5f;
+  const float m = 1.f - cos_i;
+  const float schlick_i = 1.f + fd90_minus_1 * (m * m * m * m * m);
+  return Eigen::Vector3f::Constant(schlick_i * (1.f + fd90_minus_1 * one_minus_cos_o_pow5_) / kPi);
 }
 
 Eigen::Vector3f SurfaceBsdf::eval(const Eigen::Vector3f& wi) const {

@@ -2,10 +2,16 @@
 // switched on): raw Embree ray throughput against the tracer's, and error at equal time of the
 // three light samplers against a converged reference.
 // Run: build/release/tests/benchmarks/bench_render [WIDTHxHEIGHT] [reference_spp] [csv]
+//  or: build/release/tests/benchmarks/bench_render efficiency MANIFEST [WIDTHxHEIGHT]
+//      the efficiency line alone on the scene `solo night` renders from a scene manifest with
+//      its default preset (the mesh at the image resolution; the camera scaled to WIDTHxHEIGHT,
+//      480x270 unless given, so that one-thread renders take seconds).
 
+#include "night_pipeline.h"
 #include "night_street.h"
 
 #include <solo/geometry/report.h>
+#include <solo/geometry/scene.h>
 #include <solo/lighting/light_category.h>
 #include <solo/render/path_tracer.h>
 #include <solo/render/ray_caster.h>
@@ -55,6 +61,18 @@ double rawEmbreeRaysPerSecond(const solo::RenderScene& scene, const solo::RayCas
   return static_cast<double>(rays) / clock.seconds();
 }
 
+// The tracer's own rays (recorded by PathTracerOptions::ray_log) cast again by a bare loop on
+// the calling thread: what Embree alone takes for exactly the tracer's workload.
+double replayRaysPerSecond(const solo::RayCaster& caster, const std::vector<solo::RecordedRay>& rays) {
+  solo::Stopwatch clock;
+  std::int64_t hits = 0;
+  for (const solo::RecordedRay& r : rays)
+    hits += r.shadow ? caster.occluded(r.origin, r.direction, 0.f, r.t_far) : caster.intersect(r.origin, r.direction).hit;
+  const double seconds = clock.seconds();
+  if (hits < 0) std::printf("unreachable\n");  // keeps the loop's results alive
+  return static_cast<double>(rays.size()) / seconds;
+}
+
 double relativeRmse(const cv::Mat& image, const cv::Mat& reference, const cv::Mat& light_id) {
   double sum = 0, norm = 0;
   for (int y = 0; y < image.rows; ++y)
@@ -67,66 +85,121 @@ double relativeRmse(const cv::Mat& image, const cv::Mat& reference, const cv::Ma
   return norm > 0 ? std::sqrt(sum / norm) : 0;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  int width = 480, height = 270, reference_spp = 1024;
-  if (argc > 1) std::sscanf(argv[1], "%dx%d", &width, &height);
-  if (argc > 2) reference_spp = std::atoi(argv[2]);
-  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // lines appear as they are measured
-  const solo::RenderScene scene = nightStreet(width, height);
-  std::printf("night street %dx%d: %zu triangles, %zu lights, 2 headlights\n", width, height, scene.faces.size(),
-              scene.emitters.size());
-
-  // Efficiency: raw Embree against the tracer's rays per second on one thread each (so "per
-  // thread" means the same thing for both, whatever the cores are), alternated five times so
-  // that machine load hits all alike; medians, with the load average before and after.
+// Efficiency: raw Embree against the tracer's rays per second on one thread each (so "per
+// thread" means the same thing for both, whatever the cores are), alternated five times so
+// that machine load hits all alike; medians, with the load average before and after.
+void measureEfficiency(const solo::RenderScene& scene) {
+  std::vector<float> vertices;
+  for (const auto& v : scene.vertices) vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
+  std::vector<std::uint32_t> indices;
+  for (const auto& f : scene.faces) indices.insert(indices.end(), f.begin(), f.end());
+  const solo::RayCaster caster(std::move(vertices), std::move(indices));
+  // One BVH and light list for every tracer run, so that samples per second are the render's
+  // alone (the BVH of a 1080p mesh takes seconds to build).
+  const solo::PreparedRenderScene prepared(scene);
+  // The default tracer's rays (power sampler, one shadow ray per vertex), recorded once: the
+  // same seed casts the same rays in every repeat.
+  std::vector<solo::RecordedRay> recorded;
   {
-    std::vector<float> vertices;
-    for (const auto& v : scene.vertices) vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
-    std::vector<std::uint32_t> indices;
-    for (const auto& f : scene.faces) indices.insert(indices.end(), f.begin(), f.end());
-    const solo::RayCaster caster(std::move(vertices), std::move(indices));
-    double load_before[3] = {0, 0, 0}, load_after[3] = {0, 0, 0};
-    getloadavg(load_before, 3);
-    std::vector<double> raw, power, hierarchy, power_samples, hierarchy_samples, per_light, per_light_samples;
-    for (int repeat = 0; repeat < 5; ++repeat) {
-      raw.push_back(rawEmbreeRaysPerSecond(scene, caster));
-      tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-      for (auto kind : {solo::LightSamplerKind::Power, solo::LightSamplerKind::Hierarchy}) {
-        solo::PathTracerOptions t;
-        t.progress = false;
-        t.min_samples = t.max_samples = 4;
-        t.seed = 11;
-        t.light_sampler = kind;
-        const solo::RenderOutput out = solo::renderPathTraced(scene, t);
-        const double rate = std::get<double>(*out.report.find("rays_per_second"));
-        const double samples = 4.0 * width * height / out.report.seconds;
-        (kind == solo::LightSamplerKind::Power ? power : hierarchy).push_back(rate);
-        (kind == solo::LightSamplerKind::Power ? power_samples : hierarchy_samples).push_back(samples);
-      }
-      // The power sampler with a shadow ray per light (the tracer before one_shadow_ray): more,
-      // cheaper rays per sample, so more rays per second for fewer samples per second.
+    tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    solo::PathTracerOptions t;
+    t.progress = false;
+    t.min_samples = t.max_samples = 4;
+    t.seed = 11;
+    t.light_sampler = solo::LightSamplerKind::Power;
+    t.ray_log = &recorded;
+    solo::renderPathTraced(prepared, scene.camera, t);
+  }
+  std::int64_t shadow_rays = 0;
+  for (const solo::RecordedRay& r : recorded) shadow_rays += r.shadow;
+  double load_before[3] = {0, 0, 0}, load_after[3] = {0, 0, 0};
+  getloadavg(load_before, 3);
+  std::vector<double> raw, replay, power, hierarchy, power_samples, hierarchy_samples, per_light, per_light_samples;
+  for (int repeat = 0; repeat < 5; ++repeat) {
+    raw.push_back(rawEmbreeRaysPerSecond(scene, caster));
+    replay.push_back(replayRaysPerSecond(caster, recorded));
+    tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    for (auto kind : {solo::LightSamplerKind::Power, solo::LightSamplerKind::Hierarchy}) {
       solo::PathTracerOptions t;
       t.progress = false;
       t.min_samples = t.max_samples = 4;
       t.seed = 11;
-      t.light_sampler = solo::LightSamplerKind::Power;
-      t.one_shadow_ray = false;
-      const solo::RenderOutput out = solo::renderPathTraced(scene, t);
-      per_light.push_back(std::get<double>(*out.report.find("rays_per_second")));
-      per_light_samples.push_back(4.0 * width * height / out.report.seconds);
+      t.light_sampler = kind;
+      const solo::RenderOutput out = solo::renderPathTraced(prepared, scene.camera, t);
+      const double rate = std::get<double>(*out.report.find("rays_per_second"));
+      const double samples = 4.0 * scene.camera.width * scene.camera.height / out.report.seconds;
+      (kind == solo::LightSamplerKind::Power ? power : hierarchy).push_back(rate);
+      (kind == solo::LightSamplerKind::Power ? power_samples : hierarchy_samples).push_back(samples);
     }
-    getloadavg(load_after, 3);
-    const double raw_median = median(raw);
-    std::printf("efficiency, 1 thread, 4 spp, median of 5 (load average %.1f before, %.1f after): raw Embree %.3f Mrays/s; "
-                "tracer power %.3f Mrays/s (%.1f %% of raw, %.3f M samples/s), hierarchy %.3f Mrays/s (%.1f %%, %.3f M "
-                "samples/s), power with a shadow ray per light %.3f Mrays/s (%.1f %%, %.3f M samples/s)\n",
-                load_before[0], load_after[0], raw_median / 1e6, median(power) / 1e6, 100 * median(power) / raw_median,
-                median(power_samples) / 1e6, median(hierarchy) / 1e6, 100 * median(hierarchy) / raw_median,
-                median(hierarchy_samples) / 1e6, median(per_light) / 1e6, 100 * median(per_light) / raw_median,
-                median(per_light_samples) / 1e6);
+    // The power sampler with a shadow ray per light (the tracer before one_shadow_ray): more,
+    // cheaper rays per sample, so more rays per second for fewer samples per second.
+    solo::PathTracerOptions t;
+    t.progress = false;
+    t.min_samples = t.max_samples = 4;
+    t.seed = 11;
+    t.light_sampler = solo::LightSamplerKind::Power;
+    t.one_shadow_ray = false;
+    const solo::RenderOutput out = solo::renderPathTraced(prepared, scene.camera, t);
+    per_light.push_back(std::get<double>(*out.report.find("rays_per_second")));
+    per_light_samples.push_back(4.0 * scene.camera.width * scene.camera.height / out.report.seconds);
   }
+  getloadavg(load_after, 3);
+  const double raw_median = median(raw);
+  std::printf("efficiency, 1 thread, 4 spp, median of 5 (load average %.1f before, %.1f after): raw Embree %.3f Mrays/s; "
+              "tracer power %.3f Mrays/s (%.1f %% of raw, %.3f M samples/s), hierarchy %.3f Mrays/s (%.1f %%, %.3f M "
+              "samples/s), power with a shadow ray per light %.3f Mrays/s (%.1f %%, %.3f M samples/s)\n",
+              load_before[0], load_after[0], raw_median / 1e6, median(power) / 1e6, 100 * median(power) / raw_median,
+              median(power_samples) / 1e6, median(hierarchy) / 1e6, 100 * median(hierarchy) / raw_median,
+              median(hierarchy_samples) / 1e6, median(per_light) / 1e6, 100 * median(per_light) / raw_median,
+              median(per_light_samples) / 1e6);
+  std::printf("efficiency against the same rays, 1 thread, median of 5: the tracer's (power) %zu rays (%.0f %% shadow "
+              "rays) replayed through bare Embree calls %.3f Mrays/s; the tracer %.3f Mrays/s, %.1f %% of it\n",
+              recorded.size(), 100.0 * static_cast<double>(shadow_rays) / static_cast<double>(recorded.size()),
+              median(replay) / 1e6, median(power) / 1e6, 100 * median(power) / median(replay));
+}
+
+// What `solo night --seed 3` renders for `manifest` with its default preset (as the Cycles
+// exporter's pipeline scene, without its simplifications), seen by a camera scaled to
+// width x height.
+solo::RenderScene pipelineScene(const std::string& manifest, int width, int height) {
+  solo::Stopwatch clock;
+  const solo::Scene input = solo::loadScene(manifest);
+  solo::tools::NightOptions options;  // its defaults are the default preset (tools/night_presets.cpp)
+  options.seed = 3;
+  solo::tools::NightPipelineResult stages;
+  solo::tools::NightPipelineExtras extras;
+  extras.progress = false;
+  solo::RenderScene scene = solo::tools::runNightSceneStages(input, options, extras, stages).scene;
+  std::printf("pipeline scene from %s: %dx%d mesh, %zu triangles, %zu emitters, %zu rectangle lights, camera %dx%d, "
+              "built in %.1f s\n",
+              manifest.c_str(), input.width(), input.height(), scene.faces.size(), scene.emitters.size(),
+              scene.rectangle_lights.size(), width, height, clock.seconds());
+  scene.camera = scene.camera.scaledTo(width, height);
+  return scene;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // lines appear as they are measured
+  if (argc > 1 && std::string(argv[1]) == "efficiency") {
+    if (argc < 3) {
+      std::fprintf(stderr, "usage: bench_render efficiency MANIFEST [WIDTHxHEIGHT]\n");
+      return 2;
+    }
+    int width = 480, height = 270;
+    if (argc > 3) std::sscanf(argv[3], "%dx%d", &width, &height);
+    measureEfficiency(pipelineScene(argv[2], width, height));
+    return 0;
+  }
+  int width = 480, height = 270, reference_spp = 1024;
+  if (argc > 1) std::sscanf(argv[1], "%dx%d", &width, &height);
+  if (argc > 2) reference_spp = std::atoi(argv[2]);
+  const solo::RenderScene scene = nightStreet(width, height);
+  std::printf("night street %dx%d: %zu triangles, %zu lights, 2 headlights\n", width, height, scene.faces.size(),
+              scene.emitters.size());
+
+  measureEfficiency(scene);
 
   solo::PathTracerOptions o;
   o.progress = false;

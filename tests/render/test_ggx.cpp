@@ -135,6 +135,30 @@ TEST(Ggx, CoupledMaterialConservesEnergyAndIsReciprocal) {
   EXPECT_NEAR(plain.pdf(wi), 0.8 / kPi, 1e-6);
 }
 
+// Burley's diffuse lobe (Burley 2012, eq. 3) as printed: the half vector normalised in double,
+// f = albedo / pi (1 + (F_D90 - 1)(1 - cos_i)^5)(1 + (F_D90 - 1)(1 - cos_o)^5),
+// F_D90 = 1/2 + 2 roughness cos_d^2, against the renderer's form without the half vector; at
+// grazing, normal and retro-reflecting pairs, where the two forms are furthest apart.
+TEST(SurfaceBsdf, DisneyDiffuseMatchesBurleysHalfVectorForm) {
+  const Eigen::Vector3f n = Eigen::Vector3f::UnitZ();
+  const double albedo = 0.7;
+  for (const double roughness : {0.0, 0.5, 1.0})
+    for (const double cos_o : {1.0, 0.6, 0.05, 1e-3})
+      for (const double cos_i : {1.0, 0.8, 0.2, 1e-3})
+        for (const double phi : {0.0, 1.0, 3.14159265358979}) {
+          const Eigen::Vector3f wo = direction(cos_o, 0.0), wi = direction(cos_i, phi);
+          const Eigen::Vector3d h = (wi.cast<double>() + wo.cast<double>()).normalized();
+          const double cos_d = wi.cast<double>().dot(h);
+          const double fd90 = 0.5 + 2 * roughness * cos_d * cos_d;
+          const auto schlick = [fd90](double c) { return 1 + (fd90 - 1) * std::pow(1 - c, 5); };
+          const double expected = albedo / kPi * schlick(wi.z()) * schlick(wo.z());
+          const solo::SurfaceBsdf bsdf(n, wo, Eigen::Vector3f::Constant(static_cast<float>(albedo)),
+                                       static_cast<float>(roughness), solo::DiffuseModel::Disney, false);
+          EXPECT_NEAR(bsdf.eval(wi).y(), expected, 2e-6 * expected)
+              << "roughness " << roughness << " cos_o " << cos_o << " cos_i " << cos_i << " phi " << phi;
+        }
+}
+
 TEST(SurfaceBsdf, OrthonormalBasisIsRightHandedAroundAnyUnitNormal) {
   const std::vector<Eigen::Vector3f> normals = {
       Eigen::Vector3f::UnitZ(), -Eigen::Vector3f::UnitZ(), Eigen::Vector3f::UnitX(),

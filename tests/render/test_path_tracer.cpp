@@ -289,6 +289,62 @@ TEST(PathTracer, OneShadowRayPerVertexKeepsTheMeanOfSeveralLights) {
               p[0].mean, p[0].variance, p[1].mean, p[1].variance, shaded);
 }
 
+TEST(PathTracer, RayLogRecordsEveryRayAsCast) {
+  // A plane at z = 5 seen through one narrow pixel, two rectangle lights at z = 4 facing it, one
+  // bounce: each sample casts the camera ray, one shadow ray toward a light and the bounce ray.
+  // The log (bench_render replays it through bare Embree) holds exactly those, and keeping it
+  // changes no pixel.
+  solo::RenderScene s;
+  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
+  for (const float x : {-0.5f, 0.7f}) {
+    solo::RectangleLight light;
+    light.centre = {x, 0, 4};
+    light.normal = {0, 0, 1};
+    light.edge_u = {0.4f, 0, 0};
+    light.edge_v = {0, 0.4f, 0};
+    light.radiance = Eigen::Vector3f::Constant(1.f);
+    s.rectangle_lights.push_back(light);
+  }
+  s.camera = cameraLookingAt(1, 4000, 0, 0);
+  solo::PathTracerOptions o;
+  o.max_bounces = 1;
+  o.min_samples = o.max_samples = 16;
+  o.progress = false;
+  o.light_sampler = solo::LightSamplerKind::Power;
+  const solo::RenderOutput plain = solo::renderPathTraced(s, o);
+  std::vector<solo::RecordedRay> log;
+  o.ray_log = &log;
+  const solo::RenderOutput logged = solo::renderPathTraced(s, o);
+  EXPECT_EQ(cv::norm(plain.radiance, logged.radiance, cv::NORM_INF), 0.0);
+  ASSERT_EQ(static_cast<std::int64_t>(log.size()), std::get<std::int64_t>(*logged.report.find("rays")));
+  ASSERT_EQ(log.size(), 16u * 3u);
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    const solo::RecordedRay& r = log[i];
+    EXPECT_NEAR(r.direction.norm(), 1.f, 1e-5f);
+    switch (i % 3) {
+      case 0:  // camera ray: from the eye, along +z within the pixel
+        EXPECT_FALSE(r.shadow);
+        EXPECT_EQ(r.origin.norm(), 0.f);
+        EXPECT_GT(r.direction.z(), 0.9999f);
+        break;
+      case 1: {  // shadow ray: from the plane point (0, 0, 5) up to a point of either light
+        EXPECT_TRUE(r.shadow);
+        EXPECT_LT((r.origin - Eigen::Vector3f(0, 0, 5)).norm(), 1e-2f);
+        const Eigen::Vector3f end = r.origin + r.direction * r.t_far;
+        EXPECT_NEAR(end.z(), 4.f, 1e-3f);
+        EXPECT_TRUE(std::abs(end.x() + 0.5f) <= 0.2001f || std::abs(end.x() - 0.7f) <= 0.2001f) << end.transpose();
+        EXPECT_LE(std::abs(end.y()), 0.2001f);
+        break;
+      }
+      default:  // the bounce ray: from the plane into the half space toward the camera
+        EXPECT_FALSE(r.shadow);
+        EXPECT_LT((r.origin - Eigen::Vector3f(0, 0, 5)).norm(), 1e-2f);
+        EXPECT_LT(r.direction.z(), 0.f);
+        EXPECT_TRUE(std::isinf(r.t_far));
+    }
+  }
+}
+
 TEST(PathTracer, IndirectClampBoundsOnlyLightScatteredTwice) {
   // The furnace with two scatterings at most: direct 1 + a, indirect a^2 (a = 0.5, emission 1).
   // Clamping each sample's indirect luminance at 0.1 leaves the direct part and at most 0.1.

@@ -20,9 +20,11 @@ const char* lightSamplerName(LightSamplerKind kind);
 /// "uniform", "power", "hierarchy"; throws std::invalid_argument otherwise.
 LightSamplerKind lightSamplerFromName(const std::string& name);
 
-/// One emitting triangle, with what every sampler needs.
-struct EmissiveTriangle {
+/// One emitting triangle, with what every sampler and next-event estimation need: 64 bytes,
+/// one cache line, so that sampling a picked triangle misses the cache once.
+struct alignas(64) EmissiveTriangle {
   std::uint32_t face = 0;
+  std::uint32_t emitter = 0;  ///< index into RenderScene::emitters
   Eigen::Vector3f p0, p1, p2;
   Eigen::Vector3f normal;  ///< unit
   float area = 0;          ///< m^2
@@ -40,6 +42,9 @@ class LightSampler {
   virtual int pick(const Eigen::Vector3f& point, const Eigen::Vector3f& normal, float u, float* pmf) const = 0;
   /// Probability that pick() at this shading point returns `triangle` (for MIS).
   virtual float pmf(const Eigen::Vector3f& point, const Eigen::Vector3f& normal, int triangle) const = 0;
+  /// A hint that pick(..., u, ...) follows: a sampler whose pick ignores the shading point may
+  /// start loading what it will read, so that the load overlaps the ray cast that finds the point.
+  virtual void prefetch(float /*u*/) const {}
 };
 
 std::unique_ptr<LightSampler> makeLightSampler(LightSamplerKind kind, const std::vector<EmissiveTriangle>& triangles);

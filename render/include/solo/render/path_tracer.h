@@ -15,9 +15,19 @@
 
 #include <cstdint>
 #include <functional>
+#include <vector>
 #include <memory>
 
 namespace solo {
+
+/// One ray as the tracer cast it, for replaying the same rays through bare Embree calls
+/// (bench_render's efficiency line): closest-hit rays from t = 0 to infinity, shadow rays
+/// (occlusion only) from t = 0 to t_far, metres.
+struct RecordedRay {
+  Eigen::Vector3f origin, direction;
+  float t_far = 0.f;
+  bool shadow = false;
+};
 
 struct PathTracerOptions {
   int min_samples = 16;   ///< per pixel before the error estimate is trusted; at least 2 are taken
@@ -78,6 +88,9 @@ struct PathTracerOptions {
   DiffuseModel diffuse = DiffuseModel::Disney;
   std::uint64_t seed = 1;
   bool progress = true;  ///< a progress bar on stderr when it is a terminal
+  /// When set, every ray cast is appended here (tile by tile, in the order each tile cast
+  /// them; tiles in completion order). For benchmarks: it costs a store per ray.
+  std::vector<RecordedRay>* ray_log = nullptr;
 };
 
 struct RenderOutput {

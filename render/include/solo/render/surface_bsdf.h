@@ -48,6 +48,7 @@ class SurfaceBsdf {
   DiffuseModel diffuse_;
   bool specular_;
   float cos_o_;
+  float one_minus_cos_o_pow5_;  // (1 - cos_o)^5, the Schlick weight of wo in Burley's lobe
   float diffuse_coupling_o_ = 1.f;  // (1 - E(cos_o)) / (1 - E_avg)
   float specular_probability_ = 0.f;
 };
