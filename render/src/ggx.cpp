@@ -23,13 +23,27 @@ struct AlbedoTables {
 
 float alphaCoordinate(float alpha) { return std::sqrt(std::clamp(alpha, 0.f, 1.f)) * (kAlphaNodes - 1); }
 
-float lookupDirectional(const AlbedoTables& t, float cos_o, float alpha) {
-  const float fc = std::clamp(cos_o, 0.f, 1.f) * (kCosNodes - 1), fa = alphaCoordinate(alpha);
-  const int c0 = std::min(static_cast<int>(fc), kCosNodes - 2), a0 = std::min(static_cast<int>(fa), kAlphaNodes - 2);
-  const float tc = fc - static_cast<float>(c0), ta = fa - static_cast<float>(a0);
+// The table row of alpha: its lower node and the upper node's weight.
+void alphaRow(float alpha, int* a0, float* ta) {
+  const float fa = alphaCoordinate(alpha);
+  *a0 = std::min(static_cast<int>(fa), kAlphaNodes - 2);
+  *ta = fa - static_cast<float>(*a0);
+}
+
+float lookupDirectionalInRow(const AlbedoTables& t, float cos_o, int a0, float ta) {
+  const float fc = std::clamp(cos_o, 0.f, 1.f) * (kCosNodes - 1);
+  const int c0 = std::min(static_cast<int>(fc), kCosNodes - 2);
+  const float tc = fc - static_cast<float>(c0);
   const auto at = [&t](int a, int c) { return t.directional[static_cast<std::size_t>(a * kCosNodes + c)]; };
   return (1 - ta) * ((1 - tc) * at(a0, c0) + tc * at(a0, c0 + 1)) +
          ta * ((1 - tc) * at(a0 + 1, c0) + tc * at(a0 + 1, c0 + 1));
+}
+
+float lookupDirectional(const AlbedoTables& t, float cos_o, float alpha) {
+  int a0 = 0;
+  float ta = 0;
+  alphaRow(alpha, &a0, &ta);
+  return lookupDirectionalInRow(t, cos_o, a0, ta);
 }
 
 // E(cos_o) by stratified visible-normal sampling: f cos_i / pdf = F G2 / G1(wo) per sample,
@@ -150,10 +164,40 @@ float ggxDirectionalAlbedo(float cos_o, float alpha) { return lookupDirectional(
 
 float ggxAverageAlbedo(float alpha) {
   const AlbedoTables& t = tables();
-  const float fa = alphaCoordinate(alpha);
-  const int a0 = std::min(static_cast<int>(fa), kAlphaNodes - 2);
-  const float ta = fa - static_cast<float>(a0);
+  int a0 = 0;
+  float ta = 0;
+  alphaRow(alpha, &a0, &ta);
   return (1 - ta) * t.average[static_cast<std::size_t>(a0)] + ta * t.average[static_cast<std::size_t>(a0 + 1)];
+}
+
+GgxLobe::GgxLobe(const Eigen::Vector3f& wo, float alpha)
+    : wo_(wo), alpha_(alpha), lambda_o_(ggxLambda(wo.z(), alpha)), g1_o_(ggxG1(wo.z(), alpha)) {
+  alphaRow(alpha, &alpha_node_, &alpha_fraction_);
+  average_albedo_ = ggxAverageAlbedo(alpha);
+}
+
+float GgxLobe::specular(const Eigen::Vector3f& wi) const {
+  if (wo_.z() <= 0.f || wi.z() <= 0.f) return 0.f;
+  const Eigen::Vector3f sum = wo_ + wi;
+  const float norm = sum.norm();
+  if (!(norm > 0.f)) return 0.f;
+  const Eigen::Vector3f h = sum / norm;
+  const float g2 = 1.f / (1.f + lambda_o_ + ggxLambda(wi.z(), alpha_));  // ggxG2 with Lambda(wo) kept
+  return ggxD(h.z(), alpha_) * g2 * schlickFresnel(wo_.dot(h), kDielectricF0) / (4.f * wo_.z() * wi.z());
+}
+
+float GgxLobe::reflectionPdf(const Eigen::Vector3f& wi) const {
+  if (wo_.z() <= 0.f) return 0.f;
+  const Eigen::Vector3f sum = wo_ + wi;
+  const float norm = sum.norm();
+  if (!(norm > 0.f)) return 0.f;
+  const Eigen::Vector3f h = sum / norm;
+  if (wo_.dot(h) <= 0.f) return 0.f;
+  return g1_o_ * ggxD(h.z(), alpha_) / (4.f * wo_.z());
+}
+
+float GgxLobe::directionalAlbedo(float cos_theta) const {
+  return lookupDirectionalInRow(tables(), cos_theta, alpha_node_, alpha_fraction_);
 }
 
 }  // namespace solo

@@ -30,8 +30,9 @@ SurfaceBsdf::SurfaceBsdf(const Eigen::Vector3f& n, const Eigen::Vector3f& wo, co
   one_minus_cos_o_pow5_ = m * m * m * m * m;
   if (specular_) {
     alpha_ = ggxAlpha(roughness_);
-    const float e_o = ggxDirectionalAlbedo(cos_o_, alpha_);
-    diffuse_coupling_o_ = (1.f - e_o) / (1.f - ggxAverageAlbedo(alpha_));
+    lobe_ = GgxLobe(wo_local_, alpha_);
+    const float e_o = lobe_.directionalAlbedo(cos_o_);
+    diffuse_coupling_o_ = (1.f - e_o) / (1.f - lobe_.averageAlbedo());
     // Lobe choice by estimated albedo: the diffuse lobe reflects about albedo (1 - E(cos_o)).
     const float diffuse_weight = std::max(0.f, albedo_.y()) * (1.f - e_o);
     specular_probability_ = std::clamp(e_o / std::max(1e-6f, e_o + diffuse_weight), 0.1f, 0.9f);
@@ -55,8 +56,8 @@ Eigen::Vector3f SurfaceBsdf::eval(const Eigen::Vector3f& wi) const {
   Eigen::Vector3f f = albedo_.cwiseProduct(diffuseShape(wi, cos_i));
   if (!specular_) return f;
   const Eigen::Vector3f wi_local = toLocal(wi);
-  f *= diffuse_coupling_o_ * (1.f - ggxDirectionalAlbedo(cos_i, alpha_));
-  return f + Eigen::Vector3f::Constant(ggxSpecular(wo_local_, wi_local, alpha_));
+  f *= diffuse_coupling_o_ * (1.f - lobe_.directionalAlbedo(cos_i));
+  return f + Eigen::Vector3f::Constant(lobe_.specular(wi_local));
 }
 
 float SurfaceBsdf::pdf(const Eigen::Vector3f& wi) const {
@@ -64,7 +65,7 @@ float SurfaceBsdf::pdf(const Eigen::Vector3f& wi) const {
   const float diffuse_pdf = std::max(0.f, cos_i) / kPi;
   if (!specular_) return diffuse_pdf;
   return (1.f - specular_probability_) * diffuse_pdf +
-         specular_probability_ * ggxReflectionPdf(wo_local_, toLocal(wi), alpha_);
+         specular_probability_ * lobe_.reflectionPdf(toLocal(wi));
 }
 
 bool SurfaceBsdf::sample(float u0, float u1, float u2, Eigen::Vector3f* wi) const {

@@ -159,6 +159,26 @@ TEST(SurfaceBsdf, DisneyDiffuseMatchesBurleysHalfVectorForm) {
         }
 }
 
+// GgxLobe keeps what evaluations from one wo share; it must change no bit of any of them.
+TEST(Ggx, LobeFromOneDirectionEqualsTheFreeFunctionsBitForBit) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (const float roughness : {0.f, 0.05f, 0.3f, 0.5f, 0.77f, 1.f}) {
+    const float alpha = solo::ggxAlpha(roughness);
+    for (const double cos_o : {1.0, 0.7, 0.2, 0.01, -0.3}) {
+      const Eigen::Vector3f wo = direction(cos_o, 0.4);
+      const solo::GgxLobe lobe(wo, alpha);
+      EXPECT_EQ(lobe.averageAlbedo(), solo::ggxAverageAlbedo(alpha));
+      for (int k = 0; k < 200; ++k) {
+        const Eigen::Vector3f wi = direction(2 * u(rng) - 1, 2 * kPi * u(rng));
+        EXPECT_EQ(lobe.specular(wi), solo::ggxSpecular(wo, wi, alpha)) << roughness << " " << cos_o;
+        EXPECT_EQ(lobe.reflectionPdf(wi), solo::ggxReflectionPdf(wo, wi, alpha)) << roughness << " " << cos_o;
+        EXPECT_EQ(lobe.directionalAlbedo(wi.z()), solo::ggxDirectionalAlbedo(wi.z(), alpha));
+      }
+    }
+  }
+}
+
 TEST(SurfaceBsdf, OrthonormalBasisIsRightHandedAroundAnyUnitNormal) {
   const std::vector<Eigen::Vector3f> normals = {
       Eigen::Vector3f::UnitZ(), -Eigen::Vector3f::UnitZ(), Eigen::Vector3f::UnitX(),

@@ -47,4 +47,24 @@ float ggxDirectionalAlbedo(float cos_o, float alpha);
 /// Cosine-weighted average 2 int_0^1 E(mu) mu dmu of the directional albedo.
 float ggxAverageAlbedo(float alpha);
 
+/// The lobe seen from one direction wo (local frame, unit) at one alpha: what every evaluation
+/// from wo shares (Smith's Lambda(wo), the albedo table's row for alpha), computed once. Each
+/// method returns bit for bit what the free function of the same name returns.
+class GgxLobe {
+ public:
+  GgxLobe() = default;
+  GgxLobe(const Eigen::Vector3f& wo, float alpha);
+  float specular(const Eigen::Vector3f& wi) const;       ///< ggxSpecular(wo, wi, alpha)
+  float reflectionPdf(const Eigen::Vector3f& wi) const;  ///< ggxReflectionPdf(wo, wi, alpha)
+  float directionalAlbedo(float cos_theta) const;        ///< ggxDirectionalAlbedo(cos_theta, alpha)
+  float averageAlbedo() const { return average_albedo_; }  ///< ggxAverageAlbedo(alpha)
+
+ private:
+  Eigen::Vector3f wo_ = Eigen::Vector3f::UnitZ();
+  float alpha_ = 1.f, lambda_o_ = 0.f, g1_o_ = 1.f;
+  int alpha_node_ = 0;         // the table's lower alpha node
+  float alpha_fraction_ = 0.f;  // and the weight of the upper one
+  float average_albedo_ = 0.f;
+};
+
 }  // namespace solo

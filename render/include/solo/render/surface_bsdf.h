@@ -11,6 +11,8 @@
 // Sampling picks a lobe in proportion to its estimated albedo (clamped to [0.1, 0.9]); pdf()
 // is the mixture's density, which is what multiple importance sampling needs.
 
+#include "solo/render/ggx.h"
+
 #include <Eigen/Core>
 
 namespace solo {
@@ -50,6 +52,7 @@ class SurfaceBsdf {
   float cos_o_;
   float one_minus_cos_o_pow5_;  // (1 - cos_o)^5, the Schlick weight of wo in Burley's lobe
   float diffuse_coupling_o_ = 1.f;  // (1 - E(cos_o)) / (1 - E_avg)
+  GgxLobe lobe_;                     // the specular lobe from wo (specular_ only)
   float specular_probability_ = 0.f;
 };
 
