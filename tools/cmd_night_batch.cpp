@@ -466,7 +466,10 @@ int runNightBatch(const NightBatchOptions& batch, const NightOptions& night) {
         write_failures();
         continue;
       }
-      running[pid] = Running{i, std::chrono::steady_clock::now()};
+      Running started;
+      started.scene = i;
+      started.start = std::chrono::steady_clock::now();
+      running[pid] = started;
       std::cout << progress(i) << ": started\n" << std::flush;
     }
     if (running.empty()) break;

@@ -693,7 +693,9 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   double max_spp = 0;
   cv::minMaxLoc(out.samples, nullptr, &max_spp);
   r.add("samples_per_pixel_max", static_cast<std::int64_t>(max_spp));
-  r.add("rays", total_rays.load()).add("rays_per_second", static_cast<double>(total_rays.load()) / seconds);
+  const std::int64_t rays_cast = total_rays.load();
+  r.add("rays", rays_cast);
+  r.add("rays_per_second", static_cast<double>(rays_cast) / seconds);
   r.add("bvh_build", build_seconds, "s");
   r.add("bvh_primitives", static_cast<std::int64_t>(p.caster->primitiveCount()));
   r.add("emissive_triangles", static_cast<std::int64_t>(emissive.size()));
