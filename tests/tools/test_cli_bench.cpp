@@ -161,8 +161,9 @@ TEST(CliBench, AccuracyQuickWritesEveryStageAndTheRenderErrorFallsWithSamples) {
   EXPECT_NE(readme.find("seed: 3"), std::string::npos) << readme;
   for (const char* stage : {"refine", "mesh", "render", "end_to_end"}) {
     EXPECT_TRUE(std::filesystem::exists(out / (std::string(stage) + ".gp"))) << stage;
-    if (std::system("command -v gnuplot > /dev/null 2>&1") == 0)
+    if (std::system("command -v gnuplot > /dev/null 2>&1") == 0) {
       EXPECT_TRUE(std::filesystem::exists(out / (std::string(stage) + ".png"))) << stage;
+    }
   }
 }
 
