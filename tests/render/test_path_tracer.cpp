@@ -240,11 +240,12 @@ TEST(PathTracer, StoppingOnTheNeighboursLeavesTheMeanUnbiased) {
   EXPECT_LT(spp_neighbours, 32) << "and it still stops early";
 }
 
-TEST(PathTracer, OneShadowRayPerVertexKeepsTheMeanOfSeveralLights) {
-  // A plane under two rectangle lights and an emitting quad, one bounce: the closed form is the
-  // sum of the three. One shadow ray per vertex to a light chosen by its contribution gives the
-  // same mean with one shadow ray per vertex instead of three (unoccluded: the same value);
-  // with a black plate shading part of one light, still the closed form.
+namespace {
+
+// A plane z = 5 (reflectance 0.5) under two 0.4 m square rectangle lights at z = 4 facing it,
+// centred at x = -0.5 and x = 0.7, of radiances `left` and `right`; the camera is one narrow
+// pixel on the plane point (0, 0, 5).
+solo::RenderScene planeUnderTwoRectangleLights(float left, float right) {
   solo::RenderScene s;
   addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
   for (const float x : {-0.5f, 0.7f}) {
@@ -253,12 +254,23 @@ TEST(PathTracer, OneShadowRayPerVertexKeepsTheMeanOfSeveralLights) {
     light.normal = {0, 0, 1};
     light.edge_u = {0.4f, 0, 0};
     light.edge_v = {0, 0.4f, 0};
-    light.radiance = Eigen::Vector3f::Constant(x < 0 ? 3.f : 1.f);
+    light.radiance = Eigen::Vector3f::Constant(x < 0 ? left : right);
     s.rectangle_lights.push_back(light);
   }
+  s.camera = cameraLookingAt(1, 4000, 0, 0);
+  return s;
+}
+
+}  // namespace
+
+TEST(PathTracer, OneShadowRayPerVertexKeepsTheMeanOfSeveralLights) {
+  // A plane under two rectangle lights and an emitting quad, one bounce: the closed form is the
+  // sum of the three. One shadow ray per vertex to a light chosen by its contribution gives the
+  // same mean with one shadow ray per vertex instead of three (unoccluded: the same value);
+  // with a black plate shading part of one light, still the closed form.
+  solo::RenderScene s = planeUnderTwoRectangleLights(3.f, 1.f);
   s.emitters.push_back({Eigen::Vector3f::Constant(2.f), false, 5});
   addQuad(s, {-0.2f, 0.6f, 4.5f}, {0.4f, 0, 0}, {0, 0.4f, 0}, 0.f, 0);
-  s.camera = cameraLookingAt(1, 4000, 0, 0);  // the plane point (0, 0, 5)
   const double irradiance = 3 * rectangleIntegral(-0.7, -0.3, -0.2, 0.2, 1) + 1 * rectangleIntegral(0.5, 0.9, -0.2, 0.2, 1) +
                             2 * rectangleIntegral(-0.2, 0.2, 0.6, 1.0, 0.5);
   const double expected = 0.5 / kPi * irradiance;
@@ -294,18 +306,7 @@ TEST(PathTracer, RayLogRecordsEveryRayAsCast) {
   // bounce: each sample casts the camera ray, one shadow ray toward a light and the bounce ray.
   // The log (bench_render replays it through bare Embree) holds exactly those, and keeping it
   // changes no pixel.
-  solo::RenderScene s;
-  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
-  for (const float x : {-0.5f, 0.7f}) {
-    solo::RectangleLight light;
-    light.centre = {x, 0, 4};
-    light.normal = {0, 0, 1};
-    light.edge_u = {0.4f, 0, 0};
-    light.edge_v = {0, 0.4f, 0};
-    light.radiance = Eigen::Vector3f::Constant(1.f);
-    s.rectangle_lights.push_back(light);
-  }
-  s.camera = cameraLookingAt(1, 4000, 0, 0);
+  const solo::RenderScene s = planeUnderTwoRectangleLights(1.f, 1.f);
   solo::PathTracerOptions o;
   o.max_bounces = 1;
   o.min_samples = o.max_samples = 16;
