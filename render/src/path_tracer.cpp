@@ -229,6 +229,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
 
   // Radiance after at most one scattering; NaN until the second vertex is reached.
   Eigen::Vector3f direct = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  float emission_scale = 1.f;  // 1 / the previous vertex's emission splits
   for (int bounce = 0; bounce <= c.options.max_bounces; ++bounce) {
     // The vertex's first two numbers (its light choice and its light pick) are drawn before the
     // ray, so that the light sampler can prefetch while Embree traverses. A path that ends here
@@ -276,7 +277,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
                                           hit.distance, abs_cos_hit, c.options.solid_angle_emitter_sampling);
           weight = powerHeuristic(previous_bsdf_pdf, light_pdf);
         }
-        radiance += throughput.cwiseProduct(emitted) * weight;
+        radiance += throughput.cwiseProduct(emitted) * (weight * emission_scale);
       }
     }
     if (bounce == 1) direct = radiance;  // light scattered at most once; the rest is indirect
@@ -375,7 +376,43 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
     const float u_lobe = bsdf.specular() ? rng.get1D() : 0.f;
     const auto [u1, u2] = rng.get2D();
     Eigen::Vector3f wi;
-    if (!bsdf.sample(u_lobe, u1, u2, &wi)) break;
+    const bool sampled = bsdf.sample(u_lobe, u1, u2, &wi);
+    // Emission splitting (PathTracerOptions::emission_splits): beside a large emitter the
+    // bounce's emission term is a rare, bright hit; it is averaged over `splits` directions, the
+    // extra ones here, the path's own at the next vertex scaled by emission_scale. The choice
+    // depends only on this vertex, so the estimate stays unbiased.
+    int splits = 1;
+    if (c.options.emission_splits > 1 && tri >= 0) {
+      const EmissiveTriangle& t = c.emissive[static_cast<std::size_t>(tri)];
+      if (((t.p0 + t.p1 + t.p2) / 3.f - point).squaredNorm() < c.options.split_distance_m * c.options.split_distance_m)
+        splits = c.options.emission_splits;
+    }
+    for (int extra = 1; extra < splits; ++extra) {
+      const float v_lobe = bsdf.specular() ? rng.get1D() : 0.f;
+      const auto [v1, v2] = rng.get2D();
+      Eigen::Vector3f w;
+      if (!bsdf.sample(v_lobe, v1, v2, &w)) continue;
+      const float p = bsdf.pdf(w);
+      if (!(p > 0.f)) continue;
+      const RayHit h = closestHit(shadow_origin, w);
+      if (!h.hit) continue;
+      const int e_index = c.scene.face_emitter.empty() ? -1 : c.scene.face_emitter[h.triangle];
+      if (e_index < 0) continue;
+      const Emitter& e = c.scene.emitters[static_cast<std::size_t>(e_index)];
+      const float abs_cos = std::abs(c.face_normals[h.triangle].dot(w));
+      const int h_tri = c.face_to_emissive[h.triangle];
+      float weight = 1.f;
+      if (h_tri >= 0 && abs_cos > 0.f) {
+        const float light_pdf = c.sampler.pmf(point, n, h_tri) *
+                                emitterPdf(c.emissive[static_cast<std::size_t>(h_tri)], shadow_origin, n, w, h.distance, abs_cos,
+                                           c.options.solid_angle_emitter_sampling);
+        weight = powerHeuristic(p, light_pdf);
+      }
+      radiance += throughput.cwiseProduct(bsdf.eval(w)).cwiseProduct(e.radiance * profile(e.directional_profile, abs_cos)) *
+                  (n.dot(w) / p * weight / static_cast<float>(splits));
+    }
+    emission_scale = 1.f / static_cast<float>(splits);
+    if (!sampled) break;
     const float cos_surface = n.dot(wi);
     const float bsdf_pdf = bsdf.pdf(wi);
     if (!(bsdf_pdf > 0.f)) break;

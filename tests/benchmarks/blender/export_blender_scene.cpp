@@ -21,7 +21,10 @@
 //       next-event-estimation A/B at 16 and 64 spp with the first sampler: emitters sampled by
 //       area instead of solid angle, one shadow ray per light instead of one per vertex, and
 //       both (the tracer before these two); with `clamp` the indirect clamp at 30 to 3000 cd/m^2;
-//       with `roulette` Russian roulette from bounce 1, 2 and 4 (the default is 3).
+//       with `roulette` Russian roulette from bounce 1, 2 and 4 (the default is 3); with `split`
+//       emission splitting (PathTracerOptions::emission_splits) 4 and 8 within 0.5 and 2 m.
+//       The runs take the seed from the environment variable SOLO_SEED (7 unless set), so that a
+//       firefly-ruled error can be averaged over seeds.
 //   export_blender_scene compare OUT_DIR IMAGE.exr
 //       Relative RMSE of IMAGE's Y (second channel) against the reference on the pixels where no
 //       emitter is seen, the ratio of their means there, the share of the squared error in the
@@ -231,6 +234,7 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
   const bool nee_variants = argc > 7 && std::string(argv[7]) == "nee";
   const bool clamp_variants = argc > 7 && std::string(argv[7]) == "clamp";
   const bool roulette_variants = argc > 7 && std::string(argv[7]) == "roulette";
+  const bool split_variants = argc > 7 && std::string(argv[7]) == "split";
   solo::RenderScene scene;
   if (name == "night") scene = nightStreet(width, height);
   else if (name == "plane-area") scene = litPlane(width, height, false);
@@ -283,7 +287,7 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
   std::printf("%-22s %8s %9s %9s %14s %10s\n", "solo settings", "spp", "seconds", "cpu_s", "relative_rmse",
               "mean_ratio");
   const auto run = [&](const std::string& label, solo::PathTracerOptions options) {
-    options.seed = 7;
+    options.seed = std::getenv("SOLO_SEED") ? static_cast<std::uint64_t>(std::atoi(std::getenv("SOLO_SEED"))) : 7;
     solo::Stopwatch clock;
     const double cpu_start = processCpuSeconds();
     const solo::RenderOutput out = solo::renderPathTraced(scene, options);
@@ -322,6 +326,14 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
   if (clamp_variants)
     for (float clamp : {30.f, 100.f, 300.f, 1000.f, 3000.f})
       variants.push_back({" clamp " + std::to_string(static_cast<int>(clamp)), [clamp](auto& t) { t.indirect_clamp = clamp; }});
+  if (split_variants)
+    for (int splits : {4, 8})
+      for (float distance : {0.5f, 2.f})
+        variants.push_back({" split " + std::to_string(splits) + " within " + std::to_string(distance).substr(0, 3) + "m",
+                            [splits, distance](auto& t) {
+                              t.emission_splits = splits;
+                              t.split_distance_m = distance;
+                            }});
   if (nee_variants) {
     variants.push_back({" area-emitters", [](auto& t) { t.solid_angle_emitter_sampling = false; }});
     variants.push_back({" ray-per-light", [](auto& t) { t.one_shadow_ray = false; }});

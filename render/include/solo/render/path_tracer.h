@@ -80,6 +80,15 @@ struct PathTracerOptions {
   /// (darker), but it removes the fireflies of paths that find the bright surroundings of a
   /// lamp by chance. 0 = off.
   float indirect_clamp = 0.f;
+  /// Emission splitting: at a vertex whose light pick (an emitting triangle's centroid) lies
+  /// within split_distance_m, the emission its bounce finds is estimated from this many BSDF
+  /// directions, each casting a ray, averaged (the path goes on along the first). Next to a
+  /// large emitter of many small triangles, which light sampling covers one triangle at a time,
+  /// the bounce finds it as a whole; the extra directions lower that estimate's variance.
+  /// Unbiased; 1 = off. On the Cycles comparison's scene, 8 within 2 m: 0.85x the error at
+  /// 1.07x the time (docs/rendering.md).
+  int emission_splits = 1;
+  float split_distance_m = 2.f;
   int russian_roulette_after = 3;  ///< bounces before roulette starts
   LightSamplerKind light_sampler = LightSamplerKind::Hierarchy;
   /// Where the per-sample random numbers come from (sampler.h): scrambled Sobol points,
