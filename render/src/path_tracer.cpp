@@ -195,6 +195,21 @@ struct Context {
   std::vector<float> rectangle_area, rectangle_cos_half_spread;  // per rectangle light, computed once
 };
 
+// The MIS weight of emission that a bounce from `from_point` (receiver normal `from_normal`,
+// ray origin `from_origin`) found along unit `direction`, `distance` away, on `face` at
+// |cosine| `abs_cos`, the bounce's density being `bounce_pdf`: against the light sampler's
+// density for that direction. 1 for emitting faces the light sampler never picks.
+float bounceEmissionWeight(const Context& c, std::uint32_t face, const Eigen::Vector3f& from_point,
+                           const Eigen::Vector3f& from_normal, const Eigen::Vector3f& from_origin,
+                           const Eigen::Vector3f& direction, float distance, float abs_cos, float bounce_pdf) {
+  const int triangle = c.face_to_emissive[face];
+  if (triangle < 0 || !(abs_cos > 0.f)) return 1.f;
+  const float light_pdf = c.sampler.pmf(from_point, from_normal, triangle) *
+                          emitterPdf(c.emissive[static_cast<std::size_t>(triangle)], from_origin, from_normal, direction,
+                                     distance, abs_cos, c.options.solid_angle_emitter_sampling);
+  return powerHeuristic(bounce_pdf, light_pdf);
+}
+
 struct FirstHit {
   Eigen::Vector3f albedo{0, 0, 0}, normal{0, 0, 0};
   float depth = 0;
@@ -268,15 +283,8 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       if (bounce == 0) {
         radiance += emitted;
       } else {
-        const int hit_triangle = c.face_to_emissive[face];
-        float weight = 1.f;
-        if (hit_triangle >= 0 && abs_cos_hit > 0.f) {
-          const float select = c.sampler.pmf(previous_point, previous_normal, hit_triangle);
-          const float light_pdf =
-              select * emitterPdf(c.emissive[static_cast<std::size_t>(hit_triangle)], origin, previous_normal, direction,
-                                          hit.distance, abs_cos_hit, c.options.solid_angle_emitter_sampling);
-          weight = powerHeuristic(previous_bsdf_pdf, light_pdf);
-        }
+        const float weight = bounceEmissionWeight(c, face, previous_point, previous_normal, origin, direction,
+                                                  hit.distance, abs_cos_hit, previous_bsdf_pdf);
         radiance += throughput.cwiseProduct(emitted) * (weight * emission_scale);
       }
     }
@@ -400,14 +408,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       if (e_index < 0) continue;
       const Emitter& e = c.scene.emitters[static_cast<std::size_t>(e_index)];
       const float abs_cos = std::abs(c.face_normals[h.triangle].dot(w));
-      const int h_tri = c.face_to_emissive[h.triangle];
-      float weight = 1.f;
-      if (h_tri >= 0 && abs_cos > 0.f) {
-        const float light_pdf = c.sampler.pmf(point, n, h_tri) *
-                                emitterPdf(c.emissive[static_cast<std::size_t>(h_tri)], shadow_origin, n, w, h.distance, abs_cos,
-                                           c.options.solid_angle_emitter_sampling);
-        weight = powerHeuristic(p, light_pdf);
-      }
+      const float weight = bounceEmissionWeight(c, h.triangle, point, n, shadow_origin, w, h.distance, abs_cos, p);
       radiance += throughput.cwiseProduct(bsdf.eval(w)).cwiseProduct(e.radiance * profile(e.directional_profile, abs_cos)) *
                   (n.dot(w) / p * weight / static_cast<float>(splits));
     }
