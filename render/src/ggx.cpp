@@ -96,6 +96,15 @@ const AlbedoTables& tables() {
   return t;
 }
 
+// The unit half vector of wo and wi; false when they are opposite (no half vector).
+bool halfVector(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi, Eigen::Vector3f* h) {
+  const Eigen::Vector3f sum = wo + wi;
+  const float norm = sum.norm();
+  if (!(norm > 0.f)) return false;
+  *h = sum / norm;
+  return true;
+}
+
 }  // namespace
 
 float ggxAlpha(float roughness) { return std::clamp(roughness * roughness, kGgxMinAlpha, 1.f); }
@@ -127,10 +136,8 @@ float schlickFresnel(float cos_d, float f0) {
 
 float ggxSpecular(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi, float alpha, float f0) {
   if (wo.z() <= 0.f || wi.z() <= 0.f) return 0.f;
-  const Eigen::Vector3f sum = wo + wi;
-  const float norm = sum.norm();
-  if (!(norm > 0.f)) return 0.f;
-  const Eigen::Vector3f h = sum / norm;
+  Eigen::Vector3f h;
+  if (!halfVector(wo, wi, &h)) return 0.f;
   return ggxD(h.z(), alpha) * ggxG2(wo.z(), wi.z(), alpha) * schlickFresnel(wo.dot(h), f0) / (4.f * wo.z() * wi.z());
 }
 
@@ -152,10 +159,8 @@ Eigen::Vector3f ggxSampleVisibleNormal(const Eigen::Vector3f& wo, float alpha, f
 
 float ggxReflectionPdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi, float alpha) {
   if (wo.z() <= 0.f) return 0.f;
-  const Eigen::Vector3f sum = wo + wi;
-  const float norm = sum.norm();
-  if (!(norm > 0.f)) return 0.f;
-  const Eigen::Vector3f h = sum / norm;
+  Eigen::Vector3f h;
+  if (!halfVector(wo, wi, &h)) return 0.f;
   if (wo.dot(h) <= 0.f) return 0.f;
   return ggxG1(wo.z(), alpha) * ggxD(h.z(), alpha) / (4.f * wo.z());
 }
@@ -178,20 +183,16 @@ GgxLobe::GgxLobe(const Eigen::Vector3f& wo, float alpha)
 
 float GgxLobe::specular(const Eigen::Vector3f& wi) const {
   if (wo_.z() <= 0.f || wi.z() <= 0.f) return 0.f;
-  const Eigen::Vector3f sum = wo_ + wi;
-  const float norm = sum.norm();
-  if (!(norm > 0.f)) return 0.f;
-  const Eigen::Vector3f h = sum / norm;
+  Eigen::Vector3f h;
+  if (!halfVector(wo_, wi, &h)) return 0.f;
   const float g2 = 1.f / (1.f + lambda_o_ + ggxLambda(wi.z(), alpha_));  // ggxG2 with Lambda(wo) kept
   return ggxD(h.z(), alpha_) * g2 * schlickFresnel(wo_.dot(h), kDielectricF0) / (4.f * wo_.z() * wi.z());
 }
 
 float GgxLobe::reflectionPdf(const Eigen::Vector3f& wi) const {
   if (wo_.z() <= 0.f) return 0.f;
-  const Eigen::Vector3f sum = wo_ + wi;
-  const float norm = sum.norm();
-  if (!(norm > 0.f)) return 0.f;
-  const Eigen::Vector3f h = sum / norm;
+  Eigen::Vector3f h;
+  if (!halfVector(wo_, wi, &h)) return 0.f;
   if (wo_.dot(h) <= 0.f) return 0.f;
   return g1_o_ * ggxD(h.z(), alpha_) / (4.f * wo_.z());
 }

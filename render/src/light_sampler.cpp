@@ -70,12 +70,12 @@ class PowerSampler final : public LightSampler {
     }
   }
   void prefetch(float u) const override {
-    if (!columns_.empty()) __builtin_prefetch(&columns_[columnOf(u)]);
+    if (!columns_.empty()) __builtin_prefetch(&columns_[columnOf(scaledOf(u))]);
   }
   int pick(const Eigen::Vector3f&, const Eigen::Vector3f&, float u, float* pmf) const override {
     if (columns_.empty()) return -1;
-    const double scaled = static_cast<double>(u) * static_cast<double>(columns_.size());
-    const std::size_t column = columnOf(u);
+    const double scaled = scaledOf(u);
+    const std::size_t column = columnOf(scaled);
     const Column& c = columns_[column];
     const bool own = scaled - static_cast<double>(column) < c.keep;
     *pmf = own ? c.own_pmf : c.alias_pmf;
@@ -86,10 +86,9 @@ class PowerSampler final : public LightSampler {
   }
 
  private:
-  std::size_t columnOf(float u) const {
-    const double scaled = static_cast<double>(u) * static_cast<double>(columns_.size());
-    return std::min(static_cast<std::size_t>(scaled), columns_.size() - 1);
-  }
+  // u in [0, 1) scaled to the columns: its integer part picks the column, its fraction decides.
+  double scaledOf(float u) const { return static_cast<double>(u) * static_cast<double>(columns_.size()); }
+  std::size_t columnOf(double scaled) const { return std::min(static_cast<std::size_t>(scaled), columns_.size() - 1); }
   struct Column {
     float keep = 1.f;         // probability of the column's own triangle
     std::uint32_t alias = 0;  // the other triangle

@@ -220,7 +220,7 @@ float offsetFor(float distance) { return 1e-4f * std::max(1.f, distance); }
 
 // One path sample from the camera through (px, py). Returns XYZ radiance.
 Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, FirstHit* first, std::int64_t& rays,
-                          std::int64_t& clamped, std::vector<RecordedRay>* log) {
+                          std::int64_t& clamped, std::int64_t& split_vertices, std::vector<RecordedRay>* log) {
   // Every ray goes through these two: counted, and recorded when a log is kept.
   const auto closestHit = [&](const Eigen::Vector3f& o, const Eigen::Vector3f& d) {
     ++rays;
@@ -392,8 +392,10 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
     int splits = 1;
     if (c.options.emission_splits > 1 && tri >= 0) {
       const EmissiveTriangle& t = c.emissive[static_cast<std::size_t>(tri)];
-      if (((t.p0 + t.p1 + t.p2) / 3.f - point).squaredNorm() < c.options.split_distance_m * c.options.split_distance_m)
+      if (((t.p0 + t.p1 + t.p2) / 3.f - point).squaredNorm() < c.options.split_distance_m * c.options.split_distance_m) {
         splits = c.options.emission_splits;
+        ++split_vertices;
+      }
     }
     for (int extra = 1; extra < splits; ++extra) {
       const float v_lobe = bsdf.specular() ? rng.get1D() : 0.f;
@@ -552,7 +554,8 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
   ProgressBar progress(options.progress, tiles_x * tiles_y);
   std::mutex ray_log_mutex;
-  std::atomic<std::int64_t> total_rays{0}, total_samples{0}, dropped{0}, total_clamped{0}, stopped_by_target{0};
+  std::atomic<std::int64_t> total_rays{0}, total_samples{0}, dropped{0}, total_clamped{0}, stopped_by_target{0},
+      total_split_vertices{0};
   const bool adaptive = std::max(2, options.min_samples) < options.max_samples;
   // Replicates (sampler.h) only where stopping decisions are made: a fixed sample count keeps
   // the single, best stratified point set.
@@ -596,7 +599,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   };
 
   tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
-    std::int64_t rays = 0, samples_taken = 0, nonfinite = 0, clamped = 0;
+    std::int64_t rays = 0, samples_taken = 0, nonfinite = 0, clamped = 0, split_vertices = 0;
     std::vector<RecordedRay> tile_rays;
     std::vector<RecordedRay>* log = options.ray_log ? &tile_rays : nullptr;
     const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
@@ -612,7 +615,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
       p.rng.startSample(static_cast<std::uint32_t>(p.taken));
       const auto [jx, jy] = p.rng.get2D();
       const Eigen::Vector3f value = tracePath(context, static_cast<float>(p.x) + jx - 0.5f, static_cast<float>(p.y) + jy - 0.5f, p.rng,
-                                              p.taken == 0 ? &p.first : nullptr, rays, clamped, log);
+                                              p.taken == 0 ? &p.first : nullptr, rays, clamped, split_vertices, log);
       const int replicate = p.taken % replicates;
       ++p.taken;
       if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
@@ -719,6 +722,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     total_samples += samples_taken;
     dropped += nonfinite;
     total_clamped += clamped;
+    total_split_vertices += split_vertices;
     progress.tick();
   });
 
@@ -745,6 +749,12 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     r.add("indirect_samples_clamped", static_cast<double>(total_clamped.load()) / static_cast<double>(std::max<std::int64_t>(1, total_samples.load())));
     r.notes.push_back("indirect light clamped at " + std::to_string(options.indirect_clamp) +
                       " cd/m2 per sample: fewer fireflies, biased darker");
+  }
+  if (options.emission_splits > 1) {
+    r.add("emission_splits", static_cast<std::int64_t>(options.emission_splits));
+    r.add("split_distance", static_cast<double>(options.split_distance_m), "m");
+    r.add("vertices_split_per_sample", static_cast<double>(total_split_vertices.load()) /
+                                           static_cast<double>(std::max<std::int64_t>(1, total_samples.load())));
   }
   // Noise estimate: median relative standard error over pixels that received light.
   std::vector<float> relative;

@@ -371,6 +371,12 @@ TEST(PathTracer, EmissionSplittingKeepsTheMeanAndLowersTheVarianceBesideALargeEm
   o.emission_splits = 8;
   o.split_distance_m = 2.f;
   const PixelStatistics split = pixelStatistics(s, o, seeds, 0, 0);
+  // The report says it split, and how often: with every lamp triangle within 3 m, every camera
+  // vertex (the plane point; bounce 1 is the last, which does not scatter), one per sample.
+  o.split_distance_m = 3.f;
+  const solo::RenderOutput reported = solo::renderPathTraced(s, o);
+  EXPECT_EQ(std::get<std::int64_t>(*reported.report.find("emission_splits")), 8);
+  EXPECT_DOUBLE_EQ(std::get<double>(*reported.report.find("vertices_split_per_sample")), 1.0);
   std::printf("beside a wall lamp, 4 spp x %d seeds: %.4f (variance %.4g), 8 emission splits %.4f (variance %.4g)\n",
               seeds, plain.mean, plain.variance, split.mean, split.variance);
   EXPECT_NEAR(split.mean, plain.mean, 4 * std::sqrt((plain.variance + split.variance) / seeds));
