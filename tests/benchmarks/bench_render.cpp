@@ -7,11 +7,10 @@
 //      its default preset (the mesh at the image resolution; the camera scaled to WIDTHxHEIGHT,
 //      480x270 unless given, so that one-thread renders take seconds).
 
-#include "night_pipeline.h"
 #include "night_street.h"
+#include "pipeline_scene.h"
 
 #include <solo/geometry/report.h>
-#include <solo/geometry/scene.h>
 #include <solo/lighting/light_category.h>
 #include <solo/render/path_tracer.h>
 #include <solo/render/ray_caster.h>
@@ -158,26 +157,6 @@ void measureEfficiency(const solo::RenderScene& scene) {
               median(replay) / 1e6, median(power) / 1e6, 100 * median(power) / median(replay));
 }
 
-// What `solo night --seed 3` renders for `manifest` with its default preset (as the Cycles
-// exporter's pipeline scene, without its simplifications), seen by a camera scaled to
-// width x height.
-solo::RenderScene pipelineScene(const std::string& manifest, int width, int height) {
-  solo::Stopwatch clock;
-  const solo::Scene input = solo::loadScene(manifest);
-  solo::tools::NightOptions options;  // its defaults are the default preset (tools/night_presets.cpp)
-  options.seed = 3;
-  solo::tools::NightPipelineResult stages;
-  solo::tools::NightPipelineExtras extras;
-  extras.progress = false;
-  solo::RenderScene scene = solo::tools::runNightSceneStages(input, options, extras, stages).scene;
-  std::printf("pipeline scene from %s: %dx%d mesh, %zu triangles, %zu emitters, %zu rectangle lights, camera %dx%d, "
-              "built in %.1f s\n",
-              manifest.c_str(), input.width(), input.height(), scene.faces.size(), scene.emitters.size(),
-              scene.rectangle_lights.size(), width, height, clock.seconds());
-  scene.camera = scene.camera.scaledTo(width, height);
-  return scene;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -189,7 +168,12 @@ int main(int argc, char** argv) {
     }
     int width = 480, height = 270;
     if (argc > 3) std::sscanf(argv[3], "%dx%d", &width, &height);
-    measureEfficiency(pipelineScene(argv[2], width, height));
+    try {
+      measureEfficiency(solo::bench::pipelineScene(argv[2], width, height));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "bench_render efficiency: %s\n", e.what());
+      return 1;
+    }
     return 0;
   }
   int width = 480, height = 270, reference_spp = 1024;

@@ -37,7 +37,7 @@
 // Diffuse BSDF at roughness 0), no roughness map (no specular lobe), black sky.
 
 #include "../night_street.h"
-#include "night_pipeline.h"
+#include "../pipeline_scene.h"
 
 #include <solo/geometry/image_io.h>
 #include <solo/geometry/report.h>
@@ -73,33 +73,16 @@ solo::RenderScene nightStreet(int width, int height) {
   return solo::bench::nightStreet({width, height, /*profiled_emitters=*/false, /*headlight_spread_rad=*/3.14159265f});
 }
 
-// The light record's draw for the pipeline scene (solo night's --seed; the synth scene's seed).
-constexpr std::uint64_t kPipelineLightSeed = 3;
-
-// What `solo night --seed kPipelineLightSeed` renders for `manifest` with its default preset,
-// built by solo night's own stages (tools/night_pipeline.h, runNightSceneStages): refined depth,
-// the cleaned mesh at the image resolution with closed solids, the light record's draw (real
-// strengths and chromaticities), the scene with the two headlights. Then the comparison's
+// The scene `solo night` renders for `manifest` (pipeline_scene.h), with the comparison's
 // simplifications: every emitter uniform, headlights over the hemisphere, no roughness (diffuse
-// only), black sky, and the camera scaled to width x height (same view, fewer pixels; the mesh
-// keeps the image resolution).
+// only), black sky.
 solo::RenderScene pipelineScene(const fs::path& manifest, int width, int height) {
-  solo::Stopwatch clock;
-  const solo::Scene input = solo::loadScene(manifest);
-  solo::tools::NightOptions options;  // the default preset
-  options.seed = kPipelineLightSeed;
-  solo::tools::NightPipelineResult stages;
-  solo::NightScene night = solo::tools::runNightSceneStages(input, options, {}, stages);
-  std::printf("pipeline scene from %s: %dx%d mesh, light seed %llu, %.1f s\n", manifest.string().c_str(),
-              input.width(), input.height(), static_cast<unsigned long long>(kPipelineLightSeed), clock.seconds());
-  std::fflush(stdout);
-  solo::RenderScene scene = std::move(night.scene);
+  solo::RenderScene scene = solo::bench::pipelineScene(manifest, width, height);
   for (auto& emitter : scene.emitters) emitter.directional_profile = false;
   for (auto& light : scene.rectangle_lights) light.spread_rad = 3.14159265f;
   scene.face_roughness.clear();
   scene.sky_radiance = Eigen::Vector3f::Zero();
   scene.sky_zenith_radiance.reset();
-  scene.camera = scene.camera.scaledTo(width, height);
   return scene;
 }
 

@@ -1,0 +1,31 @@
+#include "pipeline_scene.h"
+
+#include "night_pipeline.h"
+
+#include <solo/geometry/report.h>
+#include <solo/geometry/scene.h>
+
+#include <cstdio>
+
+namespace solo::bench {
+
+RenderScene pipelineScene(const std::filesystem::path& manifest, int width, int height) {
+  Stopwatch clock;
+  const Scene input = loadScene(manifest);
+  tools::NightOptions options;  // its defaults are the default preset (tools/night_presets.cpp)
+  options.seed = kPipelineLightSeed;
+  tools::NightPipelineResult stages;
+  tools::NightPipelineExtras extras;
+  extras.progress = false;
+  RenderScene scene = tools::runNightSceneStages(input, options, extras, stages).scene;
+  std::printf("pipeline scene from %s: %dx%d mesh, %zu triangles, %zu emitters, %zu rectangle lights, light seed %llu, "
+              "camera %dx%d, built in %.1f s\n",
+              manifest.string().c_str(), input.width(), input.height(), scene.faces.size(), scene.emitters.size(),
+              scene.rectangle_lights.size(), static_cast<unsigned long long>(kPipelineLightSeed), width, height,
+              clock.seconds());
+  std::fflush(stdout);
+  scene.camera = scene.camera.scaledTo(width, height);
+  return scene;
+}
+
+}  // namespace solo::bench
