@@ -77,6 +77,7 @@ int runMeshFromDepth(const MeshFromDepthOptions& options) {
   }
   DepthMeshCleanupOptions cleanup;
   cleanup.close_solids = !options.no_solids;
+  cleanup.backdrops = !options.no_backdrops;
   cleanup.evaluate = !options.no_evaluation;
   StageReport stage;
   DepthMesh mesh = meshFromScene(scene.depth_m, scene.camera, scene.instances, uncertain, cleanup, stage, true_depth,

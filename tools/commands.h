@@ -40,6 +40,7 @@ struct NightOptions {
   bool refine = true;      ///< depth refinement (filter, uncertainty, optimisation)
   bool optimize = true;    ///< the normal-guided optimisation inside it
   bool solids = true;      ///< close foreground objects into solids
+  bool backdrops = true;   ///< close frame holes that nothing else closes as backdrops (docs/mesh.md)
   bool evaluate_mesh = false;  ///< quality counts of the cleaned mesh (self-intersections: slow)
   bool ablation = false;   ///< every light on, white, one strength
   std::optional<std::filesystem::path> lights_record;  ///< an edited light record instead of a new draw
@@ -172,6 +173,7 @@ struct MeshFromDepthOptions {
   std::optional<std::filesystem::path> uncertain;  ///< uncertain mask (8/16-bit, non-zero = uncertain)
   std::optional<std::filesystem::path> truth;      ///< ground-truth scene: score the spurious-face removal
   bool no_solids = false;      ///< leave foreground things as open sheets
+  bool no_backdrops = false;   ///< leave the frame holes only a backdrop closes open
   bool no_evaluation = false;  ///< skip the final evaluateMesh (self-intersections are costly at 1080p)
 };
 int runMeshFromDepth(const MeshFromDepthOptions& options);

@@ -40,6 +40,8 @@ int main(int argc, char** argv) {
                         "It stops when the objective decreases by less than this, relative (preset)")
       ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   night_cmd->add_flag("--solids,!--no-solids", night.solids, "Close foreground objects into solids (default on)");
+  night_cmd->add_flag("--backdrops,!--no-backdrops", night.backdrops,
+                      "Close the frame holes nothing else closes with a backdrop behind the occluders (default on)");
   night_cmd->add_flag("--evaluate-mesh,!--no-evaluate-mesh", night.evaluate_mesh,
                       "Count self-intersections and non-manifold parts (slow; preset)");
   night_cmd->add_flag("--ablation", night.ablation, "The paper's ablation: every light on, white, one strength");
@@ -227,6 +229,8 @@ int main(int argc, char** argv) {
   mesh_from_depth_cmd->add_option("--truth", mesh_from_depth.truth,
                                   "Ground-truth scene (depth and normals): score the spurious-face removal");
   mesh_from_depth_cmd->add_flag("--no-solids", mesh_from_depth.no_solids, "Leave foreground things as open sheets");
+  mesh_from_depth_cmd->add_flag("--no-backdrops", mesh_from_depth.no_backdrops,
+                                "Leave open the frame holes only a backdrop behind the occluders closes");
   mesh_from_depth_cmd->add_flag("--no-evaluation", mesh_from_depth.no_evaluation,
                                 "Skip the final topology and self-intersection counts");
   MeshCleanOptions mesh_clean;

@@ -81,6 +81,7 @@ NightScene runNightSceneStages(const Scene& scene, const NightOptions& o, const 
   say("mesh ... ");
   DepthMeshCleanupOptions mesh_options;
   mesh_options.close_solids = o.solids;
+  mesh_options.backdrops = o.backdrops;
   mesh_options.evaluate = o.evaluate_mesh;
   mesh_options.fill_holes = extras.fill_holes;
   mesh_options.hole_filling.max_fair_vertices = extras.max_fair_vertices;

@@ -119,6 +119,7 @@ std::string nightConfigText(const NightOptions& o) {
   line("optimize-iterations", std::to_string(o.optimize_iterations));
   line("optimize-tolerance", number(o.optimize_tolerance));
   flag("solids", o.solids);
+  flag("backdrops", o.backdrops);
   flag("evaluate-mesh", o.evaluate_mesh);
   flag("ablation", o.ablation);
   if (o.lights_record) path("lights", *o.lights_record);

@@ -21,17 +21,19 @@ double twiceSignedArea(const std::vector<OpenMesh::Vec2i>& polygon) {
 // How a hole in DepthLoops::holes is to be closed: by its frame_paths entry (along the frame, or
 // nothing to add for an inner hole), by the chord between its ends, along the sky line, or as
 // the joined runs of several sheets (with its path_after entry).
-enum class ClosedBy { path, chord, sky_line, joined_runs };
+enum class ClosedBy { path, chord, sky_line, joined_runs, backdrop };
 
 // Appends a hole with its entry in every per-hole array of DepthLoops, which stay aligned.
 void appendHole(DepthLoops& out, VertexLoop hole, ClosedBy by, std::vector<OpenMesh::Vec2i> path = {},
-                std::vector<int> after = {}) {
+                std::vector<int> after = {}, bool frame_hole = true) {
   out.holes.push_back(std::move(hole));
   out.frame_paths.push_back(std::move(path));
   out.path_after.push_back(std::move(after));
   out.chord_closed.push_back(by == ClosedBy::chord);
   out.sky_line_closed.push_back(by == ClosedBy::sky_line);
-  out.merged.push_back(by == ClosedBy::joined_runs);
+  out.merged.push_back(by == ClosedBy::joined_runs || by == ClosedBy::backdrop);
+  out.backdrop.push_back(by == ClosedBy::backdrop);
+  out.frame_hole.push_back(frame_hole);
 }
 
 }  // namespace
@@ -79,7 +81,8 @@ const char* loopKindName(LoopKind kind) {
   return "unknown";
 }
 
-DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, const cv::Mat& depth_m) {
+DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, const cv::Mat& depth_m,
+                              BackdropMode backdrops) {
   DepthLoops out;
   out.loops = findBoundaryLoops(m.mesh);
   const SurfaceMesh& mesh = m.mesh;
@@ -240,10 +243,15 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     return false;
   };
   std::vector<VertexLoop> pending;  // frame-hole runs with no closing path of their own
+  std::vector<VertexLoop> enclosing;  // frame-hole runs for backdrops
   const auto addFrameHole = [&](const VertexLoop& run) {
     std::size_t behind = 0;
     for (std::size_t e = 1; e + 1 < run.size(); ++e) behind += behindOccluder(run[e]);
     if (2 * behind < run.size() - 2) return;
+    if (backdrops == BackdropMode::every_frame_hole) {
+      enclosing.push_back(run);
+      return;
+    }
     std::vector<OpenMesh::Vec2i> path;
     const bool closed_along_frame = closingPath(run, path);  // (a path may be empty: neighbouring ends)
     if (!closed_along_frame) {
@@ -295,10 +303,14 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
   // Each path pixel must be nearer than 0.99 x both runs' ends it joins, and no vertex behind
   // an occluder; the polygon must be simple with a hole's orientation. Runs left over keep
   // the chord (or are unclosable).
-  const auto closeMergedRuns = [&](std::vector<VertexLoop>& runs) {
+  // As a backdrop (`backdrop`): the same trace with no depth condition, for the runs that no
+  // closing path over nearer pixels reaches; a chain may be one run.
+  const auto closeMergedRuns = [&](std::vector<VertexLoop>& runs, bool backdrop,
+                                   std::vector<std::size_t>* dead_ends = nullptr) {
     constexpr std::size_t kMaxRunsPerHole = 16;
     std::unordered_map<std::int64_t, std::size_t> first_at, vertex_run;
     for (std::size_t r = 0; r < runs.size(); ++r) {
+      if (runs[r].empty()) continue;  // closed already, or left out
       first_at.emplace(key(pixelOf(runs[r].front())), r);
       for (const auto v : runs[r]) vertex_run.emplace(key(pixelOf(v)), r);
     }
@@ -311,6 +323,26 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       const OpenMesh::Vec2i a = pixelOf(runs[from].back());
       const double start_limit_m = 0.99 * depth_m.at<float>(a[1], a[0]);
       std::unordered_map<std::int64_t, std::size_t> on_path;
+      // A backdrop's trace takes a run's first vertex beside the pixel it reached: the runs'
+      // ends need not lie on the outline itself (one pixel inside, by a thin far structure).
+      const auto firstBeside = [&](const OpenMesh::Vec2i& p, bool at_start) -> std::ptrdiff_t {
+        for (int dv = -1; dv <= 1; ++dv)
+          for (int du = -1; du <= 1; ++du) {
+            const auto found = first_at.find(key(OpenMesh::Vec2i(p[0] + du, p[1] + dv)));
+            if (found == first_at.end()) continue;
+            const std::size_t target = found->second;
+            // The run's own start closes a chain of one run, but not at once (no region).
+            if (target == from && (at_start || target != closing)) continue;
+            if (target != closing && (used[target] || in_chain[target])) continue;
+            return static_cast<std::ptrdiff_t>(target);
+          }
+        return -1;
+      };
+      if (backdrop) {
+        path.clear();
+        const std::ptrdiff_t at_once = firstBeside(a, true);
+        if (at_once >= 0) return at_once;
+      }
       for (int start = 0; start < 8; ++start) {
         if (!startsBackgroundArc(a, start)) continue;
         path.clear();
@@ -322,19 +354,30 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
           OpenMesh::Vec2i next;
           if (!contourStep(current, back, next)) break;
           const auto on_run = vertex_run.find(key(next));
+          if (backdrop && on_run == vertex_run.end()) {
+            const std::ptrdiff_t beside = firstBeside(next, false);
+            if (beside >= 0) {
+              appendSimple(path, on_path, next);
+              return beside;
+            }
+          }
           if (on_run != vertex_run.end()) {
             const auto first = first_at.find(key(next));
             if (first == first_at.end()) break;  // inside a run: not its start
             const std::size_t target = first->second;
             if (target != closing && (used[target] || in_chain[target])) break;
-            if (!(farthest_m < 0.99 * depth_m.at<float>(next[1], next[0]))) break;
+            if (!backdrop && !(farthest_m < 0.99 * depth_m.at<float>(next[1], next[0]))) break;
             return static_cast<std::ptrdiff_t>(target);
           }
           if (next == a || back < 0) break;
           const double z = depth_m.at<float>(next[1], next[0]);
-          if (!(z < start_limit_m)) break;
-          const int q = m.vertexAt(next[0], next[1]);
-          if (q >= 0 && !mesh.status(OpenMesh::VertexHandle(q)).deleted() && behindOccluder(OpenMesh::VertexHandle(q))) break;
+          if (!backdrop) {
+            if (!(z < start_limit_m)) break;
+            const int q = m.vertexAt(next[0], next[1]);
+            if (q >= 0 && !mesh.status(OpenMesh::VertexHandle(q)).deleted() &&
+                behindOccluder(OpenMesh::VertexHandle(q)))
+              break;
+          }
           appendSimple(path, on_path, next);
           farthest_m = std::max(farthest_m, z);
           current = next;
@@ -345,7 +388,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     };
     std::vector<std::uint8_t> in_chain(runs.size(), 0);
     for (std::size_t r0 = 0; r0 < runs.size(); ++r0) {
-      if (used[r0]) continue;
+      if (used[r0] || runs[r0].empty()) continue;
       std::vector<std::size_t> chain{r0};
       std::vector<std::vector<OpenMesh::Vec2i>> paths;
       in_chain[r0] = 1;
@@ -353,7 +396,10 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       while (chain.size() < kMaxRunsPerHole) {
         std::vector<OpenMesh::Vec2i> path;
         const std::ptrdiff_t target = trace(chain.back(), r0, in_chain, path);
-        if (target < 0) break;
+        if (target < 0) {
+          if (dead_ends) dead_ends->push_back(chain.back());
+          break;
+        }
         paths.push_back(std::move(path));
         if (static_cast<std::size_t>(target) == r0) {
           closed = true;
@@ -363,7 +409,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
         in_chain[chain.back()] = 1;
       }
       for (const std::size_t r : chain) in_chain[r] = 0;
-      if (!closed || chain.size() < 2) continue;
+      if (!closed || (chain.size() < 2 && !backdrop)) continue;
       // One simple polygon with a hole's orientation: every pixel once, negative area.
       VertexLoop hole;
       std::vector<OpenMesh::Vec2i> hole_path, polygon;
@@ -384,10 +430,11 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       for (const auto& p : polygon) simple = simple && once.emplace(key(p), 1).second;
       if (!simple || !(twiceSignedArea(polygon) < 0)) continue;
       for (const std::size_t r : chain) used[r] = 1;
-      appendHole(out, std::move(hole), ClosedBy::joined_runs, std::move(hole_path), std::move(after));
+      appendHole(out, std::move(hole), backdrop ? ClosedBy::backdrop : ClosedBy::joined_runs, std::move(hole_path),
+                 std::move(after));
       ++out.frame_holes;
-      ++out.frame_holes_merged;
-      out.frame_hole_runs_merged += static_cast<std::int64_t>(chain.size());
+      ++(backdrop ? out.frame_holes_backdrop : out.frame_holes_merged);
+      (backdrop ? out.frame_hole_runs_backdrop : out.frame_hole_runs_merged) += static_cast<std::int64_t>(chain.size());
     }
     for (std::size_t r = 0; r < runs.size(); ++r)
       if (used[r]) runs[r].clear();
@@ -417,7 +464,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     switch (kind) {
       case LoopKind::hole:
         ++out.inner_holes;
-        appendHole(out, loop, ClosedBy::path);
+        appendHole(out, loop, ClosedBy::path, {}, {}, false);
         break;
       case LoopKind::sky_opening: ++out.sky_openings; break;
       case LoopKind::silhouette: ++out.silhouettes; break;
@@ -447,7 +494,28 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       }
     }
   }
-  closeMergedRuns(pending);
+  closeMergedRuns(pending, false);
+  // The runs whose chord polygon encloses their own sheet: as a backdrop, or unclosable.
+  for (auto& run : pending) {
+    if (run.empty()) continue;
+    std::vector<OpenMesh::Vec2i> polygon;
+    for (const auto v : run) polygon.push_back(pixelOf(v));
+    if (twiceSignedArea(polygon) > 0) enclosing.push_back(std::move(run)), run.clear();
+  }
+  // A run whose outline trace finds no other run's start (its end at a pocket of sky walled in
+  // by thin far structures) would stop every chain through it: left out, the others' trace
+  // passes over its pixels, and it stays open alone (a few rounds).
+  for (int round = 0; backdrops != BackdropMode::off && round < 4; ++round) {
+    const std::int64_t closed_before = out.frame_holes_backdrop;
+    std::vector<std::size_t> dead_ends;
+    closeMergedRuns(enclosing, true, &dead_ends);
+    if (out.frame_holes_backdrop > closed_before || dead_ends.empty()) break;
+    std::sort(dead_ends.begin(), dead_ends.end());
+    dead_ends.erase(std::unique(dead_ends.begin(), dead_ends.end()), dead_ends.end());
+    for (const std::size_t r : dead_ends) pending.push_back(std::move(enclosing[r])), enclosing[r].clear();
+  }
+  for (auto& run : enclosing)
+    if (!run.empty()) pending.push_back(std::move(run));
   for (std::size_t r = 0; r < pending.size(); ++r)
     if (!pending[r].empty()) addChordOrUnclosable(pending[r]);
   return out;

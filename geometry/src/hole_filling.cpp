@@ -185,9 +185,10 @@ bool facesIntersect(const std::vector<Point>& points, const std::array<int, 3>& 
 
 
 /// Pixel centres inside the polygon and about 2 pixels or more from its edges (a band of width
-/// 2 along the edges is cleared), every `step`-th in both axes (step grows until at most
-/// max_points are left).
-std::vector<Point2> interiorPixelCentres(const std::vector<Point2>& uv, const Cdt& cdt, int max_points) {
+/// 2 along the edges is cleared; with `every_pixel`, none is and every centre inside is kept),
+/// every `step`-th in both axes (step grows until at most max_points are left).
+std::vector<Point2> interiorPixelCentres(const std::vector<Point2>& uv, const Cdt& cdt, int max_points,
+                                         const ImageBackdrop* backdrop) {
   double u0 = 1e300, v0 = 1e300, u1 = -1e300, v1 = -1e300;
   for (const auto& p : uv) u0 = std::min(u0, p.x()), v0 = std::min(v0, p.y()), u1 = std::max(u1, p.x()), v1 = std::max(v1, p.y());
   const int x0 = static_cast<int>(std::floor(u0)), y0 = static_cast<int>(std::floor(v0));
@@ -200,10 +201,19 @@ std::vector<Point2> interiorPixelCentres(const std::vector<Point2>& uv, const Cd
     polygon[0].emplace_back(static_cast<int>(std::lround((p.x() - x0) * (1 << kShift))),
                             static_cast<int>(std::lround((p.y() - y0) * (1 << kShift))));
   cv::fillPoly(mask, polygon, cv::Scalar(255), cv::LINE_8, kShift);
-  cv::polylines(mask, polygon, true, cv::Scalar(0), 2, cv::LINE_8, kShift);
+  // A backdrop keeps the band along the edges (the raster is widened; the triangulation decides).
+  cv::Mat band;
+  if (backdrop) {
+    band = cv::Mat::zeros(height, width, CV_8U);
+    cv::polylines(band, polygon, true, cv::Scalar(255), 3, cv::LINE_8, kShift);
+    mask |= band;
+  } else {
+    cv::polylines(mask, polygon, true, cv::Scalar(0), 2, cv::LINE_8, kShift);
+  }
   const int inside = cv::countNonZero(mask);
   int step = 1;
-  while (inside / (double(step) * step) > max_points) ++step;
+  while (!backdrop && inside / (double(step) * step) > max_points) ++step;
+  const int spacing = backdrop ? std::max(1, backdrop->hidden_spacing_px) : 1;
   std::vector<Point2> points;
   Cdt::Face_handle hint;
   for (int y = 0; y < height; ++y) {
@@ -211,6 +221,9 @@ std::vector<Point2> interiorPixelCentres(const std::vector<Point2>& uv, const Cd
     const auto* row = mask.ptr<std::uint8_t>(y);
     for (int x = 0; x < width; ++x) {
       if (!row[x] || (x + x0) % step != 0) continue;
+      if (backdrop && !band.at<std::uint8_t>(y, x) && ((x + x0) % spacing != 0 || (y + y0) % spacing != 0) &&
+          !(backdrop->obstacle_within_m && backdrop->obstacle_within_m(x + x0, y + y0, 0) <= 0))
+        continue;  // hidden, off the coarse grid
       const Point2 p(x + x0, y + y0);
       Cdt::Locate_type type;
       int li = 0;
@@ -307,7 +320,8 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const PinholeCamera& camera,
                           const HoleFillOptions& options, const std::function<double(int, int)>& obstacle_depth_m,
                           const std::vector<Eigen::Vector2d>& closing_path_px,
-                          const std::vector<int>& closing_path_after) {
+                          const std::vector<int>& closing_path_after, const ImageBackdrop* backdrop_mode) {
+  const bool backdrop = backdrop_mode != nullptr;
   HolePatch patch;
   const int n = static_cast<int>(boundary.size());  // points of known depth
   const int f = static_cast<int>(closing_path_px.size());
@@ -384,7 +398,8 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
     markNesting(cdt);
     // The unknowns: the closing path's points (free: their depth comes from the extension too),
     // then the interior pixel centres; index polygon_size + k is interior[k].
-    const std::vector<Point2> interior = interiorPixelCentres(polygon_uv, cdt, options.max_image_interior_vertices);
+    const std::vector<Point2> interior =
+        interiorPixelCentres(polygon_uv, cdt, options.max_image_interior_vertices, backdrop_mode);
     const int m_interior = static_cast<int>(interior.size());
     Cdt::Vertex_handle last = handles[polygon_size - 1];
     for (int k = 0; k < m_interior; ++k) {
@@ -394,7 +409,35 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
     const int m = f + m_interior;
     std::vector<Point2> unknown_uv(uv.begin() + n, uv.end());
     unknown_uv.insert(unknown_uv.end(), interior.begin(), interior.end());
-    if (m > 0) markNesting(cdt);
+    if (backdrop && backdrop_mode->mesh_has_edge) {
+      // Every pixel centre inside is a vertex, so the triangulation splits whole pixel quads;
+      // where the mesh has the other diagonal of a quad, the patch takes it: two halves split
+      // differently overlap, and a patch face beside a run vertex in front of a farther mesh
+      // face would cross it.
+      const auto pixel = [](const Cdt::Vertex_handle& v) {
+        return std::pair<long, long>(std::lround(v->point().x()), std::lround(v->point().y()));
+      };
+      std::vector<std::pair<Cdt::Vertex_handle, Cdt::Vertex_handle>> to_flip;
+      for (const auto& e : cdt.finite_edges()) {
+        if (cdt.is_constrained(e)) continue;
+        const Cdt::Face_handle g = e.first, h = g->neighbor(e.second);
+        if (cdt.is_infinite(g) || cdt.is_infinite(h)) continue;
+        const auto a = pixel(g->vertex(Cdt::cw(e.second))), b = pixel(g->vertex(Cdt::ccw(e.second)));
+        if (std::abs(a.first - b.first) != 1 || std::abs(a.second - b.second) != 1) continue;
+        const auto c = pixel(g->vertex(e.second)), d = pixel(h->vertex(h->index(g)));
+        const std::pair<long, long> corner1(a.first, b.second), corner2(b.first, a.second);
+        if (!((c == corner1 && d == corner2) || (c == corner2 && d == corner1))) continue;
+        if (backdrop_mode->mesh_has_edge(int(c.first), int(c.second), int(d.first), int(d.second)) &&
+            !backdrop_mode->mesh_has_edge(int(a.first), int(a.second), int(b.first), int(b.second)))
+          to_flip.emplace_back(g->vertex(Cdt::cw(e.second)), g->vertex(Cdt::ccw(e.second)));
+      }
+      for (const auto& [va, vb] : to_flip) {
+        Cdt::Face_handle g;
+        int i = 0;
+        if (cdt.is_edge(va, vb, g, i) && !cdt.is_constrained(Cdt::Edge(g, i))) cdt.flip(g, i);
+      }
+    }
+    if (m > 0 || backdrop) markNesting(cdt);
     if (clock.seconds() > options.time_limit_s) {
       patch.failure = "image-space triangulation exceeded its time limit";
       return patch;
@@ -422,7 +465,7 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
     std::vector<Point2> position(uv);
     position.insert(position.end(), interior.begin(), interior.end());
     double affine_c = 0, affine_gu = 0, affine_gv = 0, centre_u = 0, centre_v = 0;
-    if (f > 0) {
+    if (f > 0 && !backdrop) {
       for (int i = 0; i < n; ++i) centre_u += uv[i].x() / n, centre_v += uv[i].y() / n;
       double suu = 0, suv = 0, svv = 0, sy = 0, suy = 0, svy = 0;
       for (int i = 0; i < n; ++i) {
@@ -438,6 +481,7 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
       affine_gv = (suu * svy - suv * suy) / det;
     }
     const auto affine = [&](const Point2& p) {
+      if (backdrop) return 0.0;
       return affine_c + affine_gu * (p.x() - centre_u) + affine_gv * (p.y() - centre_v);
     };
     std::unordered_map<std::uint64_t, double> weight;
@@ -456,7 +500,29 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
       // the others are solved again (a few rounds: pinning can push neighbours forward).
       std::vector<double> pinned(m, 0.0);  // inverse depth, 0: free
       Eigen::VectorXd inverse_depth(m);
-      for (int round = 0; round < 4; ++round) {
+      // The depth each unknown stays behind (0: none). A backdrop's vertex: every surface within
+      // the reach of its faces (its longest edge, plus a pixel for the mesh faces' own extent).
+      std::vector<double> obstacle(m, 0.0);
+      if (backdrop && backdrop_mode->obstacle_within_m) {
+        std::vector<double> reach(m, 0.0);
+        for (const auto& t : faces)
+          for (int k = 0; k < 3; ++k) {
+            const int i = t[k], j = t[(k + 1) % 3];
+            const double length = std::sqrt(CGAL::squared_distance(position[i], position[j]));
+            if (i >= n) reach[i - n] = std::max(reach[i - n], length);
+            if (j >= n) reach[j - n] = std::max(reach[j - n], length);
+          }
+        for (int k = 0; k < m; ++k)
+          obstacle[k] = backdrop_mode->obstacle_within_m(static_cast<int>(std::lround(unknown_uv[k].x())),
+                                                         static_cast<int>(std::lround(unknown_uv[k].y())),
+                                                         static_cast<int>(std::ceil(reach[k])) + 1);
+      } else if (obstacle_depth_m) {
+        for (int k = 0; k < m; ++k)
+          obstacle[k] = obstacle_depth_m(static_cast<int>(std::lround(unknown_uv[k].x())),
+                                         static_cast<int>(std::lround(unknown_uv[k].y())));
+      }
+      const int rounds = backdrop ? 1 : 4;
+      for (int round = 0; round < rounds; ++round) {
         std::vector<int> unknown(m, -1);
         int free_count = 0;
         for (int k = 0; k < m; ++k)
@@ -501,9 +567,8 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
         std::int64_t covered = 0, hidden = 0;
         for (int k = 0; k < m; ++k) {
           inverse_depth[k] = unknown[k] >= 0 ? solved[unknown[k]] : pinned[k];
-          if (unknown[k] < 0 || !obstacle_depth_m) continue;
-          const double z = obstacle_depth_m(static_cast<int>(std::lround(unknown_uv[k].x())),
-                                            static_cast<int>(std::lround(unknown_uv[k].y())));
+          if (unknown[k] < 0) continue;
+          const double z = obstacle[k];
           if (z > 0) {
             ++covered;
             hidden += z > kHiddenDepthRatio / inverse_depth[k];
@@ -517,15 +582,35 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
         // the surfaces seen inside it are nearer than the extension. Surfaces farther away are
         // seen there: the region is not behind the occluder (the run outlines a sheet standing
         // against other surfaces), and a patch pinned behind them would be a wall of nothing.
-        if (f > 0 && round == 0 && hidden > kMaxHiddenFraction * covered) {
+        if (f > 0 && !backdrop && round == 0 && hidden > kMaxHiddenFraction * covered) {
           patch.failure = "frame hole region shows " + std::to_string(hidden) + " of " + std::to_string(covered) +
                           " covered vertices farther than the extension (not behind an occluder)";
           return patch;
         }
         if (!changed) break;
       }
+      // A backdrop is clamped behind its obstacles after its last solve (the solves only
+      // smooth it around the pins).
+      if (backdrop)
+        for (int k = 0; k < m; ++k)
+          if (obstacle[k] > 0 && 1.0 / inverse_depth[k] < obstacle[k]) inverse_depth[k] = 1.0 / obstacle[k];
       for (int k = 0; k < m; ++k)
         patch.new_points.push_back(camera.backproject(unknown_uv[k].x(), unknown_uv[k].y(), 1.0 / inverse_depth[k]));
+    }
+    if (backdrop) {
+      // In rows, as the depth mesh was built: OpenMesh attaches a face next to faces already
+      // there cheaply, and one in the middle of nowhere (a new boundary fan) dearly.
+      std::vector<std::pair<double, std::size_t>> row_order(faces.size());
+      for (std::size_t i = 0; i < faces.size(); ++i) {
+        const auto& t = faces[i];
+        const double v = std::min({position[t[0]].y(), position[t[1]].y(), position[t[2]].y()});
+        const double u = std::min({position[t[0]].x(), position[t[1]].x(), position[t[2]].x()});
+        row_order[i] = {v * 1e6 + u, i};
+      }
+      std::sort(row_order.begin(), row_order.end());
+      std::vector<std::array<int, 3>> sorted(faces.size());
+      for (std::size_t i = 0; i < faces.size(); ++i) sorted[i] = faces[row_order[i].second];
+      faces = std::move(sorted);
     }
     patch.faces = std::move(faces);
     patch.filled = true;
@@ -558,7 +643,8 @@ bool patchFacesIntersect(const std::vector<Eigen::Vector3d>& points_in, const st
 
 std::vector<std::uint8_t> findIntersectingFaces(const std::vector<Eigen::Vector3d>& points_in,
                                                 const std::vector<std::array<int, 3>>& candidates,
-                                                const std::vector<std::array<int, 3>>& others) {
+                                                const std::vector<std::array<int, 3>>& others,
+                                                bool candidates_among_themselves) {
   std::vector<Point> points;
   points.reserve(points_in.size());
   for (const auto& p : points_in) points.push_back(toPoint(p));
@@ -575,10 +661,12 @@ std::vector<std::uint8_t> findIntersectingFaces(const std::vector<Eigen::Vector3
   };
   std::vector<Box> candidate_boxes = boxesOf(candidates), other_boxes = boxesOf(others);
   std::vector<std::uint8_t> hit(candidates.size(), 0);
-  CGAL::box_self_intersection_d(candidate_boxes.begin(), candidate_boxes.end(), [&](const Box& a, const Box& b) {
-    if ((hit[a.info()] && hit[b.info()]) || !facesIntersect(points, candidates[a.info()], candidates[b.info()])) return;
-    hit[a.info()] = hit[b.info()] = 1;
-  });
+  if (candidates_among_themselves)
+    CGAL::box_self_intersection_d(candidate_boxes.begin(), candidate_boxes.end(), [&](const Box& a, const Box& b) {
+      if ((hit[a.info()] && hit[b.info()]) || !facesIntersect(points, candidates[a.info()], candidates[b.info()]))
+        return;
+      hit[a.info()] = hit[b.info()] = 1;
+    });
   if (!other_boxes.empty() && !candidate_boxes.empty())
     CGAL::box_intersection_d(candidate_boxes.begin(), candidate_boxes.end(), other_boxes.begin(), other_boxes.end(),
                              [&](const Box& a, const Box& b) {

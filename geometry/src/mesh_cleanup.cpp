@@ -2,9 +2,11 @@
 
 #include "solo/geometry/boundary_loops.h"
 #include "solo/geometry/error.h"
+#include "solo/geometry/foreground_solids.h"
 #include "solo/geometry/mesh_fragments.h"
 #include "solo/geometry/mesh_holes.h"
 #include "solo/geometry/mesh_repair.h"
+#include "solo/geometry/scene.h"
 
 #include <opencv2/imgproc.hpp>
 
@@ -47,6 +49,25 @@ void addLoopCounts(StageReport& report, const std::string& prefix, const DepthLo
   report.add(prefix + "frame_holes_sky_line", loops.frame_holes_sky_line);
   report.add(prefix + "frame_holes_merged", loops.frame_holes_merged);
   report.add(prefix + "frame_hole_runs_merged", loops.frame_hole_runs_merged);
+  report.add(prefix + "frame_holes_backdrop", loops.frame_holes_backdrop);
+  report.add(prefix + "frame_hole_runs_backdrop", loops.frame_hole_runs_backdrop);
+}
+
+// Room (metres) a backdrop leaves behind a foreground solid's back, beyond its thickness.
+constexpr double kBackdropSolidRoom_m = 0.25;
+
+// Adds a second closeHoles pass (its holes listed after the first's).
+void appendHoleClosing(HoleClosing& into, const HoleClosing& more) {
+  into.holes += more.holes, into.filled += more.filled, into.left_open += more.left_open;
+  into.by_image_space += more.by_image_space, into.by_refine_fair += more.by_refine_fair;
+  into.by_triangulation += more.by_triangulation, into.by_centroid_fan += more.by_centroid_fan;
+  into.by_membrane += more.by_membrane, into.by_chord_split += more.by_chord_split;
+  into.patches_rejected_for_intersection += more.patches_rejected_for_intersection;
+  into.faces_added += more.faces_added, into.vertices_added += more.vertices_added;
+  into.largest_hole_vertices = std::max(into.largest_hole_vertices, more.largest_hole_vertices);
+  into.warnings.insert(into.warnings.end(), more.warnings.begin(), more.warnings.end());
+  into.patch_faces.insert(into.patch_faces.end(), more.patch_faces.begin(), more.patch_faces.end());
+  into.hole_methods.insert(into.hole_methods.end(), more.hole_methods.begin(), more.hole_methods.end());
 }
 
 void addHoleCounts(StageReport& report, const HoleClosing& holes) {
@@ -137,7 +158,9 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
   report.add("seconds_fragments", step.seconds(), "s");
 
   step = Stopwatch();
-  const DepthLoops loops = classifyDepthLoops(m, had_depth, depth_m);
+  const BackdropMode backdrop_mode =
+      options.backdrops && options.fill_holes ? BackdropMode::unclosable : BackdropMode::off;
+  const DepthLoops loops = classifyDepthLoops(m, had_depth, depth_m, backdrop_mode);
   addLoopCounts(report, "found_", loops);
   for (const auto& note : loops.unclosable_notes) report.notes.push_back(note);
   report.add("seconds_boundary_loops", step.seconds(), "s");
@@ -148,7 +171,6 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
     // A large frame hole closed by its chord whose image-space patch fails gets no 3D method:
     // its chord crosses the mesh, and every 3D patch failed on such holes (measured on the
     // synthetic 1080p streets: 0 of 11, 506 to 3 689 boundary vertices), after seconds of CGAL.
-    std::vector<std::uint8_t> image_space_only(loops.holes.size(), 0);
     // A frame hole closed along the sky line: its 3D fallbacks close it by its chord, which is
     // as hopeless when the chord polygon encloses its own sheet (positive area in the image).
     const auto chordEnclosesSheet = [&](const VertexLoop& run) {
@@ -160,16 +182,76 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
       }
       return twice > 0;
     };
+    const auto imageSpaceOnly = [&](const DepthLoops& source, std::size_t i) {
+      return ((source.chord_closed[i] || source.sky_line_closed[i]) &&
+              static_cast<int>(source.holes[i].size()) > options.hole_filling.max_cubic_boundary_vertices) ||
+             (source.sky_line_closed[i] && chordEnclosesSheet(source.holes[i])) ||
+             source.merged[i];  // its runs belong to several sheets: no chord closes it
+    };
+    const auto pass = [&](const DepthLoops& source, const std::vector<std::size_t>& which, const cv::Mat* farthest) {
+      DepthLoops subset;
+      std::vector<std::uint8_t> only;
+      for (const std::size_t i : which) {
+        subset.holes.push_back(source.holes[i]);
+        subset.frame_paths.push_back(source.frame_paths[i]);
+        subset.path_after.push_back(source.path_after[i]);
+        subset.backdrop.push_back(source.backdrop[i]);
+        only.push_back(imageSpaceOnly(source, i));
+      }
+      PixelMapping mapping{m.properties, m.camera, m.width, m.height, &m.vertex_of_pixel};
+      mapping.frame_paths = &subset.frame_paths;
+      mapping.frame_path_after = &subset.path_after;
+      mapping.image_space_only = &only;
+      mapping.backdrop = &subset.backdrop;
+      mapping.farthest_surface_m = farthest;
+      return closeHoles(mesh, subset.holes, options.hole_filling, mapping);
+    };
+    // Backdrops are filled after every other hole: they lie behind everything in their
+    // region, the other holes' patches too (seen through the farthest-surface map).
+    std::vector<std::size_t> first_pass, backdrop_holes;
     for (std::size_t i = 0; i < loops.holes.size(); ++i)
-      image_space_only[i] = ((loops.chord_closed[i] || loops.sky_line_closed[i]) &&
-                             static_cast<int>(loops.holes[i].size()) > options.hole_filling.max_cubic_boundary_vertices) ||
-                            (loops.sky_line_closed[i] && chordEnclosesSheet(loops.holes[i])) ||
-                            loops.merged[i];  // its runs belong to several sheets: no chord closes it
-    PixelMapping mapping{m.properties, m.camera, m.width, m.height, &m.vertex_of_pixel};
-    mapping.frame_paths = &loops.frame_paths;
-    mapping.frame_path_after = &loops.path_after;
-    mapping.image_space_only = &image_space_only;
-    holes = closeHoles(mesh, loops.holes, options.hole_filling, mapping);
+      (loops.backdrop[i] ? backdrop_holes : first_pass).push_back(i);
+    holes = pass(loops, first_pass, nullptr);
+    // A frame hole its own closing left open (its patch met the mesh) is tried again in a
+    // backdrop: the loops are classified again, every frame hole left a backdrop run.
+    std::int64_t retried = 0;
+    for (std::size_t k = 0; k < first_pass.size(); ++k)
+      retried += loops.frame_hole[first_pass[k]] && holes.hole_methods[k] == "open";
+    DepthLoops again;
+    const DepthLoops* backdrop_source = &loops;
+    if (retried > 0 && backdrop_mode != BackdropMode::off) {
+      again = classifyDepthLoops(m, had_depth, depth_m, BackdropMode::every_frame_hole);
+      backdrop_source = &again;
+      backdrop_holes.clear();
+      for (std::size_t i = 0; i < again.holes.size(); ++i)
+        if (again.backdrop[i]) backdrop_holes.push_back(i);
+      report.add("frame_holes_retried_as_backdrop", retried);
+      report.add("backdrop_runs_after_retry", again.frame_hole_runs_backdrop);
+    }
+    if (!backdrop_holes.empty()) {
+      cv::Mat farthest = farthestSurfaceDepth(mesh, m.camera, m.width, m.height);
+      // Foreground things become solids of their class's thickness after this: the backdrop
+      // leaves them that room (and some), instead of pressing their backs onto their fronts.
+      if (options.close_solids && !instances.empty())
+        for (int v = 0; v < m.height; ++v)
+          for (int u = 0; u < m.width; ++u) {
+            const int i = m.vertexAt(u, v);
+            if (i < 0 || mesh.status(OpenMesh::VertexHandle(i)).deleted()) continue;
+            const double t = classThicknessM(
+                cityscapesClassOfInstance(mesh.property(m.properties.instance, OpenMesh::VertexHandle(i))));
+            if (t <= 0) continue;
+            float& slot = farthest.at<float>(v, u);
+            slot =
+                std::max(slot, static_cast<float>(mesh.point(OpenMesh::VertexHandle(i))[2] + t + kBackdropSolidRoom_m));
+          }
+      const HoleClosing more = pass(*backdrop_source, backdrop_holes, &farthest);
+      if (backdrop_source == &again && more.left_open == 0) {
+        // The frame holes left open are closed now, inside the backdrops (counted there).
+        holes.holes -= retried;
+        holes.left_open -= retried;
+      }
+      appendHoleClosing(holes, more);
+    }
     addHoleCounts(report, holes);
   } else {
     report.notes.push_back("hole filling off: " + std::to_string(loops.holes.size()) + " holes left open");
@@ -190,7 +272,7 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
   report.add("seconds_solids", step.seconds(), "s");
 
   step = Stopwatch();
-  const DepthLoops remaining = classifyDepthLoops(m, had_depth, depth_m);
+  const DepthLoops remaining = classifyDepthLoops(m, had_depth, depth_m, backdrop_mode);
   addLoopCounts(report, "after_", remaining);
   mesh.garbage_collection();
   rebuildPixelIndex(m);

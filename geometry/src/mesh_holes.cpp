@@ -1,4 +1,5 @@
 #include "solo/geometry/mesh_holes.h"
+#include "solo/geometry/report.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace solo {
 namespace {
@@ -139,13 +141,14 @@ bool xRangeInStrip(const Eigen::Vector2d uv[3], double y0, double y1, double& x0
   return x0 <= x1;
 }
 
-/// Whether a patch meets a face of a depth mesh: each patch face is tested against the mesh
-/// faces around a pixel within one pixel (both axes) of its projection.
-bool patchMeetsDepthMesh(const Attempt& attempt, const std::vector<Eigen::Vector3d>& points, const SurfaceMesh& mesh,
+/// Whether a patch's faces [begin, end) meet a face of a depth mesh: each patch face is tested
+/// against the mesh faces around a pixel within one pixel (both axes) of its projection.
+bool patchMeetsDepthMesh(const Attempt& attempt, std::size_t begin, std::size_t end,
+                         const std::vector<Eigen::Vector3d>& points, const SurfaceMesh& mesh,
                          const PixelMapping& pixels) {
   std::vector<int> near;
-  std::vector<Face> corners;
-  for (const Face& g : attempt.faces) {
+  for (std::size_t face = begin; face < end; ++face) {
+    const Face& g = attempt.faces[face];
     Eigen::Vector2d uv[3];
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector3d& p = points[g[k]];
@@ -182,6 +185,74 @@ bool patchMeetsDepthMesh(const Attempt& attempt, const std::vector<Eigen::Vector
 
 }  // namespace
 
+cv::Mat farthestSurfaceDepth(const SurfaceMesh& mesh, const PinholeCamera& camera, int width, int height) {
+  // Each vertex projected once; the faces rasterized in one slice per thread, each into its
+  // own map, merged by the maximum.
+  const int vertex_count = static_cast<int>(mesh.n_vertices());
+  std::vector<Eigen::Vector2d> projected(vertex_count);
+  std::vector<double> inverse_depth_of(vertex_count, 0.0);
+  cv::parallel_for_(cv::Range(0, vertex_count), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      const auto& p = mesh.point(OpenMesh::VertexHandle(i));
+      if (!(p[2] > 0)) continue;
+      projected[i] = camera.project(Eigen::Vector3d(p[0], p[1], p[2]));
+      inverse_depth_of[i] = 1.0 / p[2];
+    }
+  });
+  const int slices = std::max(1, cv::getNumThreads());
+  const int face_count = static_cast<int>(mesh.n_faces());
+  std::vector<cv::Mat> partial(slices);
+  cv::parallel_for_(cv::Range(0, slices), [&](const cv::Range& range) {
+    for (int slice = range.start; slice < range.end; ++slice) {
+      cv::Mat farthest(height, width, CV_32F, cv::Scalar(0.0f));
+      const int first = static_cast<int>(std::int64_t(face_count) * slice / slices);
+      const int last = static_cast<int>(std::int64_t(face_count) * (slice + 1) / slices);
+      for (int fi = first; fi < last; ++fi) {
+        const OpenMesh::FaceHandle f(fi);
+        if (mesh.status(f).deleted()) continue;
+        Eigen::Vector2d uv[3];
+        double inverse_depth[3];
+        int k = 0;
+        bool in_front = true;
+        for (const auto v : mesh.fv_range(f)) {
+          if (k == 3) break;
+          inverse_depth[k] = inverse_depth_of[v.idx()];
+          in_front = in_front && inverse_depth[k] > 0;
+          uv[k++] = projected[v.idx()];
+        }
+        if (!in_front || k != 3) continue;
+        const double area = (uv[1] - uv[0]).x() * (uv[2] - uv[0]).y() - (uv[1] - uv[0]).y() * (uv[2] - uv[0]).x();
+        if (!(std::abs(area) > 1e-12)) continue;
+        const int x0 = std::max(0, static_cast<int>(std::ceil(std::min({uv[0].x(), uv[1].x(), uv[2].x()}))));
+        const int x1 = std::min(width - 1, static_cast<int>(std::floor(std::max({uv[0].x(), uv[1].x(), uv[2].x()}))));
+        const int y0 = std::max(0, static_cast<int>(std::ceil(std::min({uv[0].y(), uv[1].y(), uv[2].y()}))));
+        const int y1 = std::min(height - 1, static_cast<int>(std::floor(std::max({uv[0].y(), uv[1].y(), uv[2].y()}))));
+        for (int y = y0; y <= y1; ++y)
+          for (int x = x0; x <= x1; ++x) {
+            // Barycentric weights of the pixel centre; a small tolerance keeps centres on an edge.
+            double w[3];
+            bool inside = true;
+            for (int i = 0; i < 3 && inside; ++i) {
+              const Eigen::Vector2d& a = uv[(i + 1) % 3];
+              const Eigen::Vector2d& b = uv[(i + 2) % 3];
+              w[i] = ((b - a).x() * (y - a.y()) - (b - a).y() * (x - a.x())) / area;
+              inside = w[i] > -1e-9;
+            }
+            if (!inside) continue;
+            const double s = w[0] * inverse_depth[0] + w[1] * inverse_depth[1] + w[2] * inverse_depth[2];
+            if (!(s > 0)) continue;
+            float& out = farthest.at<float>(y, x);
+            out = std::max(out, static_cast<float>(1.0 / s));
+          }
+      }
+      partial[slice] = std::move(farthest);
+    }
+  });
+  cv::Mat farthest = partial.front();
+  for (int slice = 1; slice < slices; ++slice) cv::max(farthest, partial[slice], farthest);
+  return farthest;
+}
+
 HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_holes, const HoleFillOptions& options,
                        const std::optional<PixelMapping>& pixels, const LargeHoleOptions& large) {
   HoleClosing result;
@@ -217,7 +288,22 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
   }
   // Without pixels every live face is a potential obstacle; with them the mesh is looked up
   // per pixel and only accepted patches are listed here.
+  // Faces with a vertex off the pixel grid (earlier patches) are not found per pixel: listed.
   std::vector<Face> others = by_pixels ? std::vector<Face>{} : liveFaces(mesh);
+  if (by_pixels) {
+    std::vector<std::uint8_t> listed(mesh.n_faces(), 0);
+    for (const auto v : mesh.vertices()) {
+      if (mesh.property(pixels->properties.origin, v) == static_cast<std::uint8_t>(VertexOrigin::pixel)) continue;
+      for (const auto f : mesh.vf_range(v)) {
+        if (listed[f.idx()]) continue;
+        listed[f.idx()] = 1;
+        Face g{};
+        int k = 0;
+        for (const auto u : mesh.fv_range(f)) g[k++] = u.idx();
+        others.push_back(g);
+      }
+    }
+  }
   std::vector<std::string> last_failure(holes.size());
   std::vector<std::size_t> pending(holes.size());
   std::vector<HoleFillMethod> method_of(holes.size(), HoleFillMethod::triangulate_refine_fair);
@@ -304,6 +390,46 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
     return points[vi].z() + kObstacleClearance_m;
   };
 
+  // A backdrop's obstacles: the farthest surface within a radius, from maximum filters of
+  // radius 0, 1, 2, 4, 8 and 16 pixels (a longer reach is scanned directly).
+  std::vector<cv::Mat> farthest_within;
+  if (by_pixels && pixels->farthest_surface_m && !pixels->farthest_surface_m->empty()) {
+    farthest_within.push_back(*pixels->farthest_surface_m);
+    for (int radius = 1; radius <= 16; radius *= 2) {
+      cv::Mat wider;
+      cv::dilate(*pixels->farthest_surface_m, wider, cv::Mat::ones(2 * radius + 1, 2 * radius + 1, CV_8U));
+      farthest_within.push_back(std::move(wider));
+    }
+  }
+  ImageBackdrop backdrop;
+  backdrop.obstacle_within_m = [&](int u, int v, int radius) -> double {
+    if (farthest_within.empty()) return 0.0;
+    const cv::Mat& base = farthest_within.front();
+    u = std::clamp(u, 0, base.cols - 1), v = std::clamp(v, 0, base.rows - 1);
+    double farthest = 0;
+    if (radius <= 16) {
+      std::size_t level = 0;
+      while (level < farthest_within.size() && (level == 0 ? 0 : 1 << (level - 1)) < radius) ++level;
+      farthest = farthest_within[level].at<float>(v, u);
+    } else {
+      for (int y = std::max(0, v - radius); y <= std::min(base.rows - 1, v + radius); ++y)
+        for (int x = std::max(0, u - radius); x <= std::min(base.cols - 1, u + radius); ++x)
+          farthest = std::max(farthest, static_cast<double>(base.at<float>(y, x)));
+    }
+    return farthest > 0 ? farthest + kObstacleClearance_m : 0.0;
+  };
+  backdrop.mesh_has_edge = [&](int u0, int v0, int u1, int v1) {
+    const auto live = [&](int u, int v) {
+      if (u < 0 || v < 0 || u >= pixels->width || v >= pixels->height) return OpenMesh::VertexHandle();
+      const int vi = (*pixels->vertex_of_pixel)[static_cast<std::size_t>(v) * pixels->width + u];
+      if (vi < 0 || mesh.status(OpenMesh::VertexHandle(vi)).deleted()) return OpenMesh::VertexHandle();
+      return OpenMesh::VertexHandle(vi);
+    };
+    const OpenMesh::VertexHandle a = live(u0, v0), b = live(u1, v1);
+    if (!a.is_valid() || !b.is_valid()) return false;
+    const auto he = mesh.find_halfedge(a, b);
+    return he.is_valid() && !mesh.status(mesh.edge_handle(he)).deleted();
+  };
   while (!pending.empty()) {
     for (const std::size_t hole : pending)
       if (method_of[hole] == HoleFillMethod::centroid_fan && large_stage[hole] == 0 && largeEligible(hole))
@@ -341,9 +467,13 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
         std::vector<int> closing_after;
         if (!closing_path.empty() && pixels->frame_path_after && hole < pixels->frame_path_after->size())
           closing_after = (*pixels->frame_path_after)[hole];
-        tries[i].patch = method_of[hole] == HoleFillMethod::image_space
-                             ? fillHoleInImage(boundary, pixels->camera, options, obstacleDepth, closing_path, closing_after)
-                             : fillHolePolyline(boundary, method_of[hole], options);
+        tries[i].patch =
+            method_of[hole] == HoleFillMethod::image_space
+                ? fillHoleInImage(boundary, pixels->camera, options, obstacleDepth, closing_path, closing_after,
+                                  pixels->backdrop && hole < pixels->backdrop->size() && (*pixels->backdrop)[hole]
+                                      ? &backdrop
+                                      : nullptr)
+                : fillHolePolyline(boundary, method_of[hole], options);
       }
     });
     std::vector<Attempt> attempts;
@@ -386,10 +516,19 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
     // survivors against each other and against the patches accepted in earlier rounds.
     std::vector<std::uint8_t> rejected(attempts.size(), 0);
     if (by_pixels) {
-      cv::parallel_for_(cv::Range(0, static_cast<int>(attempts.size())), [&](const cv::Range& range) {
-        for (int a = range.start; a < range.end; ++a)
-          rejected[a] = patchMeetsDepthMesh(attempts[a], round_points, mesh, *pixels) ? 1 : 0;
+      // In pieces of at most 4096 faces, so that one large patch (a backdrop) is shared out too.
+      constexpr std::size_t kPiece = 4096;
+      std::vector<std::array<std::size_t, 3>> pieces;  // attempt, first face, end
+      for (std::size_t a = 0; a < attempts.size(); ++a)
+        for (std::size_t b = 0; b < attempts[a].faces.size(); b += kPiece)
+          pieces.push_back({a, b, std::min(attempts[a].faces.size(), b + kPiece)});
+      std::vector<std::uint8_t> piece_meets(pieces.size(), 0);
+      cv::parallel_for_(cv::Range(0, static_cast<int>(pieces.size())), [&](const cv::Range& range) {
+        for (int i = range.start; i < range.end; ++i)
+          piece_meets[i] =
+              patchMeetsDepthMesh(attempts[pieces[i][0]], pieces[i][1], pieces[i][2], round_points, mesh, *pixels);
       });
+      for (std::size_t i = 0; i < pieces.size(); ++i) rejected[pieces[i][0]] |= piece_meets[i];
     }
     std::vector<Face> candidates;
     std::vector<std::size_t> owner;
@@ -400,7 +539,15 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
         owner.push_back(a);
       }
     }
-    const std::vector<std::uint8_t> hit = findIntersectingFaces(round_points, candidates, others);
+    // One image-space patch alone cannot meet itself: its faces lie over disjoint triangles of
+    // the image, lifted along their rays.
+    std::size_t candidate_patches = 0;
+    bool all_image_space = true;
+    for (std::size_t a = 0; a < attempts.size(); ++a)
+      if (!rejected[a])
+        ++candidate_patches, all_image_space = all_image_space && attempts[a].method == HoleFillMethod::image_space;
+    const std::vector<std::uint8_t> hit =
+        findIntersectingFaces(round_points, candidates, others, !(candidate_patches == 1 && all_image_space));
     for (std::size_t i = 0; i < hit.size(); ++i)
       if (hit[i]) rejected[owner[i]] = 1;
     for (std::size_t a = 0; a < attempts.size(); ++a) {

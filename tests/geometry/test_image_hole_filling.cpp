@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <set>
 
 namespace {
 
@@ -234,6 +235,92 @@ TEST(ImageHoleFilling, InteriorVerticesStayBehindAnObstacle) {
   EXPECT_EQ(pinned, 100);
   // Without the obstacle the fill is the plane z = 8 m.
   for (const auto& p : solo::fillHoleInImage(boundary, kCamera).new_points) EXPECT_NEAR(p.z(), 8.0, 1e-9);
+}
+
+TEST(ImageHoleFilling, ABackdropStaysBehindEverySurfaceItsFacesReach) {
+  // A backdrop's region: a run of known depth along row 25 (x from 35 to 4, 10 m at the right
+  // to 12 m at the left, inverse depth linear), closed by a path up column 4, along row 3 and
+  // down column 35. A surface to stay behind (at 25 m, clearance included) covers the pixels
+  // 14..25 x 8..15; nothing is seen elsewhere, so the rest of the region is the visible part.
+  // The mesh has the anti-diagonal in every pixel quad.
+  std::vector<Eigen::Vector3d> run;
+  for (int x = 35; x >= 4; --x)
+    run.push_back(kCamera.backproject(x, 25, 1.0 / (0.1 + (1.0 / 12 - 0.1) * (35 - x) / 31.0)));
+  std::vector<Eigen::Vector2d> path;
+  for (int y = 24; y >= 3; --y) path.emplace_back(4, y);
+  for (int x = 5; x <= 35; ++x) path.emplace_back(x, 3);
+  for (int y = 4; y <= 24; ++y) path.emplace_back(35, y);
+  const cv::Rect block(14, 8, 12, 8);
+  const auto blockWithin = [&](int u, int v, int radius) {
+    return cv::Rect(u - radius, v - radius, 2 * radius + 1, 2 * radius + 1) & block;
+  };
+  solo::ImageBackdrop backdrop;
+  backdrop.obstacle_within_m = [&](int u, int v, int radius) { return blockWithin(u, v, radius).area() > 0 ? 25.0 : 0.0; };
+  backdrop.mesh_has_edge = [](int u0, int v0, int u1, int v1) { return (u1 - u0) * (v1 - v0) == -1; };
+  const solo::HolePatch patch = solo::fillHoleInImage(run, kCamera, {}, {}, path, {}, &backdrop);
+  ASSERT_TRUE(patch.filled) << patch.failure;
+  // Vertices: the path's 74, every interior centre of the visible part (30 x 21 - 96 = 534)
+  // and, hidden, every 4th centre in both axes of the block (x 16, 20, 24; y 8, 12).
+  ASSERT_EQ(patch.new_points.size(), 74u + 534u + 6u);
+  std::vector<Eigen::Vector3d> points = run;
+  points.insert(points.end(), patch.new_points.begin(), patch.new_points.end());
+  int far_from_block = 0;
+  for (const auto& p : patch.new_points) {
+    const Eigen::Vector2d uv = kCamera.project(p);
+    const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
+    if (block.contains(cv::Point(u, v))) {
+      EXPECT_GE(p.z(), 25.0 - 1e-9);
+    }
+    if (blockWithin(u, v, 6).area() == 0) {  // beyond any face's reach: the run's harmonic extension
+      EXPECT_GE(p.z(), 10.0 - 1e-9);
+      EXPECT_LE(p.z(), 12.0 + 1e-9);
+      ++far_from_block;
+    }
+  }
+  EXPECT_GT(far_from_block, 200);
+  std::set<std::pair<long, long>> vertex_pixels;
+  for (const auto& p : points) {
+    const Eigen::Vector2d uv = kCamera.project(p);
+    vertex_pixels.emplace(std::lround(uv.x()), std::lround(uv.y()));
+  }
+  int half_quads = 0, pixel_centres_checked = 0;
+  for (const auto& f : patch.faces) {
+    Eigen::Vector2d uv[3];
+    double inverse_depth[3];
+    for (int k = 0; k < 3; ++k) {
+      uv[k] = kCamera.project(points[f[k]]);
+      inverse_depth[k] = 1.0 / points[f[k]].z();
+    }
+    // A pixel quad with a vertex at each corner takes the mesh's diagonal.
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d a = uv[k], b = uv[(k + 1) % 3], d = b - a;
+      const bool corners = vertex_pixels.count({std::lround(a.x()), std::lround(b.y())}) &&
+                           vertex_pixels.count({std::lround(b.x()), std::lround(a.y())});
+      if (corners && std::abs(std::abs(d.x()) - 1) < 1e-6 && std::abs(std::abs(d.y()) - 1) < 1e-6) {
+        EXPECT_LT(d.x() * d.y(), 0) << uv[k].transpose() << " to " << uv[(k + 1) % 3].transpose();
+        ++half_quads;
+      }
+    }
+    // No face passes in front of the surface: at every block pixel centre it covers, it is
+    // at least as far (inverse depth is affine in the image over a planar triangle).
+    const double area = (uv[1] - uv[0]).x() * (uv[2] - uv[0]).y() - (uv[1] - uv[0]).y() * (uv[2] - uv[0]).x();
+    for (int v = block.y; v < block.y + block.height; ++v)
+      for (int u = block.x; u < block.x + block.width; ++u) {
+        double w[3];
+        bool inside = true;
+        for (int i = 0; i < 3; ++i) {
+          const Eigen::Vector2d& a = uv[(i + 1) % 3];
+          const Eigen::Vector2d& b = uv[(i + 2) % 3];
+          w[i] = ((b - a).x() * (v - a.y()) - (b - a).y() * (u - a.x())) / area;
+          inside = inside && w[i] > -1e-9;
+        }
+        if (!inside) continue;
+        EXPECT_GE(1.0 / (w[0] * inverse_depth[0] + w[1] * inverse_depth[1] + w[2] * inverse_depth[2]), 25.0 - 1e-6);
+        ++pixel_centres_checked;
+      }
+  }
+  EXPECT_GT(half_quads, 500);
+  EXPECT_GE(pixel_centres_checked, 96);
 }
 
 TEST(ImageHoleFilling, PolygonsThatAreNotSimpleAreLeftToThe3dMethods) {
@@ -622,84 +709,153 @@ TEST(ImageHoleFilling, AnOccluderSplittingThePlaneClosesWithTheRunsOfBothSheetsI
   EXPECT_GT(over_step, 10);
 }
 
-TEST(ImageHoleFilling, RunsJoinedAroundAnOccluderWithAFartherSurfaceSeenThroughItStayOpen) {
+TEST(ImageHoleFilling, RunsJoinedAroundAnOccluderWithAFartherSurfaceSeenThroughItCloseAsABackdrop) {
   // A wider building at 4 m (columns 10..29 from row 5 to the bottom frame) splitting the
   // plane, with a window (columns 14..21, rows 10..17) through which a wall at 30 m is seen:
   // a sheet of its own (98 faces, kept), farther than the plane. The two runs join into one
   // hole as above, but the region shows that farther surface at 64 of its vertices, far over
-  // 5 % of those covered by the mesh: it is not all behind the building, and a patch pinned
-  // behind the wall would be wrong. The image-space fill refuses it; the joined hole gets no
-  // chord (its runs belong to two sheets): left open with the reason, nothing added.
+  // 5 % of those covered by the mesh: it is not all behind the building, and the plane's
+  // extension there would hide the wall. The image-space fill refuses it; the joined hole
+  // gets no chord (its runs belong to two sheets). Left open by its own closing, it is tried
+  // again as a backdrop: the same two runs, a patch pinned behind everything in the region,
+  // the building and the wall seen through its window alike. Without backdrops it stays open.
   const Eigen::Vector3d normal = Eigen::Vector3d(-0.3, -0.2, 1.0).normalized();
   cv::Mat depth = planeSkyAndBox(normal, 10.0, 10, cv::Rect(10, 5, 20, kCamera.height - 5), 4.0f);
-  depth(cv::Rect(14, 10, 8, 8)).setTo(30.0f);
-  solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, {});
-  const solo::StageReport r = solo::cleanDepthMesh(m, depth, {}, {});
-  EXPECT_EQ(metricInt(r, "found_frame_holes"), 1);
-  EXPECT_EQ(metricInt(r, "found_frame_holes_merged"), 1);
-  EXPECT_EQ(metricInt(r, "found_frame_hole_runs_merged"), 2);
-  EXPECT_EQ(metricInt(r, "found_silhouette_loops"), 1);  // the wall seen through the window
-  // The building's own loop around the window is an inner hole, closed in the building's
-  // plane as before (by the 3D methods: its image-space patch would hide the wall); the joined
-  // hole is the one left open.
-  EXPECT_EQ(metricInt(r, "found_inner_holes"), 1);
-  EXPECT_EQ(metricInt(r, "holes_filled"), 1);
-  EXPECT_EQ(metricInt(r, "holes_filled_image_space"), 0);
-  EXPECT_EQ(metricInt(r, "holes_left_open"), 1);
-  EXPECT_EQ(metricInt(r, "after_frame_holes"), 1);
-  EXPECT_EQ(metricInt(r, "after_frame_holes_merged"), 1);  // found again, still open
-  EXPECT_EQ(metricInt(r, "after_inner_holes"), 0);
-  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
-  // Nothing was added behind the building: every patch vertex is the window's, at 4 m.
-  int fill = 0;
-  for (const auto v : m.mesh.vertices())
-    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::hole_fill) {
-      EXPECT_LT(m.mesh.point(v)[2], 4.5);
+  const cv::Rect window(14, 10, 8, 8);
+  depth(window).setTo(30.0f);
+  for (const bool backdrops : {false, true}) {
+    solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, {});
+    solo::DepthMeshCleanupOptions options;
+    options.backdrops = backdrops;
+    const solo::StageReport r = solo::cleanDepthMesh(m, depth, {}, {}, options);
+    EXPECT_EQ(metricInt(r, "found_frame_holes"), 1);
+    EXPECT_EQ(metricInt(r, "found_frame_holes_merged"), 1);
+    EXPECT_EQ(metricInt(r, "found_frame_hole_runs_merged"), 2);
+    EXPECT_EQ(metricInt(r, "found_silhouette_loops"), 1);  // the wall seen through the window
+    // The building's own loop around the window is an inner hole, closed in the building's
+    // plane as before (by the 3D methods: its image-space patch would hide the wall).
+    EXPECT_EQ(metricInt(r, "found_inner_holes"), 1);
+    EXPECT_EQ(metricInt(r, "after_inner_holes"), 0);
+    EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
+    int refused = 0;
+    for (const auto& note : r.notes)
+      refused += note.find("left open") != std::string::npos && note.find("farther than the extension") != std::string::npos;
+    EXPECT_EQ(refused, 1);
+    int fill = 0, behind_building = 0, behind_wall = 0;
+    for (const auto v : m.mesh.vertices()) {
+      if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) != solo::VertexOrigin::hole_fill) continue;
       ++fill;
+      const auto& q = m.mesh.point(v);
+      const Eigen::Vector2d uv = kCamera.project(Eigen::Vector3d(q[0], q[1], q[2]));
+      const cv::Point pixel(static_cast<int>(std::lround(uv.x())), static_cast<int>(std::lround(uv.y())));
+      if (q[2] < 4.5) continue;  // the window's patch, in the building's plane
+      EXPECT_TRUE(backdrops);
+      EXPECT_GT(q[2], 4.0 + 0.1 - 1e-9);
+      ++behind_building;
+      if (window.contains(pixel)) {
+        EXPECT_GE(q[2], 30.0 + 0.1 - 1e-6);
+        ++behind_wall;
+      }
     }
-  EXPECT_EQ(fill, metricInt(r, "hole_vertices_added"));
-  int refused = 0;
-  for (const auto& note : r.notes)
-    refused += note.find("left open") != std::string::npos && note.find("farther than the extension") != std::string::npos;
-  EXPECT_EQ(refused, 1);
+    EXPECT_EQ(fill, metricInt(r, "hole_vertices_added"));
+    if (!backdrops) {
+      EXPECT_EQ(metricInt(r, "holes_filled"), 1);
+      EXPECT_EQ(metricInt(r, "holes_left_open"), 1);
+      EXPECT_EQ(metricInt(r, "after_frame_holes"), 1);
+      EXPECT_EQ(metricInt(r, "after_frame_holes_merged"), 1);  // found again, still open
+      continue;
+    }
+    EXPECT_EQ(metricInt(r, "frame_holes_retried_as_backdrop"), 1);
+    EXPECT_EQ(metricInt(r, "backdrop_runs_after_retry"), 2);
+    EXPECT_EQ(metricInt(r, "holes_filled"), 2);
+    EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
+    EXPECT_EQ(metricInt(r, "after_frame_holes"), 0);
+    EXPECT_GT(behind_building, 100);
+    EXPECT_EQ(behind_wall, 4);  // hidden: every 4th centre (columns 16, 20; rows 12, 16)
+  }
 }
 
-TEST(ImageHoleFilling, DefaultSceneClosesEveryFrameHoleItCanBound) {
+TEST(ImageHoleFilling, DefaultSceneClosesEveryFrameHole) {
   // data/default/scene.json as `solo mesh from-depth` meshes it. Measured: 1 906 inner holes
-  // and 40 frame holes found (counts of the spurious-face removal of this tree: its small-jump
-  // and occluded-line tests cut 217 more faces of this estimated depth than before, which made
-  // 19 more inner holes, 1 887 before); every inner
-  // hole and all 29 frame holes with a region to fill close in image space. The 11 not
-  // attempted end on the sky line or have sky on the frame between their ends, their chord
-  // polygon encloses their own sheet, and no closing path along the sky line exists for them:
-  // the outline of the pixels with depth leads from their last vertex onto a surface no nearer
-  // than their ends (9: the next facade along the top frame, their own surface along a side
-  // frame) or onto one itself behind an occluder (2: a car behind a nearer one); these are facades behind trees and cars whose other side
-  // is another sheet of the same facade. Closing along the sky line moved no count here (it
-  // closes the sky-line cases of the tests above), and neither did joining the runs of several
-  // sheets around one occluder into one hole (found_frame_holes_merged 0: it closes the split
-  // plane above): from 7 of the 11 runs' ends the outline steps at once onto a farther pixel
-  // that starts no such run (the next far sheet meets the run's end on the frame with no
-  // occluder between them), from 3 it reaches another such run's start over pixels no nearer
-  // than that run's end (the estimated depth of foliage and cars between facade fragments),
-  // and 1 finds nothing; so no count moved. After the fills and the solids the classification
-  // finds 8 such loops, and no other frame hole.
+  // and 40 frame runs found; every inner hole and the 29 frame holes with a region of their own
+  // close in image space. The other 11 (facades behind trees and cars, the road's far edge
+  // behind parked cars: a patchwork of far sheets, traced in docs/mesh.md) have no closing path
+  // along the frame or the sky line, none over nearer pixels to another run, and closed by
+  // their chord they enclose their own sheet: without backdrops they stay open (8 loops after
+  // the solids). As a backdrop their outline trace joins all 11 into one hole (they are
+  // consecutive pieces of the boundary between the far layer and the near one), filled behind
+  // everything seen inside it: no frame hole is left, with no self-intersection.
   const solo::Scene scene = solo::loadScene(std::filesystem::path(SOLO_PROJECT_DATA_DIR) / "default/scene.json");
   solo::DepthMeshCleanupOptions options;
-  options.evaluate = false;
   solo::StageReport report;
   solo::meshFromScene(scene.depth_m, scene.camera, scene.instances, {}, options, report);
   EXPECT_EQ(metricInt(report, "found_inner_holes"), 1906);
-  EXPECT_EQ(metricInt(report, "found_frame_holes"), 40);
-  EXPECT_EQ(metricInt(report, "found_frame_holes_unclosable"), 11);
-  EXPECT_EQ(metricInt(report, "found_frame_holes_sky_line"), 0);
+  EXPECT_EQ(metricInt(report, "found_frame_holes"), 29 + 1);
+  EXPECT_EQ(metricInt(report, "found_frame_holes_backdrop"), 1);
+  EXPECT_EQ(metricInt(report, "found_frame_hole_runs_backdrop"), 11);
+  EXPECT_EQ(metricInt(report, "found_frame_holes_unclosable"), 0);
   EXPECT_EQ(metricInt(report, "found_frame_holes_merged"), 0);
-  EXPECT_EQ(metricInt(report, "holes_filled"), 1906 + 40 - 11);
-  EXPECT_EQ(metricInt(report, "holes_filled_image_space"), 1906 + 40 - 11);
+  EXPECT_EQ(metricInt(report, "holes_filled"), 1906 + 30);
+  EXPECT_EQ(metricInt(report, "holes_filled_image_space"), 1906 + 30);
   EXPECT_EQ(metricInt(report, "holes_left_open"), 0);
   EXPECT_EQ(metricInt(report, "after_inner_holes"), 0);
-  EXPECT_EQ(metricInt(report, "after_frame_holes"), 8);
-  EXPECT_EQ(metricInt(report, "after_frame_holes_unclosable"), 8);  // every frame hole left is one of those
+  EXPECT_EQ(metricInt(report, "after_frame_holes"), 0);
+  EXPECT_EQ(metricInt(report, "after_self_intersecting_pairs"), 0);
+  EXPECT_EQ(metricInt(report, "after_non_manifold_edges"), 0);
+  EXPECT_EQ(metricInt(report, "after_non_manifold_vertices"), 0);
+  EXPECT_EQ(metricInt(report, "after_degenerate_faces"), 0);
+  // Without backdrops: the 11 runs unclosable, 8 frame loops left.
+  options.backdrops = false;
+  options.evaluate = false;
+  solo::StageReport without;
+  solo::meshFromScene(scene.depth_m, scene.camera, scene.instances, {}, options, without);
+  EXPECT_EQ(metricInt(without, "found_frame_holes_unclosable"), 11);
+  EXPECT_EQ(metricInt(without, "after_frame_holes"), 8);
+}
+
+TEST(ImageHoleFilling, BackdropsCloseMostFrameHolesOfRandomBlockScenesWithoutSelfIntersection) {
+  // 150 random scenes (seeded): sky over the top 2..7 rows, a wall at 20 m and 2..5 boxes of
+  // random place, size and depth (4..39 m) painted over it: far things seen through nearer
+  // ones, occluders rising into the sky, patchworks at the frame. Cleaned with and without
+  // backdrops (which also take the frame holes whose own patch met the mesh). Measured: 94
+  // frame loops left without, 19 with (56 backdrops, 27 frame holes retried as one); no
+  // self-intersection either way.
+  cv::RNG rng(12345);
+  std::int64_t left[2] = {0, 0}, pairs[2] = {0, 0}, backdrops = 0, retried = 0;
+  for (int trial = 0; trial < 150; ++trial) {
+    cv::Mat depth(kCamera.height, kCamera.width, CV_32F, cv::Scalar(0.0f));
+    const int sky_rows = rng.uniform(2, 8);
+    depth(cv::Rect(0, sky_rows, kCamera.width, kCamera.height - sky_rows)).setTo(20.0f);
+    const int boxes = rng.uniform(2, 6);
+    for (int b = 0; b < boxes; ++b) {
+      const int x = rng.uniform(0, kCamera.width - 4), y = rng.uniform(0, kCamera.height - 2);
+      const int w = rng.uniform(3, kCamera.width - x + 1), h = rng.uniform(3, kCamera.height - y + 1);
+      depth(cv::Rect(x, y, std::min(w, kCamera.width - x), std::min(h, kCamera.height - y)))
+          .setTo(static_cast<float>(rng.uniform(4, 40)));
+    }
+    for (int with = 0; with < 2; ++with) {
+      solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, {});
+      solo::DepthMeshCleanupOptions options;
+      options.backdrops = with == 1;
+      const solo::StageReport r = solo::cleanDepthMesh(m, depth, {}, {}, options);
+      left[with] += metricInt(r, "after_frame_holes");
+      pairs[with] += metricInt(r, "after_self_intersecting_pairs");
+      EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0) << "trial " << trial;
+      EXPECT_EQ(metricInt(r, "after_degenerate_faces"), 0) << "trial " << trial;
+      if (with) {
+        backdrops += metricInt(r, "found_frame_holes_backdrop");
+        if (r.find("frame_holes_retried_as_backdrop")) retried += metricInt(r, "frame_holes_retried_as_backdrop");
+      }
+    }
+  }
+  std::printf("frame loops left: %lld without backdrops, %lld with; backdrops %lld, retried %lld\n",
+              static_cast<long long>(left[0]), static_cast<long long>(left[1]), static_cast<long long>(backdrops),
+              static_cast<long long>(retried));
+  EXPECT_EQ(pairs[0], 0);
+  EXPECT_EQ(pairs[1], 0);
+  EXPECT_GT(backdrops, 20);
+  EXPECT_GT(retried, 0);
+  EXPECT_LE(4 * left[1], left[0]);  // at most a quarter left
 }
 
 }  // namespace

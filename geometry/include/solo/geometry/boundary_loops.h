@@ -69,12 +69,27 @@ struct DepthLoops {
   /// around one occluder, none closable alone, joined by paths along the occluder's outline
   /// over nearer pixels only (tried last, before the chord); and how many runs they hold.
   std::int64_t frame_holes_merged = 0, frame_hole_runs_merged = 0;
+  /// Per hole: 1 for a frame hole closed as a backdrop (also 1 in `merged`: it may span sheets).
+  std::vector<std::uint8_t> backdrop;
+  /// Per hole: 1 for a frame hole, 0 for an inner hole.
+  std::vector<std::uint8_t> frame_hole;
+  /// Frame holes (counted in frame_holes, and in holes) closed as a backdrop: runs that no path
+  /// over nearer pixels closes and whose chord encloses their own sheet (a patchwork of far
+  /// sheets behind a band of occluders), chained as above with no depth condition along the
+  /// outline of the pixels with depth until it comes back, alone or with others; the region
+  /// inside is what lies behind everything seen there, and its patch is pinned behind every
+  /// vertex inside (fillHoleInImage's backdrop mode). And how many runs they hold.
+  std::int64_t frame_holes_backdrop = 0, frame_hole_runs_backdrop = 0;
   std::vector<std::string> unclosable_notes;
 };
 
 /// Classifies the loops of a depth mesh. `had_depth` (CV_8U, the depth map's size) marks the
 /// pixels that had a vertex before any face was removed: its complement is sky and invalid depth.
 /// `depth_m` is the map the mesh was made from.
-DepthLoops classifyDepthLoops(const DepthMesh& mesh, const cv::Mat& had_depth, const cv::Mat& depth_m);
+/// How frame holes become backdrops: never (those a backdrop would close are reported
+/// unclosable), those no other closing reaches, or every one (after the other closings failed).
+enum class BackdropMode { off, unclosable, every_frame_hole };
+DepthLoops classifyDepthLoops(const DepthMesh& mesh, const cv::Mat& had_depth, const cv::Mat& depth_m,
+                              BackdropMode backdrops = BackdropMode::unclosable);
 
 }  // namespace solo

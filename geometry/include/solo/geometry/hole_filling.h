@@ -96,11 +96,31 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 /// `closing_path_after` (optional, one per closing-path point, non-decreasing): the boundary
 /// index each point follows in the polygon, so that the path may come in several pieces
 /// between known runs (a hole joining several sheets' runs); empty: all after the last.
+/// `backdrop` (a frame hole closed as a backdrop, DepthLoops::backdrop): the region is what
+/// lies behind everything seen in it, so farther surfaces inside are expected (no 5 % rule).
+/// Every vertex is pinned behind every surface within the reach of its faces
+/// (obstacle_within_m at the length of its longest edge plus a pixel), so no patch face passes
+/// in front of a mesh surface. Interior vertices: every pixel centre within 2 pixels of the
+/// polygon's edges (where the patch meets the mesh at the runs) and wherever nothing is seen
+/// (the visible part), every hidden_spacing_px-th elsewhere; in each pixel quad with all four
+/// corners the patch takes the mesh's diagonal, where it has one (two halves split differently
+/// overlap, and a patch face beside a run vertex would cross a farther mesh face). The
+/// extension has no affine part (over a region this large the boundary's plane may reach
+/// behind the camera): the inverse depth is harmonic with the run's values and no flux across
+/// the path, so it stays within their range, then pinned (two solves, then clamped).
+struct ImageBackdrop {
+  /// Whether the mesh has an edge between the vertices of pixels (u0, v0) and (u1, v1).
+  std::function<bool(int u0, int v0, int u1, int v1)> mesh_has_edge;
+  /// The depth (metres) the patch must stay behind within radius_px of pixel (u, v) (the
+  /// farthest surface seen there plus a clearance); 0 where nothing is seen.
+  std::function<double(int u, int v, int radius_px)> obstacle_within_m;
+  int hidden_spacing_px = 4;
+};
 HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const PinholeCamera& camera,
                           const HoleFillOptions& options = {},
                           const std::function<double(int, int)>& obstacle_depth_m = {},
                           const std::vector<Eigen::Vector2d>& closing_path_px = {},
-                          const std::vector<int>& closing_path_after = {});
+                          const std::vector<int>& closing_path_after = {}, const ImageBackdrop* backdrop = nullptr);
 
 /// For each face of `candidates`, whether it intersects a face of `candidates` or of `others`
 /// other than in what they share by index (the rules of evaluateMesh: no shared vertex, any
@@ -112,6 +132,7 @@ bool patchFacesIntersect(const std::vector<Eigen::Vector3d>& points, const std::
 
 std::vector<std::uint8_t> findIntersectingFaces(const std::vector<Eigen::Vector3d>& points,
                                                 const std::vector<std::array<int, 3>>& candidates,
-                                                const std::vector<std::array<int, 3>>& others);
+                                                const std::vector<std::array<int, 3>>& others,
+                                                bool candidates_among_themselves = true);
 
 }  // namespace solo

@@ -22,6 +22,10 @@ struct DepthMeshCleanupOptions {
   std::int64_t min_fragment_faces = 64;  ///< smaller connected pieces are removed
   bool fill_holes = true;
   HoleFillOptions hole_filling;
+  /// Close the frame holes no path over nearer pixels closes (a patchwork of far sheets behind
+  /// a band of occluders) as a backdrop behind everything seen in their region
+  /// (DepthLoops::backdrop); off: they stay open, reported unclosable.
+  bool backdrops = true;
   bool close_solids = true;
   ForegroundSolidOptions solids;
   bool evaluate = true;  ///< run evaluateMesh on the result (self-intersections included)

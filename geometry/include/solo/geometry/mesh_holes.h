@@ -53,7 +53,18 @@ struct PixelMapping {
   /// Optional, per hole (DepthLoops::image_space_only): non-zero = no 3D fallback after the
   /// image-space fill (a large frame hole closed by its chord, on which every 3D patch fails).
   const std::vector<std::uint8_t>* image_space_only = nullptr;
+  /// Optional, per hole (DepthLoops::backdrop): non-zero = fillHoleInImage in backdrop mode.
+  const std::vector<std::uint8_t>* backdrop = nullptr;
+  /// Optional (CV_32F, width x height, metres, 0 for none): the farthest surface at each pixel
+  /// centre (farthestSurfaceDepth); image-space patches stay behind it as behind the pixels'
+  /// own vertices. Given for backdrops, filled after every other hole.
+  const cv::Mat* farthest_surface_m = nullptr;
 };
+
+/// The depth (metres) of the farthest live face of `mesh` along each pixel centre's ray
+/// (`camera`, a width x height image; CV_32F, 0 where no face covers the centre): rasterized
+/// in inverse depth, which is affine in the image over a planar triangle.
+cv::Mat farthestSurfaceDepth(const SurfaceMesh& mesh, const PinholeCamera& camera, int width, int height);
 
 /// Fills the holes (loops in border half-edge direction, see findBoundaryLoops). With `pixels`
 /// (and options.image_space_first) every hole is first filled in image space (fillHoleInImage);
