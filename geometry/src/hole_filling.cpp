@@ -221,9 +221,12 @@ std::vector<Point2> interiorPixelCentres(const std::vector<Point2>& uv, const Cd
     const auto* row = mask.ptr<std::uint8_t>(y);
     for (int x = 0; x < width; ++x) {
       if (!row[x] || (x + x0) % step != 0) continue;
-      if (backdrop && !band.at<std::uint8_t>(y, x) && ((x + x0) % spacing != 0 || (y + y0) % spacing != 0) &&
-          !(backdrop->obstacle_within_m && backdrop->obstacle_within_m(x + x0, y + y0, 0) <= 0))
-        continue;  // hidden, off the coarse grid
+      if (backdrop && !band.at<std::uint8_t>(y, x) && ((x + x0) % spacing != 0 || (y + y0) % spacing != 0)) {
+        const bool seen = backdrop->surface_seen ? backdrop->surface_seen(x + x0, y + y0)
+                                                 : !backdrop->obstacle_within_m ||
+                                                       backdrop->obstacle_within_m(x + x0, y + y0, 0) > 0;
+        if (seen) continue;  // hidden, off the coarse grid
+      }
       const Point2 p(x + x0, y + y0);
       Cdt::Locate_type type;
       int li = 0;

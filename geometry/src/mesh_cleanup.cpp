@@ -188,7 +188,8 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
              (source.sky_line_closed[i] && chordEnclosesSheet(source.holes[i])) ||
              source.merged[i];  // its runs belong to several sheets: no chord closes it
     };
-    const auto pass = [&](const DepthLoops& source, const std::vector<std::size_t>& which, const cv::Mat* farthest) {
+    const auto pass = [&](const DepthLoops& source, const std::vector<std::size_t>& which, const cv::Mat* farthest,
+                          const cv::Mat* observed) {
       DepthLoops subset;
       std::vector<std::uint8_t> only;
       for (const std::size_t i : which) {
@@ -204,6 +205,7 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
       mapping.image_space_only = &only;
       mapping.backdrop = &subset.backdrop;
       mapping.farthest_surface_m = farthest;
+      mapping.observed_depth_m = observed;
       return closeHoles(mesh, subset.holes, options.hole_filling, mapping);
     };
     // Backdrops are filled after every other hole: they lie behind everything in their
@@ -211,7 +213,7 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
     std::vector<std::size_t> first_pass, backdrop_holes;
     for (std::size_t i = 0; i < loops.holes.size(); ++i)
       (loops.backdrop[i] ? backdrop_holes : first_pass).push_back(i);
-    holes = pass(loops, first_pass, nullptr);
+    holes = pass(loops, first_pass, nullptr, nullptr);
     // A frame hole its own closing left open (its patch met the mesh) is tried again in a
     // backdrop: the loops are classified again, every frame hole left a backdrop run.
     std::int64_t retried = 0;
@@ -244,7 +246,15 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
             slot =
                 std::max(slot, static_cast<float>(mesh.point(OpenMesh::VertexHandle(i))[2] + t + kBackdropSolidRoom_m));
           }
-      const HoleClosing more = pass(*backdrop_source, backdrop_holes, &farthest);
+      // Where the mesh shows nothing, the depth observed there (the removed surface).
+      cv::Mat observed(m.height, m.width, CV_32F, cv::Scalar(0.0f));
+      for (int v = 0; v < m.height; ++v)
+        for (int u = 0; u < m.width; ++u) {
+          const float z = depth_m.at<float>(v, u);
+          if (had_depth.at<std::uint8_t>(v, u) && std::isfinite(z) && z > 0 && !(farthest.at<float>(v, u) > 0))
+            observed.at<float>(v, u) = z;
+        }
+      const HoleClosing more = pass(*backdrop_source, backdrop_holes, &farthest, &observed);
       if (backdrop_source == &again && more.left_open == 0) {
         // The frame holes left open are closed now, inside the backdrops (counted there).
         holes.holes -= retried;

@@ -394,10 +394,13 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
   // radius 0, 1, 2, 4, 8 and 16 pixels (a longer reach is scanned directly).
   std::vector<cv::Mat> farthest_within;
   if (by_pixels && pixels->farthest_surface_m && !pixels->farthest_surface_m->empty()) {
-    farthest_within.push_back(*pixels->farthest_surface_m);
+    cv::Mat base = pixels->farthest_surface_m->clone();
+    if (pixels->observed_depth_m && pixels->observed_depth_m->size() == base.size())
+      cv::max(base, *pixels->observed_depth_m, base);
+    farthest_within.push_back(base);
     for (int radius = 1; radius <= 16; radius *= 2) {
       cv::Mat wider;
-      cv::dilate(*pixels->farthest_surface_m, wider, cv::Mat::ones(2 * radius + 1, 2 * radius + 1, CV_8U));
+      cv::dilate(base, wider, cv::Mat::ones(2 * radius + 1, 2 * radius + 1, CV_8U));
       farthest_within.push_back(std::move(wider));
     }
   }
@@ -418,6 +421,11 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
     }
     return farthest > 0 ? farthest + kObstacleClearance_m : 0.0;
   };
+  if (by_pixels && pixels->farthest_surface_m && !pixels->farthest_surface_m->empty())
+    backdrop.surface_seen = [&](int u, int v) {
+      const cv::Mat& seen = *pixels->farthest_surface_m;
+      return seen.at<float>(std::clamp(v, 0, seen.rows - 1), std::clamp(u, 0, seen.cols - 1)) > 0;
+    };
   backdrop.mesh_has_edge = [&](int u0, int v0, int u1, int v1) {
     const auto live = [&](int u, int v) {
       if (u < 0 || v < 0 || u >= pixels->width || v >= pixels->height) return OpenMesh::VertexHandle();

@@ -101,19 +101,22 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 /// Every vertex is pinned behind every surface within the reach of its faces
 /// (obstacle_within_m at the length of its longest edge plus a pixel), so no patch face passes
 /// in front of a mesh surface. Interior vertices: every pixel centre within 2 pixels of the
-/// polygon's edges (where the patch meets the mesh at the runs) and wherever nothing is seen
+/// polygon's edges (where the patch meets the mesh at the runs) and wherever no surface is seen
 /// (the visible part), every hidden_spacing_px-th elsewhere; in each pixel quad with all four
 /// corners the patch takes the mesh's diagonal, where it has one (two halves split differently
 /// overlap, and a patch face beside a run vertex would cross a farther mesh face). The
 /// extension has no affine part (over a region this large the boundary's plane may reach
 /// behind the camera): the inverse depth is harmonic with the run's values and no flux across
-/// the path, so it stays within their range, then pinned (two solves, then clamped).
+/// the path, so it stays within their range (one solve), then clamped behind the obstacles.
 struct ImageBackdrop {
   /// Whether the mesh has an edge between the vertices of pixels (u0, v0) and (u1, v1).
   std::function<bool(int u0, int v0, int u1, int v1)> mesh_has_edge;
   /// The depth (metres) the patch must stay behind within radius_px of pixel (u, v) (the
-  /// farthest surface seen there plus a clearance); 0 where nothing is seen.
+  /// farthest surface seen there plus a clearance); 0 for none.
   std::function<double(int u, int v, int radius_px)> obstacle_within_m;
+  /// Whether a surface of the mesh is seen at pixel (u, v) (the patch is hidden there); unset:
+  /// wherever obstacle_within_m(u, v, 0) is positive.
+  std::function<bool(int u, int v)> surface_seen;
   int hidden_spacing_px = 4;
 };
 HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const PinholeCamera& camera,

@@ -59,6 +59,11 @@ struct PixelMapping {
   /// centre (farthestSurfaceDepth); image-space patches stay behind it as behind the pixels'
   /// own vertices. Given for backdrops, filled after every other hole.
   const cv::Mat* farthest_surface_m = nullptr;
+  /// Optional (CV_32F, width x height, metres, 0 for none): the depth observed where the mesh
+  /// shows no surface (pixels whose faces were all removed: foliage, far fragments, depth-jump
+  /// strips). A backdrop stays behind it too: where the removed surface was farther than the
+  /// backdrop's extension (a far building cut into fragments), the backdrop follows it.
+  const cv::Mat* observed_depth_m = nullptr;
 };
 
 /// The depth (metres) of the farthest live face of `mesh` along each pixel centre's ray
