@@ -185,10 +185,12 @@ bool facesIntersect(const std::vector<Point>& points, const std::array<int, 3>& 
 
 
 /// Pixel centres inside the polygon and about 2 pixels or more from its edges (a band of width
-/// 2 along the edges is cleared; with `every_pixel`, none is and every centre inside is kept),
-/// every `step`-th in both axes (step grows until at most max_points are left).
+/// 2 along the edges is cleared), every `step`-th in both axes (step grows until at most
+/// max_points are left). For a backdrop: every centre inside within about 1.5 pixels of an edge
+/// between two known points (`known`, per polygon point: where the patch meets the mesh) or
+/// where no surface is seen, every hidden_spacing_px-th elsewhere.
 std::vector<Point2> interiorPixelCentres(const std::vector<Point2>& uv, const Cdt& cdt, int max_points,
-                                         const ImageBackdrop* backdrop) {
+                                         const ImageBackdrop* backdrop, const std::vector<std::uint8_t>& known) {
   double u0 = 1e300, v0 = 1e300, u1 = -1e300, v1 = -1e300;
   for (const auto& p : uv) u0 = std::min(u0, p.x()), v0 = std::min(v0, p.y()), u1 = std::max(u1, p.x()), v1 = std::max(v1, p.y());
   const int x0 = static_cast<int>(std::floor(u0)), y0 = static_cast<int>(std::floor(v0));
@@ -201,12 +203,18 @@ std::vector<Point2> interiorPixelCentres(const std::vector<Point2>& uv, const Cd
     polygon[0].emplace_back(static_cast<int>(std::lround((p.x() - x0) * (1 << kShift))),
                             static_cast<int>(std::lround((p.y() - y0) * (1 << kShift))));
   cv::fillPoly(mask, polygon, cv::Scalar(255), cv::LINE_8, kShift);
-  // A backdrop keeps the band along the edges (the raster is widened; the triangulation decides).
+  // A backdrop keeps the centres along the edges (the raster is widened; the triangulation
+  // decides), at full resolution along the runs.
   cv::Mat band;
   if (backdrop) {
     band = cv::Mat::zeros(height, width, CV_8U);
     cv::polylines(band, polygon, true, cv::Scalar(255), 3, cv::LINE_8, kShift);
     mask |= band;
+    band.setTo(0);
+    const std::size_t count = polygon[0].size();
+    for (std::size_t i = 0; i < count; ++i)
+      if (i < known.size() && known[i] && known[(i + 1) % count])
+        cv::line(band, polygon[0][i], polygon[0][(i + 1) % count], cv::Scalar(255), 3, cv::LINE_8, kShift);
   } else {
     cv::polylines(mask, polygon, true, cv::Scalar(0), 2, cv::LINE_8, kShift);
   }
@@ -371,7 +379,8 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
     uv.emplace_back(q.x(), q.y());
   }
   std::vector<Point2> polygon_uv;
-  for (const int i : order) polygon_uv.push_back(uv[i]);
+  std::vector<std::uint8_t> polygon_known;  // a boundary point (known depth), not a path point
+  for (const int i : order) polygon_uv.push_back(uv[i]), polygon_known.push_back(i < n);
   double twice_area = 0;
   for (int i = 0; i < polygon_size; ++i)
     twice_area += polygon_uv[i].x() * polygon_uv[(i + 1) % polygon_size].y() -
@@ -402,7 +411,7 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
     // The unknowns: the closing path's points (free: their depth comes from the extension too),
     // then the interior pixel centres; index polygon_size + k is interior[k].
     const std::vector<Point2> interior =
-        interiorPixelCentres(polygon_uv, cdt, options.max_image_interior_vertices, backdrop_mode);
+        interiorPixelCentres(polygon_uv, cdt, options.max_image_interior_vertices, backdrop_mode, polygon_known);
     const int m_interior = static_cast<int>(interior.size());
     Cdt::Vertex_handle last = handles[polygon_size - 1];
     for (int k = 0; k < m_interior; ++k) {

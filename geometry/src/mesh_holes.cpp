@@ -147,8 +147,13 @@ bool patchMeetsDepthMesh(const Attempt& attempt, std::size_t begin, std::size_t 
                          const std::vector<Eigen::Vector3d>& points, const SurfaceMesh& mesh,
                          const PixelMapping& pixels) {
   std::vector<int> near;
+  // Faces already listed for the current patch face: stamped with its number (no sort).
+  thread_local std::vector<std::uint32_t> stamp;
+  thread_local std::uint32_t current = 0;
+  if (stamp.size() < mesh.n_faces()) stamp.assign(mesh.n_faces(), 0), current = 0;
   for (std::size_t face = begin; face < end; ++face) {
     const Face& g = attempt.faces[face];
+    if (++current == 0) std::fill(stamp.begin(), stamp.end(), 0), current = 1;
     Eigen::Vector2d uv[3];
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector3d& p = points[g[k]];
@@ -168,11 +173,12 @@ bool patchMeetsDepthMesh(const Attempt& attempt, std::size_t begin, std::size_t 
         const OpenMesh::VertexHandle vh(vi);
         if (mesh.status(vh).deleted()) continue;
         for (const auto f : mesh.vf_range(vh))
-          if (!mesh.status(f).deleted()) near.push_back(f.idx());
+          if (stamp[f.idx()] != current && !mesh.status(f).deleted()) {
+            stamp[f.idx()] = current;
+            near.push_back(f.idx());
+          }
       }
     }
-    std::sort(near.begin(), near.end());
-    near.erase(std::unique(near.begin(), near.end()), near.end());
     for (const int fi : near) {
       Face t{};
       int k = 0;
