@@ -275,6 +275,7 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
     report.add("foreground_solids", solids.solids);
     report.add("solid_faces_added", solids.faces_added);
     report.add("solid_back_vertices_clamped", solids.vertices_clamped);
+    report.add("floating_sheets_closed", solids.floating_sheets);
     std::string classes;
     for (const auto& c : solids.classes) classes += (classes.empty() ? "" : " ") + c;
     report.add("foreground_solids_per_class", classes);

@@ -804,6 +804,12 @@ TEST(ImageHoleFilling, DefaultSceneClosesEveryFrameHole) {
   EXPECT_EQ(metricInt(report, "after_non_manifold_edges"), 0);
   EXPECT_EQ(metricInt(report, "after_non_manifold_vertices"), 0);
   EXPECT_EQ(metricInt(report, "after_degenerate_faces"), 0);
+  // The 86 floating sheets (far fragments seen between leaves, 67 of them of no thing class)
+  // are closed as slabs: the only boundary loop left is the border (frame and sky line).
+  EXPECT_EQ(metricInt(report, "found_silhouette_loops"), 86);
+  EXPECT_EQ(metricInt(report, "floating_sheets_closed"), 67);
+  EXPECT_EQ(metricInt(report, "after_silhouette_loops"), 0);
+  EXPECT_EQ(metricInt(report, "after_boundary_loops_total"), 1);
   // Without backdrops: the 11 runs unclosable, 8 frame loops left.
   options.backdrops = false;
   options.evaluate = false;
@@ -811,6 +817,44 @@ TEST(ImageHoleFilling, DefaultSceneClosesEveryFrameHole) {
   solo::meshFromScene(scene.depth_m, scene.camera, scene.instances, {}, options, without);
   EXPECT_EQ(metricInt(without, "found_frame_holes_unclosable"), 11);
   EXPECT_EQ(metricInt(without, "after_frame_holes"), 8);
+}
+
+TEST(ImageHoleFilling, AFloatingSheetOfAFarSurfaceIsClosedIntoASlab) {
+  // A wall at 20 m (building) under sky rows 0..4, and a piece of a farther building at 40 m
+  // seen through it (columns 15..24, rows 12..19): a sheet whose outline touches neither the
+  // frame nor the sky, all behind the wall. Its outline is no border: it is closed into a slab
+  // 0.2 m thick (ForegroundSolidOptions::floating_sheet_thickness_m), so the only boundary loop
+  // left is the wall's border. (The wall's own loop around it is an inner hole, filled in the
+  // wall's plane as every inner hole is, which hides the piece: see docs/mesh.md.)
+  cv::Mat depth(kCamera.height, kCamera.width, CV_32F, cv::Scalar(0.0f));
+  depth(cv::Rect(0, 5, kCamera.width, kCamera.height - 5)).setTo(20.0f);
+  const cv::Rect piece(15, 12, 10, 8);
+  depth(piece).setTo(40.0f);
+  const cv::Mat instances(kCamera.height, kCamera.width, CV_32S, cv::Scalar(11));  // building
+  solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, instances);
+  const solo::StageReport r = solo::cleanDepthMesh(m, depth, instances, {});
+  EXPECT_EQ(metricInt(r, "found_silhouette_loops"), 1);
+  EXPECT_EQ(metricInt(r, "floating_sheets_closed"), 1);
+  EXPECT_EQ(metricInt(r, "foreground_solids"), 1);
+  EXPECT_EQ(metricInt(r, "after_silhouette_loops"), 0);
+  EXPECT_EQ(metricInt(r, "after_boundary_loops_total"), 1);
+  EXPECT_EQ(metricInt(r, "after_border_loops"), 1);
+  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
+  EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0);
+  // Every back vertex 0.2 m behind its front along the ray: at 40.2 m (80 of them).
+  int backs = 0;
+  for (const auto v : m.mesh.vertices())
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::solid_back) {
+      EXPECT_NEAR(m.mesh.point(v)[2], 40.2, 1e-9);
+      ++backs;
+    }
+  EXPECT_EQ(backs, piece.area());
+  // Off: the outline stays a silhouette loop.
+  solo::DepthMesh open = solo::meshFromDepth(depth, kCamera, instances);
+  solo::DepthMeshCleanupOptions options;
+  options.solids.floating_sheet_thickness_m = 0;
+  const solo::StageReport o = solo::cleanDepthMesh(open, depth, instances, {}, options);
+  EXPECT_EQ(metricInt(o, "after_silhouette_loops"), 1);
 }
 
 TEST(ImageHoleFilling, BackdropsCloseMostFrameHolesOfRandomBlockScenesWithoutSelfIntersection) {

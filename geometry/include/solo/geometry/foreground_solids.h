@@ -22,6 +22,11 @@ namespace solo {
 struct ForegroundSolidOptions {
   double min_thickness_m = 0.02;
   double clearance_m = 0.05;  ///< gap kept between a solid's back and the surface behind it
+  /// A sheet of any other class whose outline touches neither the frame nor a pixel without
+  /// depth (a piece of a far surface seen through a gap, its surroundings removed) is closed
+  /// the same way with this thickness: its outline would be a boundary loop that is neither the
+  /// frame nor the sky line. 0: left open.
+  double floating_sheet_thickness_m = 0.2;
 };
 
 /// Plausible depth extent along the viewing ray of a thing of this Cityscapes class, metres
@@ -34,11 +39,13 @@ struct SolidClosing {
   std::int64_t solids = 0;           ///< closed into solids
   std::int64_t faces_added = 0, vertices_added = 0;
   std::int64_t vertices_clamped = 0; ///< back vertices held in front of the surface behind
+  std::int64_t floating_sheets = 0;  ///< of the solids, sheets of other classes closed as floating
   std::vector<std::string> classes;  ///< one "class:count" entry per class closed
 };
 
-/// Closes the foreground sheets of `mesh` (garbage collected or not). `background_faces` are
-/// the faces whose depth limits the thickness (the hole patches).
+/// Closes the foreground sheets of `mesh` (before its garbage collection: the pixels that had
+/// a vertex tell the frame and the sky apart). `background_faces` are the faces whose depth
+/// limits the thickness (the hole patches).
 SolidClosing closeForegroundSolids(DepthMesh& mesh, const std::vector<OpenMesh::FaceHandle>& background_faces,
                                    const ForegroundSolidOptions& options = {});
 
