@@ -64,6 +64,28 @@ cv::Mat depthBehind(const DepthMesh& m, const std::vector<OpenMesh::FaceHandle>&
 
 }  // namespace
 
+std::vector<std::uint8_t> floatingSheets(const DepthMesh& m, const std::vector<int>& component, int count) {
+  const SurfaceMesh& mesh = m.mesh;
+  const auto atBorder = [&](OpenMesh::VertexHandle v) {
+    const OpenMesh::Vec2i p = mesh.property(m.properties.pixel, v);
+    if (p[0] <= 0 || p[1] <= 0 || p[0] >= m.width - 1 || p[1] >= m.height - 1) return true;
+    for (int dv = -1; dv <= 1; ++dv)
+      for (int du = -1; du <= 1; ++du)
+        if (m.vertexAt(p[0] + du, p[1] + dv) < 0) return true;
+    return false;
+  };
+  std::vector<std::uint8_t> floating(count, 1), has_boundary(count, 0);
+  for (const auto h : mesh.halfedges()) {
+    if (mesh.status(mesh.edge_handle(h)).deleted() || !mesh.is_boundary(h)) continue;
+    const int c = component[mesh.face_handle(mesh.opposite_halfedge_handle(h)).idx()];
+    if (c < 0) continue;
+    has_boundary[c] = 1;
+    if (floating[c] && atBorder(mesh.from_vertex_handle(h))) floating[c] = 0;
+  }
+  for (int c = 0; c < count; ++c) floating[c] = floating[c] && has_boundary[c];
+  return floating;
+}
+
 double classThicknessM(int class_id) {
   switch (class_id) {
     case 17: return 0.25;
@@ -107,26 +129,10 @@ SolidClosing closeForegroundSolids(DepthMesh& m, const std::vector<OpenMesh::Fac
                                    [](const auto& a, const auto& b) { return a.second < b.second; })->first;
     thickness[c] = classThicknessM(class_of[c]);
   }
-  // Floating sheets: no boundary vertex on the frame or beside a pixel that had no vertex.
-  std::vector<std::uint8_t> floating(count, 1), has_boundary(count, 0);
   if (options.floating_sheet_thickness_m > 0) {
-    const auto atBorder = [&](OpenMesh::VertexHandle v) {
-      const OpenMesh::Vec2i p = mesh.property(props.pixel, v);
-      if (p[0] <= 0 || p[1] <= 0 || p[0] >= m.width - 1 || p[1] >= m.height - 1) return true;
-      for (int dv = -1; dv <= 1; ++dv)
-        for (int du = -1; du <= 1; ++du)
-          if (m.vertexAt(p[0] + du, p[1] + dv) < 0) return true;
-      return false;
-    };
-    for (const auto h : mesh.halfedges()) {
-      if (mesh.status(mesh.edge_handle(h)).deleted() || !mesh.is_boundary(h)) continue;
-      const int c = component[mesh.face_handle(mesh.opposite_halfedge_handle(h)).idx()];
-      if (c < 0) continue;
-      has_boundary[c] = 1;
-      if (floating[c] && atBorder(mesh.from_vertex_handle(h))) floating[c] = 0;
-    }
+    const std::vector<std::uint8_t> floating = floatingSheets(m, component, count);
     for (int c = 0; c < count; ++c)
-      if (thickness[c] <= 0 && floating[c] && has_boundary[c] && !votes[c].empty()) {
+      if (thickness[c] <= 0 && floating[c] && !votes[c].empty()) {
         thickness[c] = options.floating_sheet_thickness_m;
         ++result.floating_sheets;
       }

@@ -111,7 +111,9 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
   report.add("depth_width", std::int64_t{m.width}, "px").add("depth_height", std::int64_t{m.height}, "px");
   report.add("before_vertices", static_cast<std::int64_t>(mesh.n_vertices()));
   report.add("before_faces", liveFaceCount(mesh));
-  if (instances.empty()) report.notes.push_back("no instance map: no instance-boundary cut and no foreground solids");
+  if (instances.empty())
+    report.notes.push_back(
+        "no instance map: no instance-boundary cut and no foreground solids (floating sheets are still closed)");
   if (uncertain.empty()) report.notes.push_back("no uncertain mask: uncertain criterion not applied");
 
   Stopwatch step;
@@ -234,13 +236,27 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
       cv::Mat farthest = farthestSurfaceDepth(mesh, m.camera, m.width, m.height);
       // Foreground things become solids of their class's thickness after this: the backdrop
       // leaves them that room (and some), instead of pressing their backs onto their fronts.
-      if (options.close_solids && !instances.empty())
+      // Floating sheets become slabs too (foreground_solids.h).
+      std::vector<int> sheet_of_vertex;
+      std::vector<std::uint8_t> floating;
+      if (options.close_solids && options.solids.floating_sheet_thickness_m > 0) {
+        int count = 0;
+        const std::vector<int> component = faceComponents(mesh, &count);
+        floating = floatingSheets(m, component, count);
+        sheet_of_vertex.assign(mesh.n_vertices(), -1);
+        for (const auto f : mesh.faces())
+          if (component[f.idx()] >= 0)
+            for (const auto v : mesh.fv_range(f)) sheet_of_vertex[v.idx()] = component[f.idx()];
+      }
+      if (options.close_solids)
         for (int v = 0; v < m.height; ++v)
           for (int u = 0; u < m.width; ++u) {
             const int i = m.vertexAt(u, v);
             if (i < 0 || mesh.status(OpenMesh::VertexHandle(i)).deleted()) continue;
-            const double t = classThicknessM(
+            double t = classThicknessM(
                 cityscapesClassOfInstance(mesh.property(m.properties.instance, OpenMesh::VertexHandle(i))));
+            if (t <= 0 && !floating.empty() && sheet_of_vertex[i] >= 0 && floating[sheet_of_vertex[i]])
+              t = options.solids.floating_sheet_thickness_m;
             if (t <= 0) continue;
             float& slot = farthest.at<float>(v, u);
             slot =
@@ -269,7 +285,7 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
   report.add("seconds_hole_filling", step.seconds(), "s");
 
   step = Stopwatch();
-  if (options.close_solids && !instances.empty()) {
+  if (options.close_solids) {  // without instances: the floating sheets only
     const SolidClosing solids = closeForegroundSolids(m, holes.patch_faces, options.solids);
     report.add("foreground_sheets_considered", solids.sheets);
     report.add("foreground_solids", solids.solids);

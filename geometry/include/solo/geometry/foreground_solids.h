@@ -43,6 +43,11 @@ struct SolidClosing {
   std::vector<std::string> classes;  ///< one "class:count" entry per class closed
 };
 
+/// Per component (`component`: faceComponents' numbering, `count` of them; the mesh before its
+/// garbage collection): 1 for a floating sheet, one with a boundary none of whose vertices is on
+/// the frame or beside a pixel that had no vertex.
+std::vector<std::uint8_t> floatingSheets(const DepthMesh& mesh, const std::vector<int>& component, int count);
+
 /// Closes the foreground sheets of `mesh` (before its garbage collection: the pixels that had
 /// a vertex tell the frame and the sky apart). `background_faces` are the faces whose depth
 /// limits the thickness (the hole patches).
