@@ -56,6 +56,47 @@ void addLoopCounts(StageReport& report, const std::string& prefix, const DepthLo
 // Room (metres) a backdrop leaves behind a foreground solid's back, beyond its thickness.
 constexpr double kBackdropSolidRoom_m = 0.25;
 
+// What a backdrop stays behind (CV_32F maps, metres, 0 for none): `farthest`, the farthest
+// surface at each pixel centre, with the room the foreground solids and floating slabs closed
+// after it will take (their thickness plus kBackdropSolidRoom_m); `observed`, the depth
+// observed where the mesh shows nothing (the removed surface).
+void backdropDepthBounds(const DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
+                         const DepthMeshCleanupOptions& options, cv::Mat& farthest, cv::Mat& observed) {
+  const SurfaceMesh& mesh = m.mesh;
+  farthest = farthestSurfaceDepth(mesh, m.camera, m.width, m.height);
+  std::vector<int> sheet_of_vertex;
+  std::vector<std::uint8_t> floating;
+  if (options.close_solids && options.solids.floating_sheet_thickness_m > 0) {
+    int count = 0;
+    const std::vector<int> component = faceComponents(mesh, &count);
+    floating = floatingSheets(m, component, count);
+    sheet_of_vertex.assign(mesh.n_vertices(), -1);
+    for (const auto f : mesh.faces())
+      if (component[f.idx()] >= 0)
+        for (const auto v : mesh.fv_range(f)) sheet_of_vertex[v.idx()] = component[f.idx()];
+  }
+  if (options.close_solids)
+    for (int v = 0; v < m.height; ++v)
+      for (int u = 0; u < m.width; ++u) {
+        const int i = m.vertexAt(u, v);
+        if (i < 0 || mesh.status(OpenMesh::VertexHandle(i)).deleted()) continue;
+        double t = classThicknessM(
+            cityscapesClassOfInstance(mesh.property(m.properties.instance, OpenMesh::VertexHandle(i))));
+        if (t <= 0 && !floating.empty() && sheet_of_vertex[i] >= 0 && floating[sheet_of_vertex[i]])
+          t = options.solids.floating_sheet_thickness_m;
+        if (t <= 0) continue;
+        float& slot = farthest.at<float>(v, u);
+        slot = std::max(slot, static_cast<float>(mesh.point(OpenMesh::VertexHandle(i))[2] + t + kBackdropSolidRoom_m));
+      }
+  observed = cv::Mat(m.height, m.width, CV_32F, cv::Scalar(0.0f));
+  for (int v = 0; v < m.height; ++v)
+    for (int u = 0; u < m.width; ++u) {
+      const float z = depth_m.at<float>(v, u);
+      if (had_depth.at<std::uint8_t>(v, u) && std::isfinite(z) && z > 0 && !(farthest.at<float>(v, u) > 0))
+        observed.at<float>(v, u) = z;
+    }
+}
+
 // Adds a second closeHoles pass (its holes listed after the first's).
 void appendHoleClosing(HoleClosing& into, const HoleClosing& more) {
   into.holes += more.holes, into.filled += more.filled, into.left_open += more.left_open;
@@ -233,43 +274,8 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
       report.add("backdrop_runs_after_retry", again.frame_hole_runs_backdrop);
     }
     if (!backdrop_holes.empty()) {
-      cv::Mat farthest = farthestSurfaceDepth(mesh, m.camera, m.width, m.height);
-      // Foreground things become solids of their class's thickness after this: the backdrop
-      // leaves them that room (and some), instead of pressing their backs onto their fronts.
-      // Floating sheets become slabs too (foreground_solids.h).
-      std::vector<int> sheet_of_vertex;
-      std::vector<std::uint8_t> floating;
-      if (options.close_solids && options.solids.floating_sheet_thickness_m > 0) {
-        int count = 0;
-        const std::vector<int> component = faceComponents(mesh, &count);
-        floating = floatingSheets(m, component, count);
-        sheet_of_vertex.assign(mesh.n_vertices(), -1);
-        for (const auto f : mesh.faces())
-          if (component[f.idx()] >= 0)
-            for (const auto v : mesh.fv_range(f)) sheet_of_vertex[v.idx()] = component[f.idx()];
-      }
-      if (options.close_solids)
-        for (int v = 0; v < m.height; ++v)
-          for (int u = 0; u < m.width; ++u) {
-            const int i = m.vertexAt(u, v);
-            if (i < 0 || mesh.status(OpenMesh::VertexHandle(i)).deleted()) continue;
-            double t = classThicknessM(
-                cityscapesClassOfInstance(mesh.property(m.properties.instance, OpenMesh::VertexHandle(i))));
-            if (t <= 0 && !floating.empty() && sheet_of_vertex[i] >= 0 && floating[sheet_of_vertex[i]])
-              t = options.solids.floating_sheet_thickness_m;
-            if (t <= 0) continue;
-            float& slot = farthest.at<float>(v, u);
-            slot =
-                std::max(slot, static_cast<float>(mesh.point(OpenMesh::VertexHandle(i))[2] + t + kBackdropSolidRoom_m));
-          }
-      // Where the mesh shows nothing, the depth observed there (the removed surface).
-      cv::Mat observed(m.height, m.width, CV_32F, cv::Scalar(0.0f));
-      for (int v = 0; v < m.height; ++v)
-        for (int u = 0; u < m.width; ++u) {
-          const float z = depth_m.at<float>(v, u);
-          if (had_depth.at<std::uint8_t>(v, u) && std::isfinite(z) && z > 0 && !(farthest.at<float>(v, u) > 0))
-            observed.at<float>(v, u) = z;
-        }
+      cv::Mat farthest, observed;
+      backdropDepthBounds(m, depth_m, had_depth, options, farthest, observed);
       const HoleClosing more = pass(*backdrop_source, backdrop_holes, &farthest, &observed);
       if (backdrop_source == &again && more.left_open == 0) {
         // The frame holes left open are closed now, inside the backdrops (counted there).
