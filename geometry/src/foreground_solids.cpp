@@ -2,6 +2,7 @@
 
 #include "solo/geometry/mesh_fragments.h"
 #include "solo/geometry/scene.h"
+#include "triangle_raster.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +13,7 @@ namespace solo {
 namespace {
 
 /// Depth of the nearest listed face behind the visible surface at each pixel (inf = none),
-/// rasterised at pixel centres with perspective-correct (inverse-depth) interpolation.
+/// rasterised at pixel centres.
 cv::Mat depthBehind(const DepthMesh& m, const std::vector<OpenMesh::FaceHandle>& faces) {
   const SurfaceMesh& mesh = m.mesh;
   cv::Mat behind(m.height, m.width, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
@@ -34,30 +35,14 @@ cv::Mat depthBehind(const DepthMesh& m, const std::vector<OpenMesh::FaceHandle>&
       ++k;
     }
     if (!ok) continue;
-    const double area = (uv[1] - uv[0]).x() * (uv[2] - uv[0]).y() - (uv[1] - uv[0]).y() * (uv[2] - uv[0]).x();
-    if (std::abs(area) < 1e-12) continue;
-    const int u0 = std::max(0, static_cast<int>(std::floor(std::min({uv[0].x(), uv[1].x(), uv[2].x()}))));
-    const int u1 = std::min(m.width - 1, static_cast<int>(std::ceil(std::max({uv[0].x(), uv[1].x(), uv[2].x()}))));
-    const int v0 = std::max(0, static_cast<int>(std::floor(std::min({uv[0].y(), uv[1].y(), uv[2].y()}))));
-    const int v1 = std::min(m.height - 1, static_cast<int>(std::ceil(std::max({uv[0].y(), uv[1].y(), uv[2].y()}))));
-    for (int v = v0; v <= v1; ++v)
-      for (int u = u0; u <= u1; ++u) {
-        const Eigen::Vector2d q(u, v);
-        double b[3];
-        for (int i = 0; i < 3; ++i) {
-          const Eigen::Vector2d& a = uv[(i + 1) % 3];
-          const Eigen::Vector2d& c = uv[(i + 2) % 3];
-          b[i] = ((c - a).x() * (q - a).y() - (c - a).y() * (q - a).x()) / area;
-        }
-        if (b[0] < -1e-9 || b[1] < -1e-9 || b[2] < -1e-9) continue;
-        const double z = 1.0 / (b[0] * w[0] + b[1] * w[1] + b[2] * w[2]);
-        // Every patch strictly behind the visible surface counts, however close: one a few
-        // centimetres behind a thing (the road patch at a tyre's contact) is what a back pushed
-        // the full class thickness would pierce.
-        if (z <= visibleDepth(u, v)) continue;
-        float& slot = behind.at<float>(v, u);
-        slot = std::min(slot, static_cast<float>(z));
-      }
+    raster::forEachCoveredPixelCentre(uv, w, m.width, m.height, [&](int u, int v, double z) {
+      // Every patch strictly behind the visible surface counts, however close: one a few
+      // centimetres behind a thing (the road patch at a tyre's contact) is what a back pushed
+      // the full class thickness would pierce.
+      if (z <= visibleDepth(u, v)) return;
+      float& slot = behind.at<float>(v, u);
+      slot = std::min(slot, static_cast<float>(z));
+    });
   }
   return behind;
 }

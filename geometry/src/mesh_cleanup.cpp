@@ -274,6 +274,7 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
       report.add("backdrop_runs_after_retry", again.frame_hole_runs_backdrop);
     }
     if (!backdrop_holes.empty()) {
+      const Stopwatch backdrop_clock;
       cv::Mat farthest, observed;
       backdropDepthBounds(m, depth_m, had_depth, options, farthest, observed);
       const HoleClosing more = pass(*backdrop_source, backdrop_holes, &farthest, &observed);
@@ -283,6 +284,7 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
         holes.left_open -= retried;
       }
       appendHoleClosing(holes, more);
+      report.add("seconds_backdrops", backdrop_clock.seconds(), "s");  // part of seconds_hole_filling
     }
     addHoleCounts(report, holes);
   } else {

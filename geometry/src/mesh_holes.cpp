@@ -1,5 +1,6 @@
 #include "solo/geometry/mesh_holes.h"
 #include "solo/geometry/report.h"
+#include "triangle_raster.h"
 
 #include <algorithm>
 #include <cmath>
@@ -227,29 +228,10 @@ cv::Mat farthestSurfaceDepth(const SurfaceMesh& mesh, const PinholeCamera& camer
           uv[k++] = projected[v.idx()];
         }
         if (!in_front || k != 3) continue;
-        const double area = (uv[1] - uv[0]).x() * (uv[2] - uv[0]).y() - (uv[1] - uv[0]).y() * (uv[2] - uv[0]).x();
-        if (!(std::abs(area) > 1e-12)) continue;
-        const int x0 = std::max(0, static_cast<int>(std::ceil(std::min({uv[0].x(), uv[1].x(), uv[2].x()}))));
-        const int x1 = std::min(width - 1, static_cast<int>(std::floor(std::max({uv[0].x(), uv[1].x(), uv[2].x()}))));
-        const int y0 = std::max(0, static_cast<int>(std::ceil(std::min({uv[0].y(), uv[1].y(), uv[2].y()}))));
-        const int y1 = std::min(height - 1, static_cast<int>(std::floor(std::max({uv[0].y(), uv[1].y(), uv[2].y()}))));
-        for (int y = y0; y <= y1; ++y)
-          for (int x = x0; x <= x1; ++x) {
-            // Barycentric weights of the pixel centre; a small tolerance keeps centres on an edge.
-            double w[3];
-            bool inside = true;
-            for (int i = 0; i < 3 && inside; ++i) {
-              const Eigen::Vector2d& a = uv[(i + 1) % 3];
-              const Eigen::Vector2d& b = uv[(i + 2) % 3];
-              w[i] = ((b - a).x() * (y - a.y()) - (b - a).y() * (x - a.x())) / area;
-              inside = w[i] > -1e-9;
-            }
-            if (!inside) continue;
-            const double s = w[0] * inverse_depth[0] + w[1] * inverse_depth[1] + w[2] * inverse_depth[2];
-            if (!(s > 0)) continue;
-            float& out = farthest.at<float>(y, x);
-            out = std::max(out, static_cast<float>(1.0 / s));
-          }
+        raster::forEachCoveredPixelCentre(uv, inverse_depth, width, height, [&](int x, int y, double depth_m) {
+          float& out = farthest.at<float>(y, x);
+          out = std::max(out, static_cast<float>(depth_m));
+        });
       }
       partial[slice] = std::move(farthest);
     }

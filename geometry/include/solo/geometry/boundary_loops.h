@@ -12,7 +12,8 @@
 //    nearer surface (an occluder touching the frame or the sky line) is a frame hole, closed
 //    along the image frame, or along the sky line over the occluder's silhouette, or joined
 //    with the runs of other sheets around the same occluder (paths along its outline between
-//    them), or by the chord between its two ends, and filled (frame_hole);
+//    them), or by the chord between its two ends, and filled (frame_hole); runs none of these
+//    closes are chained into a backdrop, a patch behind everything seen in its region;
 //  - outer loop without border edge: the outline of a floating sheet (silhouette); foreground
 //    things are closed into solids, other sheets stay open and are reported.
 

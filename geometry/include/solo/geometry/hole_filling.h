@@ -100,9 +100,9 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 /// lies behind everything seen in it, so farther surfaces inside are expected (no 5 % rule).
 /// Every vertex is pinned behind every surface within the reach of its faces
 /// (obstacle_within_m at the length of its longest edge plus a pixel), so no patch face passes
-/// in front of a mesh surface. Interior vertices: every pixel centre within 2 pixels of the
-/// polygon's edges (where the patch meets the mesh at the runs) and wherever no surface is seen
-/// (the visible part), every hidden_spacing_px-th elsewhere; in each pixel quad with all four
+/// in front of a mesh surface. Interior vertices: every pixel centre within about 1.5 pixels of
+/// an edge between two boundary points (where the patch meets the mesh at the runs) and
+/// wherever no surface is seen (the visible part), every hidden_spacing_px-th elsewhere; in each pixel quad with all four
 /// corners the patch takes the mesh's diagonal, where it has one (two halves split differently
 /// overlap, and a patch face beside a run vertex would cross a farther mesh face). The
 /// extension has no affine part (over a region this large the boundary's plane may reach

@@ -56,8 +56,8 @@ struct PixelMapping {
   /// Optional, per hole (DepthLoops::backdrop): non-zero = fillHoleInImage in backdrop mode.
   const std::vector<std::uint8_t>* backdrop = nullptr;
   /// Optional (CV_32F, width x height, metres, 0 for none): the farthest surface at each pixel
-  /// centre (farthestSurfaceDepth); image-space patches stay behind it as behind the pixels'
-  /// own vertices. Given for backdrops, filled after every other hole.
+  /// centre (farthestSurfaceDepth), which backdrops stay behind (ImageBackdrop's obstacles and
+  /// where a surface is seen). Given for the backdrops' pass, after every other hole.
   const cv::Mat* farthest_surface_m = nullptr;
   /// Optional (CV_32F, width x height, metres, 0 for none): the depth observed where the mesh
   /// shows no surface (pixels whose faces were all removed: foliage, far fragments, depth-jump
