@@ -15,7 +15,7 @@
 //    them), or by the chord between its two ends, and filled (frame_hole); runs none of these
 //    closes are chained into a backdrop, a patch behind everything seen in its region;
 //  - outer loop without border edge: the outline of a floating sheet (silhouette); foreground
-//    things are closed into solids, other sheets stay open and are reported.
+//    things are closed into solids, and so are floating sheets of other classes (slabs).
 
 #include "solo/geometry/depth_mesh.h"
 
