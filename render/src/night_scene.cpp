@@ -2,8 +2,10 @@
 
 #include <solo/lighting/colorimetry.h>
 
+#include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -61,25 +63,21 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
       for (const PixelRun& run : record.tree.lights[i].runs)
         for (int c = run.first_col; c <= run.last_col; ++c) light_index.at<int>(run.row, c) = static_cast<int>(i);
 
-  // One emitter per light that is on and has an area.
-  std::vector<int> emitter_of_light(record.tree.lights.size(), -1);
-  std::map<std::string, std::int64_t> lights_on_by_category;
+  // Lights that are on, with a usable strength. A flux becomes a luminance once the area
+  // of the faces that show the light is known (below).
+  std::vector<bool> light_on(record.tree.lights.size(), false);
   for (std::size_t i = 0; i < record.tree.lights.size(); ++i) {
-    const Light& light = record.tree.lights[i];
     const LightState& state = record.instantiation.lights[i];
-    if (!state.on) continue;
-    const double area = record.geometry[i].area_m2;
-    const double luminance = emittedLuminance(state, light.category, area);
-    if (!(luminance > 0) || !std::isfinite(luminance)) continue;
-    const Eigen::Vector3d xyz = xyzFromChromaticity(state.xy, luminance);
-    Emitter e;
-    e.radiance = xyz.cast<float>();
-    e.directional_profile = emissionProfile(light.category) == EmissionProfile::CosineLobe;
-    e.light_id = light.map_id;
-    emitter_of_light[i] = static_cast<int>(scene.emitters.size());
-    scene.emitters.push_back(e);
-    ++lights_on_by_category[lightCategoryName(light.category)];
+    light_on[i] = state.on && state.strength > 0 && std::isfinite(state.strength);
   }
+  std::vector<int> light_of_face;  // per scene face, index into record.tree.lights, -1 = none
+  struct SeenFace {
+    std::size_t face;
+    float depth_m;  // the face's centroid z
+    double area_m2;
+  };
+  std::vector<std::vector<SeenFace>> seen_faces(record.tree.lights.size());
+  std::int64_t hidden_faces_under_lights = 0;
 
   // Geometry, and per face the pixel under its vertices' mean pixel position.
   const SurfaceMesh& mesh = depth_mesh.mesh;
@@ -95,7 +93,9 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     int k = 0;
     double u = 0, v = 0;
     int with_pixel = 0;
+    bool all_seen = props.has_value();
     for (const auto vh : mesh.fv_range(f)) {
+      if (props) all_seen &= mesh.property(props->origin, vh) == static_cast<std::uint8_t>(VertexOrigin::pixel);
       int& index = index_of_vertex[static_cast<std::size_t>(vh.idx())];
       if (index < 0) {
         const auto p = mesh.point(vh);
@@ -127,12 +127,89 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
       }
       if (!roughness.empty()) rough = std::clamp(roughness.at<float>(y, x), 0.f, 1.f);
       const int light = light_index.at<int>(y, x);
-      if (light >= 0) emitter = emitter_of_light[static_cast<std::size_t>(light)];
+      if (light >= 0 && light_on[static_cast<std::size_t>(light)]) {
+        // Only the surface the light's pixels see emits. Faces that hole filling, closed solids
+        // or backdrops put behind it share its pixels: emitting, they would add area (a street
+        // lamp's 0.4 m^2 became 10-30 m^2 of backdrop and solid backs) and light where none is.
+        if (all_seen) {
+          emitter = light;
+          const Eigen::Vector3d a = scene.vertices[face[0]].cast<double>();
+          const Eigen::Vector3d ab = scene.vertices[face[1]].cast<double>() - a;
+          const Eigen::Vector3d ac = scene.vertices[face[2]].cast<double>() - a;
+          const float depth = (scene.vertices[face[0]].z() + scene.vertices[face[1]].z() + scene.vertices[face[2]].z()) / 3;
+          seen_faces[static_cast<std::size_t>(light)].push_back({scene.faces.size() - 1, depth, 0.5 * ab.cross(ac).norm()});
+        } else {
+          ++hidden_faces_under_lights;
+        }
+      }
     } else {
       ++faces_without_pixel;
     }
     scene.face_reflectance.push_back(reflectanceFromLinearSrgb(rgb));
     if (!roughness.empty()) scene.face_roughness.push_back(rough);
+    light_of_face.push_back(emitter);
+  }
+
+  // A light's pixels also see the faces its silhouette stretches toward the background
+  // (pixels of mixed depth): a street lamp's head 0.5 m deep showed faces over 5 m of depth
+  // behind it. Only faces within a robust band around the light's median depth emit:
+  // median +- max(3 MAD, 0.25 m). A flat light seen at grazing (depth spread evenly over its
+  // width w: MAD = w / 4) keeps all of its faces.
+  std::vector<double> seen_area_m2(record.tree.lights.size(), 0.0);
+  std::int64_t faces_off_light_depth = 0;
+  for (std::size_t i = 0; i < seen_faces.size(); ++i) {
+    std::vector<SeenFace>& faces = seen_faces[i];
+    if (faces.empty()) continue;
+    std::vector<float> depths(faces.size());
+    for (std::size_t k = 0; k < faces.size(); ++k) depths[k] = faces[k].depth_m;
+    const auto middle = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
+    std::nth_element(depths.begin(), middle, depths.end());
+    const float median = *middle;
+    for (float& d : depths) d = std::abs(d - median);
+    std::nth_element(depths.begin(), middle, depths.end());
+    const float band = std::max(3.f * *middle, 0.25f);
+    for (const SeenFace& face : faces) {
+      if (std::abs(face.depth_m - median) <= band) {
+        seen_area_m2[i] += face.area_m2;
+      } else {
+        light_of_face[face.face] = -1;
+        ++faces_off_light_depth;
+      }
+    }
+  }
+
+  // One emitter per light that is on and shown by some face. A flux (street and front lights)
+  // is spread over the area of those faces, so the rendered light keeps its flux whatever the
+  // mesh made of the light's pixels; a luminance is emitted as it is.
+  std::vector<int> emitter_of_light(record.tree.lights.size(), -1);
+  std::map<std::string, std::int64_t> lights_on_by_category;
+  std::int64_t lights_on_without_faces = 0;
+  double flux_area_mesh_m2 = 0, flux_area_record_m2 = 0;
+  for (std::size_t i = 0; i < record.tree.lights.size(); ++i) {
+    if (!light_on[i]) continue;
+    const Light& light = record.tree.lights[i];
+    const LightState& state = record.instantiation.lights[i];
+    if (!(seen_area_m2[i] > 0)) {
+      ++lights_on_without_faces;
+      continue;
+    }
+    if (state.unit == StrengthUnit::FluxLm) {
+      flux_area_mesh_m2 += seen_area_m2[i];
+      flux_area_record_m2 += record.geometry[i].area_m2;
+    }
+    const double luminance = emittedLuminance(state, light.category, seen_area_m2[i]);
+    if (!(luminance > 0) || !std::isfinite(luminance)) continue;
+    Emitter e;
+    e.radiance = xyzFromChromaticity(state.xy, luminance).cast<float>();
+    e.directional_profile = emissionProfile(light.category) == EmissionProfile::CosineLobe;
+    e.light_id = light.map_id;
+    emitter_of_light[i] = static_cast<int>(scene.emitters.size());
+    scene.emitters.push_back(e);
+    ++lights_on_by_category[lightCategoryName(light.category)];
+  }
+  scene.face_emitter.reserve(light_of_face.size());
+  for (const int light : light_of_face) {
+    const int emitter = light >= 0 ? emitter_of_light[static_cast<std::size_t>(light)] : -1;
     scene.face_emitter.push_back(emitter);
     emitting_faces += emitter >= 0;
   }
@@ -151,6 +228,11 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   report.add("emitting_faces", emitting_faces);
   report.add("emitters", static_cast<std::int64_t>(scene.emitters.size()));
   report.add("faces_without_pixel", faces_without_pixel);
+  report.add("hidden_faces_under_lights", hidden_faces_under_lights);
+  report.add("faces_off_light_depth", faces_off_light_depth);
+  report.add("lights_on_without_faces", lights_on_without_faces);
+  report.add("flux_lights_area_mesh", flux_area_mesh_m2, "m2");
+  report.add("flux_lights_area_record", flux_area_record_m2, "m2");
   for (const auto& [category, count] : lights_on_by_category) report.add("on_" + category, count);
   if (scene.emitters.empty()) report.notes.push_back("no active light in view");
   report.seconds = clock.seconds();

@@ -123,3 +123,132 @@ TEST(NightScene, AMeshFromADownsampledDepthMapTakesTheAlbedoUnderItsFacesAtFullR
   EXPECT_EQ(left_faces, 12);   // quads 0-1 and 1-2 of 3 rows, two faces each
   EXPECT_EQ(right_faces, 12);  // quads 3-4 and 4-5
 }
+
+TEST(NightScene, AFluxLightKeepsItsFluxOnTheSeenFacesAndHiddenFacesUnderItDoNotEmit) {
+  // A street light over the right half of the plane (columns 3-5), 6000 lm. Vertices of
+  // column 5 are marked as the back of a closed solid: the faces touching them share the
+  // light's pixels but are not what the pixels see, so they must not emit, and the flux must
+  // sit on the faces that remain.
+  solo::DepthMesh mesh = planeMesh();
+  const auto props = solo::ImageVertexProperties::find(mesh.mesh);
+  ASSERT_TRUE(props.has_value());
+  for (const auto vh : mesh.mesh.vertices())
+    if (mesh.mesh.property(props->pixel, vh)[0] == 5)
+      mesh.mesh.property(props->origin, vh) = static_cast<std::uint8_t>(solo::VertexOrigin::solid_back);
+  solo::LightRecord record;
+  record.tree.width = 6;
+  record.tree.height = 4;
+  record.tree.groups.push_back({});
+  solo::Light light;
+  light.id = 1;
+  light.map_id = 1900;
+  light.category = solo::LightCategory::StreetLightLowCct;
+  for (int row = 0; row < 4; ++row) light.runs.push_back({row, 3, 5});
+  light.pixels = 12;
+  record.tree.lights.push_back(light);
+  record.geometry.push_back({});
+  record.geometry.back().area_m2 = 0.05;  // the record's estimate; the mesh decides
+  record.geometry.back().pixels_with_depth = 12;
+  solo::LightState state;
+  state.on = true;
+  state.xy = {0.5, 0.42};
+  state.strength = 6000;
+  state.unit = solo::StrengthUnit::FluxLm;
+  record.instantiation.lights.push_back(state);
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  ASSERT_EQ(night.scene.emitters.size(), 1u);
+  EXPECT_TRUE(night.scene.emitters[0].directional_profile);
+
+  // Faces whose mean pixel column rounds into 3-5: quads 2-3 (mean columns 2.33 and 2.67: one
+  // of each pair rounds to 3), 3-4 and 4-5. Those touching column 5 are hidden.
+  double area = 0;
+  int emitting = 0, hidden_under_light = 0;
+  for (std::size_t f = 0; f < night.scene.faces.size(); ++f) {
+    const auto& face = night.scene.faces[f];
+    bool touches_back = false;
+    double mean_x = 0;
+    for (const std::uint32_t v : face) {
+      // The plane is 4 m away with fx = 10 and cx = 2.5: x = 0.4 (u - 2.5) m.
+      const double u = night.scene.vertices[v].x() / 0.4 + 2.5;
+      touches_back |= std::lround(u) == 5;
+      mean_x += u / 3;
+    }
+    const bool under_light = std::lround(mean_x) >= 3;
+    if (under_light && touches_back) ++hidden_under_light;
+    if (night.scene.face_emitter[f] < 0) continue;
+    ++emitting;
+    EXPECT_FALSE(touches_back) << "face " << f << " is behind what the pixels see";
+    EXPECT_TRUE(under_light);
+    const Eigen::Vector3f a = night.scene.vertices[face[0]];
+    const Eigen::Vector3f ab = night.scene.vertices[face[1]] - a, ac = night.scene.vertices[face[2]] - a;
+    area += 0.5 * std::abs(static_cast<double>(ab.x() * ac.y() - ab.y() * ac.x()));
+  }
+  EXPECT_EQ(hidden_under_light, 6) << "quad 4-5 of 3 rows, two faces each";
+  EXPECT_EQ(emitting, 9) << "quad 3-4 (6 faces) and one face of each quad 2-3 (3)";
+  // Each face is half of a 0.4 x 0.4 m quad.
+  EXPECT_NEAR(area, 9 * 0.08, 1e-5);
+  // Flux = L * area * (8 / pi) for the g profile: all 6000 lm, whatever the record's area said.
+  const double flux = night.scene.emitters[0].radiance.y() * area * solo::profileProjectedSolidAngle(
+                                                                          solo::EmissionProfile::CosineLobe);
+  EXPECT_NEAR(flux, 6000.0, 6000.0 * 1e-5);
+  const solo::MetricValue* hidden = night.report.find("hidden_faces_under_lights");
+  ASSERT_NE(hidden, nullptr);
+  EXPECT_EQ(std::get<std::int64_t>(*hidden), 6);
+}
+
+TEST(NightScene, FacesALightsSilhouetteStretchesToTheBackgroundDoNotEmit) {
+  // A lamp 4 m away over columns 2-4 whose column 5 sees a wall 9 m away: the faces between
+  // columns 4 and 5 span 4-9 m of depth (mixed pixels at a silhouette). The light covers
+  // columns 2-5, so some of those stretched faces lie under its pixels; they must not emit,
+  // and the lamp's 1000 lm must sit on the faces at its own depth.
+  cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
+  depth.col(5).setTo(9.f);
+  const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
+  solo::LightRecord record;
+  record.tree.width = 6;
+  record.tree.height = 4;
+  record.tree.groups.push_back({});
+  solo::Light light;
+  light.id = 1;
+  light.map_id = 2600;
+  light.category = solo::LightCategory::MovingFront;
+  for (int row = 0; row < 4; ++row) light.runs.push_back({row, 2, 5});
+  light.pixels = 16;
+  record.tree.lights.push_back(light);
+  record.geometry.push_back({});
+  record.geometry.back().area_m2 = 1.0;
+  record.geometry.back().pixels_with_depth = 16;
+  solo::LightState state;
+  state.on = true;
+  state.xy = {0.44, 0.40};
+  state.strength = 1000;
+  state.unit = solo::StrengthUnit::FluxLm;
+  record.instantiation.lights.push_back(state);
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  ASSERT_EQ(night.scene.emitters.size(), 1u);
+  double area = 0;
+  int emitting = 0;
+  for (std::size_t f = 0; f < night.scene.faces.size(); ++f) {
+    if (night.scene.face_emitter[f] < 0) continue;
+    ++emitting;
+    const auto& face = night.scene.faces[f];
+    for (const std::uint32_t v : face) EXPECT_FLOAT_EQ(night.scene.vertices[v].z(), 4.f) << "face " << f;
+    const Eigen::Vector3f a = night.scene.vertices[face[0]];
+    const Eigen::Vector3f ab = night.scene.vertices[face[1]] - a, ac = night.scene.vertices[face[2]] - a;
+    area += 0.5 * std::abs(static_cast<double>(ab.x() * ac.y() - ab.y() * ac.x()));
+  }
+  // Under columns 2-5 (mean column rounded): one face of quad 1-2, quads 2-3 and 3-4 (the
+  // flat lamp: 3 + 12 faces) and quad 4-5 (6 stretched faces, left out).
+  EXPECT_EQ(emitting, 15);
+  EXPECT_NEAR(area, 15 * 0.08, 1e-5);
+  const double flux = night.scene.emitters[0].radiance.y() * area *
+                      solo::profileProjectedSolidAngle(solo::EmissionProfile::CosineLobe);
+  EXPECT_NEAR(flux, 1000.0, 1e-2);
+  const solo::MetricValue* off_depth = night.report.find("faces_off_light_depth");
+  ASSERT_NE(off_depth, nullptr);
+  EXPECT_EQ(std::get<std::int64_t>(*off_depth), 6);
+}
