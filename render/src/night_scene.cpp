@@ -207,10 +207,16 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     scene.emitters.push_back(e);
     ++lights_on_by_category[lightCategoryName(light.category)];
   }
+  // An emitting face reflects nothing. A lamp's luminance (10^3-10^5 cd/m^2) dwarfs what it
+  // could reflect, except its own light: a depth mesh crumples a small lamp into creases, and
+  // a path caught in one gathers the lamp's radiance at every bounce (at reflectance 0.8 a
+  // one-in-10^5 sample worth 2.4 times the lamp's luminance: the fireflies of the 1080p street).
   scene.face_emitter.reserve(light_of_face.size());
-  for (const int light : light_of_face) {
+  for (std::size_t f = 0; f < light_of_face.size(); ++f) {
+    const int light = light_of_face[f];
     const int emitter = light >= 0 ? emitter_of_light[static_cast<std::size_t>(light)] : -1;
     scene.face_emitter.push_back(emitter);
+    if (emitter >= 0) scene.face_reflectance[f].setZero();
     emitting_faces += emitter >= 0;
   }
 

@@ -219,8 +219,10 @@ struct FirstHit {
 float offsetFor(float distance) { return 1e-4f * std::max(1.f, distance); }
 
 // One path sample from the camera through (px, py). Returns XYZ radiance.
-Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, FirstHit* first, std::int64_t& rays,
-                          std::int64_t& clamped, std::int64_t& split_vertices, std::vector<RecordedRay>* log) {
+// `sees_emitter` is set when the camera ray hits an emitting face.
+Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, FirstHit* first, bool& sees_emitter,
+                          std::int64_t& rays, std::int64_t& clamped, std::int64_t& split_vertices,
+                          std::vector<RecordedRay>* log) {
   // Every ray goes through these two: counted, and recorded when a log is kept.
   const auto closestHit = [&](const Eigen::Vector3f& o, const Eigen::Vector3f& d) {
     ++rays;
@@ -292,6 +294,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
     const Eigen::Vector3f wo = -direction;
     const SurfaceBsdf bsdf(n, wo, c.scene.face_reflectance[face], has_roughness ? c.scene.face_roughness[face] : 0.5f,
                            c.options.diffuse, has_roughness);
+    if (bounce == 0) sees_emitter = emitter_index >= 0;
     if (bounce == 0 && first) {
       first->albedo = bsdf.albedo();
       first->normal = n;
@@ -468,6 +471,7 @@ class ProgressBar {
 }  // namespace
 
 struct PreparedRenderScene::Impl {
+  explicit Impl(const RenderScene& rendered) : scene(rendered) {}
   const RenderScene& scene;
   std::unique_ptr<RayCaster> caster;
   double build_seconds = 0;
@@ -475,9 +479,21 @@ struct PreparedRenderScene::Impl {
   std::vector<int> face_to_emissive;
   std::vector<Eigen::Vector3f> face_normals;
   double prepare_seconds = 0;  // the whole construction, BVH included
+  // Light samplers built on first use, one per kind, shared by every render of the scene
+  // (the hierarchy over the 1080p street's 188 000 emitting triangles takes a noticeable
+  // fraction of a second to build; a preview and the final render need it twice).
+  mutable std::mutex samplers_mutex;
+  mutable std::array<std::unique_ptr<LightSampler>, 3> samplers;
+
+  const LightSampler& lightSampler(LightSamplerKind kind) const {
+    const std::lock_guard<std::mutex> lock(samplers_mutex);
+    std::unique_ptr<LightSampler>& sampler = samplers.at(static_cast<std::size_t>(kind));
+    if (!sampler) sampler = makeLightSampler(kind, emissive);
+    return *sampler;
+  }
 };
 
-PreparedRenderScene::PreparedRenderScene(const RenderScene& scene) : impl_(new Impl{scene, nullptr, 0, {}, {}, {}, 0}) {
+PreparedRenderScene::PreparedRenderScene(const RenderScene& scene) : impl_(new Impl(scene)) {
   const Stopwatch prepare_clock;
   CV_Assert(scene.face_reflectance.size() == scene.faces.size());
   CV_Assert(scene.face_emitter.empty() || scene.face_emitter.size() == scene.faces.size());
@@ -529,12 +545,12 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   const RayCaster& caster = *p.caster;
   const std::vector<EmissiveTriangle>& emissive = p.emissive;
   const std::vector<int>& face_to_emissive = p.face_to_emissive;
-  const std::unique_ptr<LightSampler> sampler = makeLightSampler(options.light_sampler, emissive);
+  const LightSampler& sampler = p.lightSampler(options.light_sampler);
 
   if (!scene.face_roughness.empty()) ggxAverageAlbedo(0.5f);  // builds the albedo table before the tiles start
   const bool sky_on = scene.sky_radiance.maxCoeff() > 0.f ||
                       (scene.sky_zenith_radiance && scene.sky_zenith_radiance->maxCoeff() > 0.f);
-  Context context{scene, camera, options, caster, emissive, face_to_emissive, *sampler, p.face_normals, SunDisc(scene.sun),
+  Context context{scene, camera, options, caster, emissive, face_to_emissive, sampler, p.face_normals, SunDisc(scene.sun),
                   sky_on, {}, {}};
   for (const RectangleLight& light : scene.rectangle_lights) {
     context.rectangle_area.push_back(light.edge_u.cross(light.edge_v).norm());
@@ -547,6 +563,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   out.normal.create(height, width, CV_32FC3);
   out.depth_m.create(height, width, CV_32F);
   out.light_id.create(height, width, CV_32S);
+  out.emitter_coverage.create(height, width, CV_32F);
   out.samples.create(height, width, CV_32S);
   out.std_error.create(height, width, CV_32F);
 
@@ -580,6 +597,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     std::array<double, kMaxReplicates> replicate_sum{};
     std::array<int, kMaxReplicates> replicate_count{};
     int n = 0, taken = 0;  // finite samples, samples taken
+    int emitter_hits = 0;  // samples whose camera ray hit an emitter
     bool done = false;
     double stopped_variance = -1;  // variance of the mean when the target stopped it
     // Variance of the mean as if the samples were independent: sample variance / n.
@@ -614,8 +632,10 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     const auto takeSample = [&](PixelState& p) {
       p.rng.startSample(static_cast<std::uint32_t>(p.taken));
       const auto [jx, jy] = p.rng.get2D();
+      bool sees_emitter = false;
       const Eigen::Vector3f value = tracePath(context, static_cast<float>(p.x) + jx - 0.5f, static_cast<float>(p.y) + jy - 0.5f, p.rng,
-                                              p.taken == 0 ? &p.first : nullptr, rays, clamped, split_vertices, log);
+                                              p.taken == 0 ? &p.first : nullptr, sees_emitter, rays, clamped, split_vertices, log);
+      p.emitter_hits += sees_emitter;
       const int replicate = p.taken % replicates;
       ++p.taken;
       if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
@@ -711,6 +731,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
       out.normal.at<cv::Vec3f>(y, x) = {p.first.normal.x(), p.first.normal.y(), p.first.normal.z()};
       out.depth_m.at<float>(y, x) = p.first.depth;
       out.light_id.at<int>(y, x) = p.first.light_id;
+      out.emitter_coverage.at<float>(y, x) = p.taken > 0 ? static_cast<float>(p.emitter_hits) / p.taken : 0.f;
       out.samples.at<int>(y, x) = p.taken;
       out.std_error.at<float>(y, x) = static_cast<float>(standard_error);
     }

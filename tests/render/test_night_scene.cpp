@@ -177,8 +177,12 @@ TEST(NightScene, AFluxLightKeepsItsFluxOnTheSeenFacesAndHiddenFacesUnderItDoNotE
     }
     const bool under_light = std::lround(mean_x) >= 3;
     if (under_light && touches_back) ++hidden_under_light;
-    if (night.scene.face_emitter[f] < 0) continue;
+    if (night.scene.face_emitter[f] < 0) {
+      EXPECT_NEAR(night.scene.face_reflectance[f].y(), options.default_reflectance, 1e-6f) << "face " << f;
+      continue;
+    }
     ++emitting;
+    EXPECT_EQ(night.scene.face_reflectance[f], Eigen::Vector3f::Zero()) << "an emitting face reflects nothing";
     EXPECT_FALSE(touches_back) << "face " << f << " is behind what the pixels see";
     EXPECT_TRUE(under_light);
     const Eigen::Vector3f a = night.scene.vertices[face[0]];

@@ -467,6 +467,29 @@ TEST(PathTracer, DirectViewOfAnEmitterIsItsRadiance) {
   EXPECT_NEAR(out.depth_m.at<float>(1, 1), 2.f, 1e-3f);
 }
 
+TEST(PathTracer, EmitterCoverageIsTheShareOfAPixelThatSeesAnEmitter) {
+  // Pixel column 1 spans x/z in [-1/400, 0]; the emitting quad at z = 2 ends at
+  // x = -0.75/400 * 2, so it covers a quarter of that column, all of column 0 and none of 2-3.
+  // A grey plane behind it fills the rest.
+  solo::RenderScene s;
+  s.camera = camera(4, 400);
+  s.emitters.push_back({Eigen::Vector3f(1.f, 1.f, 1.f), false, 7});
+  const float edge_x = -0.75f / 400.f * 2.f;
+  addQuad(s, {-1, -1, 2}, {0, 2, 0}, {edge_x + 1.f, 0, 0}, 0.f, 0);
+  addQuad(s, {-10, -10, 3}, {0, 20, 0}, {20, 0, 0}, 0.5f);
+  solo::PathTracerOptions o;
+  o.min_samples = o.max_samples = 64;
+  o.progress = false;
+  const auto out = solo::renderPathTraced(s, o);
+  ASSERT_EQ(out.emitter_coverage.type(), CV_32F);
+  for (int y = 0; y < 4; ++y) {
+    EXPECT_FLOAT_EQ(out.emitter_coverage.at<float>(y, 0), 1.f);
+    EXPECT_NEAR(out.emitter_coverage.at<float>(y, 1), 0.25f, 0.06f) << "row " << y;
+    EXPECT_FLOAT_EQ(out.emitter_coverage.at<float>(y, 2), 0.f);
+    EXPECT_FLOAT_EQ(out.emitter_coverage.at<float>(y, 3), 0.f);
+  }
+}
+
 TEST(PathTracer, SamplersAgreeAndPmfsMatchPicks) {
   // Many lights of different power: all three samplers estimate the same image.
   solo::RenderScene s;

@@ -10,8 +10,8 @@
 //       light record drawn with seed 3, the two headlights; the camera scaled to WIDTHxHEIGHT).
 //       Writes OUT_DIR/scene.json + *.f32/*.u32 arrays (camera frame = OpenCV, metres; colours
 //       are XYZ relative to E, rendered channel by channel, so Cycles receives them as "RGB"
-//       and no colour transform may touch them), solo_reference.exr, emitter_mask.exr (1 where an
-//       emitter is seen directly), solo_runs.csv (fixed sample counts and the default adaptive
+//       and no colour transform may touch them), solo_reference.exr, emitter_mask.exr (1 where any
+//       reference sample's camera ray hits an emitter), solo_runs.csv (fixed sample counts and the default adaptive
 //       settings: wall and CPU seconds, relative RMSE; each image as solo_<settings>.exr) for
 //       each per-sample sampler in SAMPLERS ("sobol,independent" by default; "sobol" alone
 //       halves the time). Prints the reference's own noise from its per-pixel standard errors.
@@ -245,8 +245,12 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     std::printf("reference: %d spp, seed 1000, %.1f s, %.1f cpu s\n", reference_spp, reference_clock.seconds(),
                 processCpuSeconds() - cpu_start);
     reference = out.radiance;
-    out.light_id.convertTo(mask, CV_32F);
-    mask = cv::min(mask, 1.0);
+    // Every pixel where some sample of the reference's camera rays hit an emitter, also a
+    // far lamp covering a sliver of the pixel: there the pixel's value is the emitter's
+    // radiance times its coverage, a sampling of the pixel's area, not of light transport.
+    mask = cv::Mat(out.emitter_coverage.size(), CV_32F);
+    mask.setTo(0.f);
+    mask.setTo(1.f, out.emitter_coverage > 0.f);
     // The reference's own relative noise from its per-pixel standard-error estimates, on the
     // pixels the comparison uses: exact in expectation for independent samples, an upper bound
     // for sobol (the estimate ignores stratification).
@@ -392,11 +396,66 @@ int compare(int argc, char** argv) {
 
 }  // namespace
 
+// Where a pixel's error comes from: N estimates of SPP samples (default 2, independent) of one pixel (a 1x1
+// camera over it, seeds 1..N), their mean and spread, the largest ones, and the rays of the
+// largest (origins, directions, lengths) to locate the path that made it.
+int probe(int argc, char** argv) {
+  if (argc < 7) throw std::runtime_error("usage: export_blender_scene probe SCENE WxH X Y N [SPP] [SAMPLER]");
+  int width = 0, height = 0;
+  if (std::sscanf(argv[3], "%dx%d", &width, &height) != 2) throw std::runtime_error("bad size");
+  const int x = std::atoi(argv[4]), y = std::atoi(argv[5]), n = std::atoi(argv[6]);
+  const std::string name = argv[2];
+  solo::RenderScene scene;
+  if (name == "night") scene = nightStreet(width, height);
+  else if (name.rfind("pipeline:", 0) == 0) scene = pipelineScene(name.substr(9), width, height);
+  else throw std::runtime_error("probe: unknown scene " + name);
+  const solo::PreparedRenderScene prepared(scene);
+  solo::PinholeCamera pixel = scene.camera;
+  pixel.cx -= x;
+  pixel.cy -= y;
+  pixel.width = pixel.height = 1;
+  solo::PathTracerOptions o;
+  o.progress = false;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.sampler = argc > 8 ? solo::parseSamplerKind(argv[8]) : solo::SamplerKind::Independent;
+  o.min_samples = o.max_samples = argc > 7 ? std::max(2, std::atoi(argv[7])) : 2;
+  std::vector<std::pair<double, int>> values;
+  double sum = 0, sum2 = 0;
+  for (int seed = 1; seed <= n; ++seed) {
+    o.seed = static_cast<std::uint64_t>(seed);
+    const double v = solo::renderPathTraced(prepared, pixel, o).radiance.at<cv::Vec3f>(0, 0)[1];
+    values.emplace_back(v, seed);
+    sum += v;
+    sum2 += v * v;
+  }
+  std::sort(values.rbegin(), values.rend());
+  const double mean = sum / n;
+  std::printf("pixel (%d, %d): %d estimates of %d samples (%s), mean %.4g, standard deviation %.4g\n", x, y, n,
+              o.max_samples, solo::samplerKindName(o.sampler), mean,
+              std::sqrt(std::max(0.0, sum2 / n - mean * mean)));
+  double top = 0;
+  for (int k = 0; k < std::min(n, 10); ++k) {
+    top += values[static_cast<std::size_t>(k)].first;
+    std::printf("  seed %d: %.4g (top %d carry %.1f %% of the sum)\n", values[static_cast<std::size_t>(k)].second,
+                values[static_cast<std::size_t>(k)].first, k + 1, 100 * top / sum);
+  }
+  std::vector<solo::RecordedRay> rays;
+  o.seed = static_cast<std::uint64_t>(values.front().second);
+  o.ray_log = &rays;
+  solo::renderPathTraced(prepared, pixel, o);
+  std::printf("rays of seed %d (origin, direction, t_far for shadow rays):\n", values.front().second);
+  for (const solo::RecordedRay& r : rays)
+    std::printf("  %s o (%.3f %.3f %.3f) d (%.3f %.3f %.3f) %.3f\n", r.shadow ? "shadow " : "closest", r.origin.x(),
+                r.origin.y(), r.origin.z(), r.direction.x(), r.direction.y(), r.direction.z(), r.t_far);
+  return 0;
+}
+
 int main(int argc, char** argv) {
   try {
     if (argc > 1 && std::string(argv[1]) == "export") return exportScene(argc, argv, false);
     if (argc > 1 && std::string(argv[1]) == "runs") return exportScene(argc, argv, true);
     if (argc > 1 && std::string(argv[1]) == "compare") return compare(argc, argv);
+    if (argc > 1 && std::string(argv[1]) == "probe") return probe(argc, argv);
     std::fprintf(stderr, "usage: export_blender_scene export|compare ...\n");
     return 2;
   } catch (const std::exception& e) {

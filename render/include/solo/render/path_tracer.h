@@ -108,6 +108,9 @@ struct RenderOutput {
   cv::Mat normal;    ///< CV_32FC3 first-hit normal facing the camera; 0 for sky
   cv::Mat depth_m;   ///< CV_32F first-hit z-depth; 0 for sky
   cv::Mat light_id;  ///< CV_32S light id of an emitter seen directly; 0 otherwise
+  /// CV_32F share of the pixel's samples whose camera ray hit an emitter (0-1): the pixels that
+  /// see a light, also where it covers a sliver of the pixel (light_id is the first sample's).
+  cv::Mat emitter_coverage;
   cv::Mat samples;   ///< CV_32S samples taken per pixel
   cv::Mat std_error; ///< CV_32F estimated standard error of Y per pixel
   StageReport report;
