@@ -126,7 +126,8 @@ RadianceError radianceError(const RenderOutput& image, const RenderOutput& refer
   double squared = 0, norm = 0, variance = 0, squared_raw = 0, norm_raw = 0, sum = 0, sum_ref = 0;
   for (int y = 0; y < reference.radiance.rows; ++y)
     for (int x = 0; x < reference.radiance.cols; ++x) {
-      if (reference.light_id.at<int>(y, x) != 0 || image.light_id.at<int>(y, x) != 0) continue;
+      // Pixels that see an emitter, also where it covers a sliver of the pixel, are left out.
+      if (reference.emitter_coverage.at<float>(y, x) > 0.f || image.light_id.at<int>(y, x) != 0) continue;
       const double r = reference.radiance.at<cv::Vec3f>(y, x)[1], v = image.radiance.at<cv::Vec3f>(y, x)[1];
       const double rc = std::min(r, e.white), vc = std::min(v, e.white);
       const double se = reference.std_error.at<float>(y, x);

@@ -115,7 +115,7 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     scene.faces.push_back(face);
     Eigen::Vector3f rgb = Eigen::Vector3f::Constant(options.default_reflectance);
     float rough = 0.5f;
-    int emitter = -1;
+    int shown_light = -1;  // the light this face shows, if it emits
     if (with_pixel > 0) {
       const int x =
           std::clamp(static_cast<int>(std::lround((u / with_pixel + 0.5) * scale_x - 0.5)), 0, width - 1);
@@ -132,7 +132,7 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
         // or backdrops put behind it share its pixels: emitting, they would add area (a street
         // lamp's 0.4 m^2 became 10-30 m^2 of backdrop and solid backs) and light where none is.
         if (all_seen) {
-          emitter = light;
+          shown_light = light;
           const Eigen::Vector3d a = scene.vertices[face[0]].cast<double>();
           const Eigen::Vector3d ab = scene.vertices[face[1]].cast<double>() - a;
           const Eigen::Vector3d ac = scene.vertices[face[2]].cast<double>() - a;
@@ -147,7 +147,7 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     }
     scene.face_reflectance.push_back(reflectanceFromLinearSrgb(rgb));
     if (!roughness.empty()) scene.face_roughness.push_back(rough);
-    light_of_face.push_back(emitter);
+    light_of_face.push_back(shown_light);
   }
 
   // A light's pixels also see the faces its silhouette stretches toward the background
