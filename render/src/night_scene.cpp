@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
 namespace solo {
@@ -75,9 +76,15 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     std::size_t face;
     float depth_m;  // the face's centroid z
     double area_m2;
+    int pixel;    // y * width + x of the pixel it shows
+    bool filled;   // has a vertex added by hole filling
+    bool edge_on;  // seen within 5 degrees of edge-on
   };
   std::vector<std::vector<SeenFace>> seen_faces(record.tree.lights.size());
-  std::int64_t hidden_faces_under_lights = 0;
+  // Per light pixel, the depth of the nearest face that shows it.
+  cv::Mat nearest_depth_m(height, width, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
+  std::int64_t hidden_faces_under_lights = 0, faces_seen_edge_on = 0;
+  const double kCosEdgeOn = std::cos(85.0 * 3.14159265358979 / 180.0);
 
   // Geometry, and per face the pixel under its vertices' mean pixel position.
   const SurfaceMesh& mesh = depth_mesh.mesh;
@@ -93,9 +100,13 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     int k = 0;
     double u = 0, v = 0;
     int with_pixel = 0;
-    bool all_seen = props.has_value();
+    bool behind = !props.has_value(), filled = false;
     for (const auto vh : mesh.fv_range(f)) {
-      if (props) all_seen &= mesh.property(props->origin, vh) == static_cast<std::uint8_t>(VertexOrigin::pixel);
+      if (props) {
+        const auto origin = static_cast<VertexOrigin>(mesh.property(props->origin, vh));
+        behind |= origin == VertexOrigin::solid_back || origin == VertexOrigin::input;
+        filled |= origin == VertexOrigin::hole_fill;
+      }
       int& index = index_of_vertex[static_cast<std::size_t>(vh.idx())];
       if (index < 0) {
         const auto p = mesh.point(vh);
@@ -128,16 +139,25 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
       if (!roughness.empty()) rough = std::clamp(roughness.at<float>(y, x), 0.f, 1.f);
       const int light = light_index.at<int>(y, x);
       if (light >= 0 && light_on[static_cast<std::size_t>(light)]) {
-        // Only the surface the light's pixels see emits. Faces that hole filling, closed solids
-        // or backdrops put behind it share its pixels: emitting, they would add area (a street
+        // Only the surface the light's pixels see emits. Closed solids' backs, and hole fills
+        // and backdrops behind it, share its pixels: emitting, they would add area (a street
         // lamp's 0.4 m^2 became 10-30 m^2 of backdrop and solid backs) and light where none is.
-        if (all_seen) {
+        // Solid backs never emit; filled faces only where nothing nearer shows the pixel (below).
+        const Eigen::Vector3d a = scene.vertices[face[0]].cast<double>();
+        const Eigen::Vector3d ab = scene.vertices[face[1]].cast<double>() - a;
+        const Eigen::Vector3d ac = scene.vertices[face[2]].cast<double>() - a;
+        const Eigen::Vector3d normal = ab.cross(ac);
+        const Eigen::Vector3d centroid = a + (ab + ac) / 3.0;
+        // Seen within 5 degrees of edge-on: stretched across a depth jump (the light's
+        // silhouette toward the background), or a surface at grazing view.
+        const bool edge_on = std::abs(normal.dot(centroid)) < kCosEdgeOn * normal.norm() * centroid.norm();
+        if (!behind) {
           shown_light = light;
-          const Eigen::Vector3d a = scene.vertices[face[0]].cast<double>();
-          const Eigen::Vector3d ab = scene.vertices[face[1]].cast<double>() - a;
-          const Eigen::Vector3d ac = scene.vertices[face[2]].cast<double>() - a;
           const float depth = (scene.vertices[face[0]].z() + scene.vertices[face[1]].z() + scene.vertices[face[2]].z()) / 3;
-          seen_faces[static_cast<std::size_t>(light)].push_back({scene.faces.size() - 1, depth, 0.5 * ab.cross(ac).norm()});
+          seen_faces[static_cast<std::size_t>(light)].push_back(
+              {scene.faces.size() - 1, depth, 0.5 * normal.norm(), y * width + x, filled, edge_on});
+          float& nearest = nearest_depth_m.at<float>(y, x);
+          nearest = std::min(nearest, depth);
         } else {
           ++hidden_faces_under_lights;
         }
@@ -159,6 +179,29 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   std::int64_t faces_off_light_depth = 0;
   for (std::size_t i = 0; i < seen_faces.size(); ++i) {
     std::vector<SeenFace>& faces = seen_faces[i];
+    // A filled face behind a nearer face of the same pixel (a backdrop or a hole fill behind
+    // the lamp) is hidden; one that fills a hole in the seen surface (a lamp's faces removed as
+    // spurious and filled again) is what the pixel sees. Tolerance: 2 % of the depth + 5 cm,
+    // below the 0.2 m of the thinnest slab behind a surface.
+    const auto hidden = [&](const SeenFace& face) {
+      const float nearest = reinterpret_cast<const float*>(nearest_depth_m.data)[face.pixel];
+      return face.filled && face.depth_m > nearest * 1.02f + 0.05f;
+    };
+    const auto first_hidden = std::partition(faces.begin(), faces.end(), [&](const SeenFace& f) { return !hidden(f); });
+    for (auto it = first_hidden; it != faces.end(); ++it) light_of_face[it->face] = -1;
+    hidden_faces_under_lights += std::distance(first_hidden, faces.end());
+    faces.erase(first_hidden, faces.end());
+    // A flux light (a compact lamp) loses its edge-on faces, which are mostly its silhouette
+    // stretched toward the background (on the default scene's draft mesh they made its street
+    // lights 206 m^2 instead of 24), unless it has no other faces. A luminance light keeps them.
+    const LightState& state = record.instantiation.lights[i];
+    if (state.unit == StrengthUnit::FluxLm &&
+        std::any_of(faces.begin(), faces.end(), [](const SeenFace& f) { return !f.edge_on; })) {
+      const auto first_edge_on = std::partition(faces.begin(), faces.end(), [](const SeenFace& f) { return !f.edge_on; });
+      for (auto it = first_edge_on; it != faces.end(); ++it) light_of_face[it->face] = -1;
+      faces_seen_edge_on += std::distance(first_edge_on, faces.end());
+      faces.erase(first_edge_on, faces.end());
+    }
     if (faces.empty()) continue;
     std::vector<float> depths(faces.size());
     for (std::size_t k = 0; k < faces.size(); ++k) depths[k] = faces[k].depth_m;
@@ -236,6 +279,7 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   report.add("faces_without_pixel", faces_without_pixel);
   report.add("hidden_faces_under_lights", hidden_faces_under_lights);
   report.add("faces_off_light_depth", faces_off_light_depth);
+  report.add("flux_light_faces_edge_on", faces_seen_edge_on);
   report.add("lights_on_without_faces", lights_on_without_faces);
   report.add("flux_lights_area_mesh", flux_area_mesh_m2, "m2");
   report.add("flux_lights_area_record", flux_area_record_m2, "m2");

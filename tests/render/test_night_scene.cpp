@@ -256,3 +256,70 @@ TEST(NightScene, FacesALightsSilhouetteStretchesToTheBackgroundDoNotEmit) {
   ASSERT_NE(off_depth, nullptr);
   EXPECT_EQ(std::get<std::int64_t>(*off_depth), 6);
 }
+
+TEST(NightScene, AFilledFaceEmitsWhereItIsTheSeenSurfaceNotBehindIt) {
+  // The light covers columns 3-5 of the plane 4 m away. Column 4's vertices are marked as
+  // added by hole filling (the lamp's faces removed as spurious and filled again): those faces
+  // are what the pixels see and must emit. A filled quad 4 m behind the plane, under the same
+  // pixels (a backdrop), must not.
+  solo::DepthMesh mesh = planeMesh();
+  const auto props = solo::ImageVertexProperties::find(mesh.mesh);
+  ASSERT_TRUE(props.has_value());
+  for (const auto vh : mesh.mesh.vertices())
+    if (mesh.mesh.property(props->pixel, vh)[0] == 4)
+      mesh.mesh.property(props->origin, vh) = static_cast<std::uint8_t>(solo::VertexOrigin::hole_fill);
+  std::array<solo::SurfaceMesh::VertexHandle, 4> back{};
+  const int corner_u[4] = {3, 5, 5, 3}, corner_v[4] = {0, 0, 3, 3};
+  for (int k = 0; k < 4; ++k) {
+    // (u - cx) z / fx with z = 8 m: behind the plane's pixels 3-5.
+    back[static_cast<std::size_t>(k)] = mesh.mesh.add_vertex(
+        solo::SurfaceMesh::Point(0.8f * (corner_u[k] - 2.5f), 0.8f * (corner_v[k] - 1.5f), 8.f));
+    mesh.mesh.property(props->pixel, back[static_cast<std::size_t>(k)]) = OpenMesh::Vec2i(corner_u[k], corner_v[k]);
+    mesh.mesh.property(props->origin, back[static_cast<std::size_t>(k)]) =
+        static_cast<std::uint8_t>(solo::VertexOrigin::hole_fill);
+  }
+  mesh.mesh.add_face(back[0], back[1], back[2]);
+  mesh.mesh.add_face(back[0], back[2], back[3]);
+  solo::LightRecord record;
+  record.tree.width = 6;
+  record.tree.height = 4;
+  record.tree.groups.push_back({});
+  solo::Light light;
+  light.id = 1;
+  light.map_id = 1100;
+  light.category = solo::LightCategory::WindowBuilding;
+  for (int row = 0; row < 4; ++row) light.runs.push_back({row, 3, 5});
+  light.pixels = 12;
+  record.tree.lights.push_back(light);
+  record.geometry.push_back({});
+  record.geometry.back().area_m2 = 1.0;
+  record.geometry.back().pixels_with_depth = 12;
+  solo::LightState state;
+  state.on = true;
+  state.xy = {0.45, 0.41};
+  state.strength = 40;
+  state.unit = solo::StrengthUnit::LuminanceCdPerM2;
+  record.instantiation.lights.push_back(state);
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  ASSERT_EQ(night.scene.faces.size(), 32u);
+  int emitting_filled = 0, emitting = 0;
+  for (std::size_t f = 0; f < night.scene.faces.size(); ++f) {
+    if (night.scene.face_emitter[f] < 0) continue;
+    ++emitting;
+    bool touches_column_4 = false;
+    for (const std::uint32_t v : night.scene.faces[f]) {
+      EXPECT_FLOAT_EQ(night.scene.vertices[v].z(), 4.f) << "the backdrop behind the light emits";
+      touches_column_4 |= std::lround(night.scene.vertices[v].x() / 0.4f + 2.5f) == 4;
+    }
+    emitting_filled += touches_column_4;
+  }
+  // Faces under columns 3-5 (one of each quad 2-3, quads 3-4 and 4-5: 3 + 6 + 6 = 15), of
+  // which those touching column 4 (quads 3-4 and 4-5) are filled.
+  EXPECT_EQ(emitting, 15);
+  EXPECT_EQ(emitting_filled, 12);
+  const solo::MetricValue* hidden = night.report.find("hidden_faces_under_lights");
+  ASSERT_NE(hidden, nullptr);
+  EXPECT_EQ(std::get<std::int64_t>(*hidden), 2) << "the backdrop's two faces";
+}
