@@ -323,3 +323,44 @@ TEST(NightScene, AFilledFaceEmitsWhereItIsTheSeenSurfaceNotBehindIt) {
   ASSERT_NE(hidden, nullptr);
   EXPECT_EQ(std::get<std::int64_t>(*hidden), 2) << "the backdrop's two faces";
 }
+
+TEST(NightScene, AFluxLightDropsTheFacesItShowsEdgeOn) {
+  // As above, but column 5 sees a wall 60 m away: the faces between columns 4 and 5 lie
+  // within about a degree of the camera's rays (edge-on), so the lamp drops them before its
+  // depth band is even needed.
+  cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
+  depth.col(5).setTo(60.f);
+  const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
+  solo::LightRecord record;
+  record.tree.width = 6;
+  record.tree.height = 4;
+  record.tree.groups.push_back({});
+  solo::Light light;
+  light.id = 1;
+  light.map_id = 2600;
+  light.category = solo::LightCategory::MovingFront;
+  for (int row = 0; row < 4; ++row) light.runs.push_back({row, 2, 5});
+  light.pixels = 16;
+  record.tree.lights.push_back(light);
+  record.geometry.push_back({});
+  record.geometry.back().area_m2 = 1.0;
+  record.geometry.back().pixels_with_depth = 16;
+  solo::LightState state;
+  state.on = true;
+  state.xy = {0.44, 0.40};
+  state.strength = 1000;
+  state.unit = solo::StrengthUnit::FluxLm;
+  record.instantiation.lights.push_back(state);
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  int emitting = 0;
+  for (std::size_t f = 0; f < night.scene.faces.size(); ++f) emitting += night.scene.face_emitter[f] >= 0;
+  EXPECT_EQ(emitting, 15);
+  const solo::MetricValue* edge_on = night.report.find("flux_light_faces_edge_on");
+  const solo::MetricValue* off_depth = night.report.find("faces_off_light_depth");
+  ASSERT_NE(edge_on, nullptr);
+  ASSERT_NE(off_depth, nullptr);
+  EXPECT_EQ(std::get<std::int64_t>(*edge_on), 6);
+  EXPECT_EQ(std::get<std::int64_t>(*off_depth), 0);
+}
