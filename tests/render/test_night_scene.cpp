@@ -268,7 +268,7 @@ TEST(NightScene, AFilledFaceEmitsWhereItIsTheSeenSurfaceNotBehindIt) {
   for (const auto vh : mesh.mesh.vertices())
     if (mesh.mesh.property(props->pixel, vh)[0] == 4)
       mesh.mesh.property(props->origin, vh) = static_cast<std::uint8_t>(solo::VertexOrigin::hole_fill);
-  std::array<solo::SurfaceMesh::VertexHandle, 4> back{};
+  std::array<solo::SurfaceMesh::VertexHandle, 4> back;
   const int corner_u[4] = {3, 5, 5, 3}, corner_v[4] = {0, 0, 3, 3};
   for (int k = 0; k < 4; ++k) {
     // (u - cx) z / fx with z = 8 m: behind the plane's pixels 3-5.
