@@ -14,6 +14,38 @@ solo::DepthMesh planeMesh() {
   return solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
 }
 
+// A record at 6x4 pixels with one light that is on over columns first..last of every row.
+solo::LightRecord oneLightRecord(solo::LightCategory category, int first_col, int last_col, double strength,
+                                 solo::StrengthUnit unit, int map_id, Eigen::Vector2d xy, double record_area_m2) {
+  solo::LightRecord record;
+  record.tree.width = 6;
+  record.tree.height = 4;
+  record.tree.groups.push_back({});
+  solo::Light light;
+  light.id = 1;
+  light.map_id = map_id;
+  light.category = category;
+  for (int row = 0; row < 4; ++row) light.runs.push_back({row, first_col, last_col});
+  light.pixels = 4 * (last_col - first_col + 1);
+  record.tree.lights.push_back(light);
+  record.geometry.push_back({});
+  record.geometry.back().area_m2 = record_area_m2;
+  record.geometry.back().pixels_with_depth = light.pixels;
+  solo::LightState state;
+  state.on = true;
+  state.xy = xy;
+  state.strength = strength;
+  state.unit = unit;
+  record.instantiation.lights.push_back(state);
+  return record;
+}
+
+std::int64_t countMetric(const solo::StageReport& report, const std::string& name) {
+  const solo::MetricValue* value = report.find(name);
+  EXPECT_NE(value, nullptr) << name;
+  return value ? std::get<std::int64_t>(*value) : -1;
+}
+
 }  // namespace
 
 TEST(NightScene, FacesTakeTheAlbedoOfTheirPixelAndNoLightMeansNoEmitter) {
@@ -135,26 +167,9 @@ TEST(NightScene, AFluxLightKeepsItsFluxOnTheSeenFacesAndHiddenFacesUnderItDoNotE
   for (const auto vh : mesh.mesh.vertices())
     if (mesh.mesh.property(props->pixel, vh)[0] == 5)
       mesh.mesh.property(props->origin, vh) = static_cast<std::uint8_t>(solo::VertexOrigin::solid_back);
-  solo::LightRecord record;
-  record.tree.width = 6;
-  record.tree.height = 4;
-  record.tree.groups.push_back({});
-  solo::Light light;
-  light.id = 1;
-  light.map_id = 1900;
-  light.category = solo::LightCategory::StreetLightLowCct;
-  for (int row = 0; row < 4; ++row) light.runs.push_back({row, 3, 5});
-  light.pixels = 12;
-  record.tree.lights.push_back(light);
-  record.geometry.push_back({});
-  record.geometry.back().area_m2 = 0.05;  // the record's estimate; the mesh decides
-  record.geometry.back().pixels_with_depth = 12;
-  solo::LightState state;
-  state.on = true;
-  state.xy = {0.5, 0.42};
-  state.strength = 6000;
-  state.unit = solo::StrengthUnit::FluxLm;
-  record.instantiation.lights.push_back(state);
+  const solo::LightRecord record =
+      oneLightRecord(solo::LightCategory::StreetLightLowCct, 3, 5, 6000, solo::StrengthUnit::FluxLm, 1900, {0.5, 0.42},
+                     0.05);  // the record's area estimate: the mesh decides
   solo::NightSceneOptions options;
   options.headlights = false;
   const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
@@ -197,9 +212,7 @@ TEST(NightScene, AFluxLightKeepsItsFluxOnTheSeenFacesAndHiddenFacesUnderItDoNotE
   const double flux = night.scene.emitters[0].radiance.y() * area * solo::profileProjectedSolidAngle(
                                                                           solo::EmissionProfile::CosineLobe);
   EXPECT_NEAR(flux, 6000.0, 6000.0 * 1e-5);
-  const solo::MetricValue* hidden = night.report.find("hidden_faces_under_lights");
-  ASSERT_NE(hidden, nullptr);
-  EXPECT_EQ(std::get<std::int64_t>(*hidden), 6);
+  EXPECT_EQ(countMetric(night.report, "hidden_faces_under_lights"), 6);
 }
 
 TEST(NightScene, FacesALightsSilhouetteStretchesToTheBackgroundDoNotEmit) {
@@ -210,26 +223,8 @@ TEST(NightScene, FacesALightsSilhouetteStretchesToTheBackgroundDoNotEmit) {
   cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
   depth.col(5).setTo(9.f);
   const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
-  solo::LightRecord record;
-  record.tree.width = 6;
-  record.tree.height = 4;
-  record.tree.groups.push_back({});
-  solo::Light light;
-  light.id = 1;
-  light.map_id = 2600;
-  light.category = solo::LightCategory::MovingFront;
-  for (int row = 0; row < 4; ++row) light.runs.push_back({row, 2, 5});
-  light.pixels = 16;
-  record.tree.lights.push_back(light);
-  record.geometry.push_back({});
-  record.geometry.back().area_m2 = 1.0;
-  record.geometry.back().pixels_with_depth = 16;
-  solo::LightState state;
-  state.on = true;
-  state.xy = {0.44, 0.40};
-  state.strength = 1000;
-  state.unit = solo::StrengthUnit::FluxLm;
-  record.instantiation.lights.push_back(state);
+  const solo::LightRecord record =
+      oneLightRecord(solo::LightCategory::MovingFront, 2, 5, 1000, solo::StrengthUnit::FluxLm, 2600, {0.44, 0.40}, 1.0);
   solo::NightSceneOptions options;
   options.headlights = false;
   const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
@@ -252,9 +247,7 @@ TEST(NightScene, FacesALightsSilhouetteStretchesToTheBackgroundDoNotEmit) {
   const double flux = night.scene.emitters[0].radiance.y() * area *
                       solo::profileProjectedSolidAngle(solo::EmissionProfile::CosineLobe);
   EXPECT_NEAR(flux, 1000.0, 1e-2);
-  const solo::MetricValue* off_depth = night.report.find("faces_off_light_depth");
-  ASSERT_NE(off_depth, nullptr);
-  EXPECT_EQ(std::get<std::int64_t>(*off_depth), 6);
+  EXPECT_EQ(countMetric(night.report, "faces_off_light_depth"), 6);
 }
 
 TEST(NightScene, AFilledFaceEmitsWhereItIsTheSeenSurfaceNotBehindIt) {
@@ -280,26 +273,8 @@ TEST(NightScene, AFilledFaceEmitsWhereItIsTheSeenSurfaceNotBehindIt) {
   }
   mesh.mesh.add_face(back[0], back[1], back[2]);
   mesh.mesh.add_face(back[0], back[2], back[3]);
-  solo::LightRecord record;
-  record.tree.width = 6;
-  record.tree.height = 4;
-  record.tree.groups.push_back({});
-  solo::Light light;
-  light.id = 1;
-  light.map_id = 1100;
-  light.category = solo::LightCategory::WindowBuilding;
-  for (int row = 0; row < 4; ++row) light.runs.push_back({row, 3, 5});
-  light.pixels = 12;
-  record.tree.lights.push_back(light);
-  record.geometry.push_back({});
-  record.geometry.back().area_m2 = 1.0;
-  record.geometry.back().pixels_with_depth = 12;
-  solo::LightState state;
-  state.on = true;
-  state.xy = {0.45, 0.41};
-  state.strength = 40;
-  state.unit = solo::StrengthUnit::LuminanceCdPerM2;
-  record.instantiation.lights.push_back(state);
+  const solo::LightRecord record =
+      oneLightRecord(solo::LightCategory::WindowBuilding, 3, 5, 40, solo::StrengthUnit::LuminanceCdPerM2, 1100, {0.45, 0.41}, 1.0);
   solo::NightSceneOptions options;
   options.headlights = false;
   const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
@@ -319,9 +294,7 @@ TEST(NightScene, AFilledFaceEmitsWhereItIsTheSeenSurfaceNotBehindIt) {
   // which those touching column 4 (quads 3-4 and 4-5) are filled.
   EXPECT_EQ(emitting, 15);
   EXPECT_EQ(emitting_filled, 12);
-  const solo::MetricValue* hidden = night.report.find("hidden_faces_under_lights");
-  ASSERT_NE(hidden, nullptr);
-  EXPECT_EQ(std::get<std::int64_t>(*hidden), 2) << "the backdrop's two faces";
+  EXPECT_EQ(countMetric(night.report, "hidden_faces_under_lights"), 2) << "the backdrop's two faces";
 }
 
 TEST(NightScene, AFluxLightDropsTheFacesItShowsEdgeOn) {
@@ -331,36 +304,14 @@ TEST(NightScene, AFluxLightDropsTheFacesItShowsEdgeOn) {
   cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
   depth.col(5).setTo(60.f);
   const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
-  solo::LightRecord record;
-  record.tree.width = 6;
-  record.tree.height = 4;
-  record.tree.groups.push_back({});
-  solo::Light light;
-  light.id = 1;
-  light.map_id = 2600;
-  light.category = solo::LightCategory::MovingFront;
-  for (int row = 0; row < 4; ++row) light.runs.push_back({row, 2, 5});
-  light.pixels = 16;
-  record.tree.lights.push_back(light);
-  record.geometry.push_back({});
-  record.geometry.back().area_m2 = 1.0;
-  record.geometry.back().pixels_with_depth = 16;
-  solo::LightState state;
-  state.on = true;
-  state.xy = {0.44, 0.40};
-  state.strength = 1000;
-  state.unit = solo::StrengthUnit::FluxLm;
-  record.instantiation.lights.push_back(state);
+  const solo::LightRecord record =
+      oneLightRecord(solo::LightCategory::MovingFront, 2, 5, 1000, solo::StrengthUnit::FluxLm, 2600, {0.44, 0.40}, 1.0);
   solo::NightSceneOptions options;
   options.headlights = false;
   const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
   int emitting = 0;
   for (std::size_t f = 0; f < night.scene.faces.size(); ++f) emitting += night.scene.face_emitter[f] >= 0;
   EXPECT_EQ(emitting, 15);
-  const solo::MetricValue* edge_on = night.report.find("flux_light_faces_edge_on");
-  const solo::MetricValue* off_depth = night.report.find("faces_off_light_depth");
-  ASSERT_NE(edge_on, nullptr);
-  ASSERT_NE(off_depth, nullptr);
-  EXPECT_EQ(std::get<std::int64_t>(*edge_on), 6);
-  EXPECT_EQ(std::get<std::int64_t>(*off_depth), 0);
+  EXPECT_EQ(countMetric(night.report, "flux_light_faces_edge_on"), 6);
+  EXPECT_EQ(countMetric(night.report, "faces_off_light_depth"), 0);
 }
