@@ -191,7 +191,7 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     // spurious and filled again) is what the pixel sees. Tolerance: 2 % of the depth + 5 cm,
     // below the 0.2 m of the thinnest slab behind a surface.
     dropFaces(faces, [&](const SeenFace& face) {
-      const float nearest = reinterpret_cast<const float*>(nearest_depth_m.data)[face.pixel];
+      const float nearest = nearest_depth_m.ptr<float>()[face.pixel];
       return face.filled && face.depth_m > nearest * 1.02f + 0.05f;
     }, hidden_faces_under_lights);
     // A flux light (a compact lamp) loses its edge-on faces, mostly its silhouette stretched

@@ -40,6 +40,27 @@ solo::LightRecord oneLightRecord(solo::LightCategory category, int first_col, in
   return record;
 }
 
+// A 1000 lm front light over columns 2-5 of a lamp 4 m away whose column 5 sees a wall
+// `wall_m` away: the faces between columns 4 and 5 are stretched across the depth jump.
+solo::NightScene lampBeforeAWall(float wall_m) {
+  cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
+  depth.col(5).setTo(wall_m);
+  const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
+  const solo::LightRecord record =
+      oneLightRecord(solo::LightCategory::MovingFront, 2, 5, 1000, solo::StrengthUnit::FluxLm, 2600, {0.44, 0.40}, 1.0);
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  return solo::buildNightScene(mesh, {}, {}, {}, record, options);
+}
+
+// Area of face f of a scene whose faces are fronto-parallel (their extent in x and y), m^2.
+double frontoParallelArea(const solo::RenderScene& scene, std::size_t f) {
+  const auto& face = scene.faces[f];
+  const Eigen::Vector3f a = scene.vertices[face[0]];
+  const Eigen::Vector3f ab = scene.vertices[face[1]] - a, ac = scene.vertices[face[2]] - a;
+  return 0.5 * std::abs(static_cast<double>(ab.x() * ac.y() - ab.y() * ac.x()));
+}
+
 std::int64_t countMetric(const solo::StageReport& report, const std::string& name) {
   const solo::MetricValue* value = report.find(name);
   EXPECT_NE(value, nullptr) << name;
@@ -200,9 +221,7 @@ TEST(NightScene, AFluxLightKeepsItsFluxOnTheSeenFacesAndHiddenFacesUnderItDoNotE
     EXPECT_EQ(night.scene.face_reflectance[f], Eigen::Vector3f::Zero()) << "an emitting face reflects nothing";
     EXPECT_FALSE(touches_back) << "face " << f << " is behind what the pixels see";
     EXPECT_TRUE(under_light);
-    const Eigen::Vector3f a = night.scene.vertices[face[0]];
-    const Eigen::Vector3f ab = night.scene.vertices[face[1]] - a, ac = night.scene.vertices[face[2]] - a;
-    area += 0.5 * std::abs(static_cast<double>(ab.x() * ac.y() - ab.y() * ac.x()));
+    area += frontoParallelArea(night.scene, f);
   }
   EXPECT_EQ(hidden_under_light, 6) << "quad 4-5 of 3 rows, two faces each";
   EXPECT_EQ(emitting, 9) << "quad 3-4 (6 faces) and one face of each quad 2-3 (3)";
@@ -216,29 +235,19 @@ TEST(NightScene, AFluxLightKeepsItsFluxOnTheSeenFacesAndHiddenFacesUnderItDoNotE
 }
 
 TEST(NightScene, FacesALightsSilhouetteStretchesToTheBackgroundDoNotEmit) {
-  // A lamp 4 m away over columns 2-4 whose column 5 sees a wall 9 m away: the faces between
-  // columns 4 and 5 span 4-9 m of depth (mixed pixels at a silhouette). The light covers
-  // columns 2-5, so some of those stretched faces lie under its pixels; they must not emit,
-  // and the lamp's 1000 lm must sit on the faces at its own depth.
-  cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
-  depth.col(5).setTo(9.f);
-  const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
-  const solo::LightRecord record =
-      oneLightRecord(solo::LightCategory::MovingFront, 2, 5, 1000, solo::StrengthUnit::FluxLm, 2600, {0.44, 0.40}, 1.0);
-  solo::NightSceneOptions options;
-  options.headlights = false;
-  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  // The lamp's column 5 sees a wall 9 m away: the faces between columns 4 and 5 span 4-9 m of
+  // depth (mixed pixels at a silhouette). The light covers columns 2-5, so some of those
+  // stretched faces lie under its pixels; they must not emit, and the lamp's 1000 lm must sit
+  // on the faces at its own depth.
+  const solo::NightScene night = lampBeforeAWall(9.f);
   ASSERT_EQ(night.scene.emitters.size(), 1u);
   double area = 0;
   int emitting = 0;
   for (std::size_t f = 0; f < night.scene.faces.size(); ++f) {
     if (night.scene.face_emitter[f] < 0) continue;
     ++emitting;
-    const auto& face = night.scene.faces[f];
-    for (const std::uint32_t v : face) EXPECT_FLOAT_EQ(night.scene.vertices[v].z(), 4.f) << "face " << f;
-    const Eigen::Vector3f a = night.scene.vertices[face[0]];
-    const Eigen::Vector3f ab = night.scene.vertices[face[1]] - a, ac = night.scene.vertices[face[2]] - a;
-    area += 0.5 * std::abs(static_cast<double>(ab.x() * ac.y() - ab.y() * ac.x()));
+    for (const std::uint32_t v : night.scene.faces[f]) EXPECT_FLOAT_EQ(night.scene.vertices[v].z(), 4.f) << "face " << f;
+    area += frontoParallelArea(night.scene, f);
   }
   // Under columns 2-5 (mean column rounded): one face of quad 1-2, quads 2-3 and 3-4 (the
   // flat lamp: 3 + 12 faces) and quad 4-5 (6 stretched faces, left out).
@@ -298,17 +307,10 @@ TEST(NightScene, AFilledFaceEmitsWhereItIsTheSeenSurfaceNotBehindIt) {
 }
 
 TEST(NightScene, AFluxLightDropsTheFacesItShowsEdgeOn) {
-  // As above, but column 5 sees a wall 60 m away: the faces between columns 4 and 5 lie
-  // within about a degree of the camera's rays (edge-on), so the lamp drops them before its
-  // depth band is even needed.
-  cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
-  depth.col(5).setTo(60.f);
-  const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
-  const solo::LightRecord record =
-      oneLightRecord(solo::LightCategory::MovingFront, 2, 5, 1000, solo::StrengthUnit::FluxLm, 2600, {0.44, 0.40}, 1.0);
-  solo::NightSceneOptions options;
-  options.headlights = false;
-  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  // The lamp's column 5 sees a wall 60 m away: the faces between columns 4 and 5 lie within
+  // about a degree of the camera's rays (edge-on), so the lamp drops them before its depth
+  // band is even needed.
+  const solo::NightScene night = lampBeforeAWall(60.f);
   int emitting = 0;
   for (std::size_t f = 0; f < night.scene.faces.size(); ++f) emitting += night.scene.face_emitter[f] >= 0;
   EXPECT_EQ(emitting, 15);
