@@ -4,6 +4,7 @@
 #include "solo/render/ray_caster.h"
 #include "solo/render/sampler.h"
 #include "solo/render/spherical_triangle.h"
+#include "slot_shading.h"
 
 #include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
@@ -187,22 +188,21 @@ struct Context {
   const PathTracerOptions& options;
   const RayCaster& caster;
   const std::vector<EmissiveTriangle>& emissive;
-  const std::vector<int>& face_to_emissive;
   const LightSampler& sampler;
-  const std::vector<Eigen::Vector3f>& face_normals;  // unit geometric normals
+  const std::vector<QuadShading>& shading;  // by the caster's slot
   SunDisc sun;
   bool sky_on;  // a non-black sky: next-event estimation toward it
   std::vector<float> rectangle_area, rectangle_cos_half_spread;  // per rectangle light, computed once
 };
 
 // The MIS weight of emission that a bounce from `from_point` (receiver normal `from_normal`,
-// ray origin `from_origin`) found along unit `direction`, `distance` away, on `face` at
-// |cosine| `abs_cos`, the bounce's density being `bounce_pdf`: against the light sampler's
-// density for that direction. 1 for emitting faces the light sampler never picks.
-float bounceEmissionWeight(const Context& c, std::uint32_t face, const Eigen::Vector3f& from_point,
+// ray origin `from_origin`) found along unit `direction`, `distance` away, on emissive triangle
+// `triangle` (-1: a face the light sampler does not hold) at |cosine| `abs_cos`, the bounce's
+// density being `bounce_pdf`: against the light sampler's density for that direction. 1 for
+// emitting faces the light sampler never picks.
+float bounceEmissionWeight(const Context& c, int triangle, const Eigen::Vector3f& from_point,
                            const Eigen::Vector3f& from_normal, const Eigen::Vector3f& from_origin,
                            const Eigen::Vector3f& direction, float distance, float abs_cos, float bounce_pdf) {
-  const int triangle = c.face_to_emissive[face];
   if (triangle < 0 || !(abs_cos > 0.f)) return 1.f;
   const float light_pdf = c.sampler.pmf(from_point, from_normal, triangle) *
                           emitterPdf(c.emissive[static_cast<std::size_t>(triangle)], from_origin, from_normal, direction,
@@ -227,7 +227,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
   const auto closestHit = [&](const Eigen::Vector3f& o, const Eigen::Vector3f& d) {
     ++rays;
     if (log) log->push_back({o, d, std::numeric_limits<float>::infinity(), false});
-    return c.caster.intersect(o, d);
+    return c.caster.intersectSlot(o, d);
   };
   const auto occluded = [&](const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t_far) {
     ++rays;
@@ -242,7 +242,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
   Eigen::Vector3f radiance = Eigen::Vector3f::Zero(), throughput = Eigen::Vector3f::Ones();
   float previous_bsdf_pdf = 0.f;
   Eigen::Vector3f previous_point = origin, previous_normal = Eigen::Vector3f::UnitZ();
-  const bool has_roughness = !c.scene.face_roughness.empty();
+  const bool has_roughness = !c.scene.face_roughness.empty();  // else no specular lobe
 
   // Radiance after at most one scattering; NaN until the second vertex is reached.
   Eigen::Vector3f direct = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
@@ -253,7 +253,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
     // draws two numbers it does not use; that moves only the pixel's later independent numbers.
     const float u_choice = rng.get1D(), u_pick = rng.get1D();
     c.sampler.prefetch(u_pick);
-    const RayHit hit = closestHit(origin, direction);
+    const SlotHit hit = closestHit(origin, direction);
     if (!hit.hit) {
       // Sky and sun: MIS-weighted against their next-event estimation after the first bounce.
       if (c.sky_on) {
@@ -267,9 +267,9 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       }
       break;
     }
-    const std::uint32_t face = hit.triangle;
+    const SlotShading& face = slotShading(c.shading, hit.slot);
     const Eigen::Vector3f point = origin + direction * hit.distance;
-    Eigen::Vector3f n = c.face_normals[face];
+    Eigen::Vector3f n = decodeOctahedral(face.normal);
     const float cos_hit = n.dot(-direction);
     if (cos_hit < 0.f) n = -n;
     const float abs_cos_hit = std::abs(cos_hit);
@@ -278,21 +278,21 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
     const int tri = bounce < c.options.max_bounces ? c.sampler.pick(point, n, u_pick, &pick_pmf) : -1;
     if (tri >= 0) __builtin_prefetch(&c.emissive[static_cast<std::size_t>(tri)]);
 
-    const int emitter_index = c.scene.face_emitter.empty() ? -1 : c.scene.face_emitter[face];
+    const int emitter_index = face.emitter;
     if (emitter_index >= 0) {
       const Emitter& e = c.scene.emitters[static_cast<std::size_t>(emitter_index)];
       const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, abs_cos_hit);
       if (bounce == 0) {
         radiance += emitted;
       } else {
-        const float weight = bounceEmissionWeight(c, face, previous_point, previous_normal, origin, direction,
+        const float weight = bounceEmissionWeight(c, face.emissive, previous_point, previous_normal, origin, direction,
                                                   hit.distance, abs_cos_hit, previous_bsdf_pdf);
         radiance += throughput.cwiseProduct(emitted) * (weight * emission_scale);
       }
     }
     if (bounce == 1) direct = radiance;  // light scattered at most once; the rest is indirect
     const Eigen::Vector3f wo = -direction;
-    const SurfaceBsdf bsdf(n, wo, c.scene.face_reflectance[face], has_roughness ? c.scene.face_roughness[face] : 0.5f,
+    const SurfaceBsdf bsdf(n, wo, face.reflectance, face.roughness,
                            c.options.diffuse, has_roughness);
     if (bounce == 0) sees_emitter = emitter_index >= 0;
     if (bounce == 0 && first) {
@@ -407,13 +407,13 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       if (!bsdf.sample(v_lobe, v1, v2, &w)) continue;
       const float p = bsdf.pdf(w);
       if (!(p > 0.f)) continue;
-      const RayHit h = closestHit(shadow_origin, w);
+      const SlotHit h = closestHit(shadow_origin, w);
       if (!h.hit) continue;
-      const int e_index = c.scene.face_emitter.empty() ? -1 : c.scene.face_emitter[h.triangle];
-      if (e_index < 0) continue;
-      const Emitter& e = c.scene.emitters[static_cast<std::size_t>(e_index)];
-      const float abs_cos = std::abs(c.face_normals[h.triangle].dot(w));
-      const float weight = bounceEmissionWeight(c, h.triangle, point, n, shadow_origin, w, h.distance, abs_cos, p);
+      const SlotShading& hit_face = slotShading(c.shading, h.slot);
+      if (hit_face.emitter < 0) continue;
+      const Emitter& e = c.scene.emitters[static_cast<std::size_t>(hit_face.emitter)];
+      const float abs_cos = std::abs(decodeOctahedral(hit_face.normal).dot(w));
+      const float weight = bounceEmissionWeight(c, hit_face.emissive, point, n, shadow_origin, w, h.distance, abs_cos, p);
       radiance += throughput.cwiseProduct(bsdf.eval(w)).cwiseProduct(e.radiance * profile(e.directional_profile, abs_cos)) *
                   (n.dot(w) / p * weight / static_cast<float>(splits));
     }
@@ -476,8 +476,7 @@ struct PreparedRenderScene::Impl {
   std::unique_ptr<RayCaster> caster;
   double build_seconds = 0;
   std::vector<EmissiveTriangle> emissive;
-  std::vector<int> face_to_emissive;
-  std::vector<Eigen::Vector3f> face_normals;
+  std::vector<QuadShading> shading;  // by the caster's slot
   double prepare_seconds = 0;  // the whole construction, BVH included
   // Light samplers built on first use, one per kind, shared by every render of the scene
   // (the hierarchy over the 1080p street's 188 000 emitting triangles takes a noticeable
@@ -508,15 +507,10 @@ PreparedRenderScene::PreparedRenderScene(const RenderScene& scene) : impl_(new I
   impl_->build_seconds = build_clock.seconds();
 
   impl_->emissive = collectEmissiveTriangles(scene);
-  impl_->face_to_emissive.assign(scene.faces.size(), -1);
+  std::vector<int> face_to_emissive(scene.faces.size(), -1);
   for (std::size_t i = 0; i < impl_->emissive.size(); ++i)
-    impl_->face_to_emissive[impl_->emissive[i].face] = static_cast<int>(i);
-  impl_->face_normals.reserve(scene.faces.size());
-  for (const auto& f : scene.faces) {
-    const Eigen::Vector3f cross = (scene.vertices[f[1]] - scene.vertices[f[0]]).cross(scene.vertices[f[2]] - scene.vertices[f[0]]);
-    const float norm = cross.norm();
-    impl_->face_normals.push_back(norm > 0.f ? Eigen::Vector3f(cross / norm) : Eigen::Vector3f::UnitZ());
-  }
+    face_to_emissive[impl_->emissive[i].face] = static_cast<int>(i);
+  impl_->shading = buildSlotShading(scene, impl_->caster->slotTriangles(), face_to_emissive);
   impl_->prepare_seconds = prepare_clock.seconds();
 }
 
@@ -544,13 +538,12 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   const double build_seconds = p.build_seconds;
   const RayCaster& caster = *p.caster;
   const std::vector<EmissiveTriangle>& emissive = p.emissive;
-  const std::vector<int>& face_to_emissive = p.face_to_emissive;
   const LightSampler& sampler = p.lightSampler(options.light_sampler);
 
   if (!scene.face_roughness.empty()) ggxAverageAlbedo(0.5f);  // builds the albedo table before the tiles start
   const bool sky_on = scene.sky_radiance.maxCoeff() > 0.f ||
                       (scene.sky_zenith_radiance && scene.sky_zenith_radiance->maxCoeff() > 0.f);
-  Context context{scene, camera, options, caster, emissive, face_to_emissive, sampler, p.face_normals, SunDisc(scene.sun),
+  Context context{scene, camera, options, caster, emissive, sampler, p.shading, SunDisc(scene.sun),
                   sky_on, {}, {}};
   for (const RectangleLight& light : scene.rectangle_lights) {
     context.rectangle_area.push_back(light.edge_u.cross(light.edge_v).norm());

@@ -161,6 +161,33 @@ RayHit RayCaster::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f
   return hit;
 }
 
+SlotHit RayCaster::intersectSlot(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near,
+                                 float t_far) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit query;
+  query.ray = makeRay(origin, direction, t_near, t_far);
+  query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->scene, &context, &query);
+  SlotHit hit;
+  if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+  hit.hit = true;
+  hit.distance = query.ray.tfar;
+  hit.slot = 2 * query.hit.primID + (query.hit.u + query.hit.v > 1.f ? 1u : 0u);  // as intersect() decides
+  return hit;
+}
+
+std::vector<std::uint32_t> RayCaster::slotTriangles() const {
+  std::vector<std::uint32_t> triangles;
+  triangles.reserve(slotCount());
+  for (const QuadSource& source : impl_->quad_sources) {
+    triangles.push_back(source.first);
+    triangles.push_back(source.second != QuadSource::kNoTriangle ? source.second : source.first);
+  }
+  return triangles;
+}
+
 bool RayCaster::occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near,
                          float t_far) const {
   RTCIntersectContext context;

@@ -6,6 +6,8 @@
 //      the efficiency line alone on the scene `solo night` renders from a scene manifest with
 //      its default preset (the mesh at the image resolution; the camera scaled to WIDTHxHEIGHT,
 //      480x270 unless given, so that one-thread renders take seconds).
+//  or: build/release/tests/benchmarks/bench_render trace MANIFEST [WIDTHxHEIGHT] [REPEATS]
+//      that line's tracer run alone, for a profiler (perf record -g ...).
 
 #include "night_street.h"
 #include "pipeline_scene.h"
@@ -38,7 +40,8 @@ double median(std::vector<double> v) {
 }
 
 // Raw Embree: camera rays then one random bounce per hit, single rays as the tracer casts
-// them, on the calling thread. Closest-hit rays only (the tracer's shadow rays are cheaper).
+// them, on the calling thread. Closest-hit rays only (the tracer's shadow rays are cheaper),
+// through intersectSlot: Embree's rtcIntersect1 and nothing after it.
 double rawEmbreeRaysPerSecond(const solo::RenderScene& scene, const solo::RayCaster& caster) {
   std::mt19937 rng(1);
   std::normal_distribution<float> g(0, 1);
@@ -50,11 +53,11 @@ double rawEmbreeRaysPerSecond(const solo::RenderScene& scene, const solo::RayCas
         const Eigen::Vector3f d = Eigen::Vector3f(static_cast<float>((x - scene.camera.cx) / scene.camera.fx),
                                                   static_cast<float>((y - scene.camera.cy) / scene.camera.fy), 1.f)
                                       .normalized();
-        const solo::RayHit hit = caster.intersect(Eigen::Vector3f::Zero(), d);
+        const solo::SlotHit hit = caster.intersectSlot(Eigen::Vector3f::Zero(), d);
         ++rays;
         if (!hit.hit) continue;
         const Eigen::Vector3f p = d * hit.distance * 0.999f;
-        caster.intersect(p, Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
+        caster.intersectSlot(p, Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
         ++rays;
       }
   return static_cast<double>(rays) / clock.seconds();
@@ -66,7 +69,7 @@ double replayRaysPerSecond(const solo::RayCaster& caster, const std::vector<solo
   solo::Stopwatch clock;
   std::int64_t hits = 0;
   for (const solo::RecordedRay& r : rays)
-    hits += r.shadow ? caster.occluded(r.origin, r.direction, 0.f, r.t_far) : caster.intersect(r.origin, r.direction).hit;
+    hits += r.shadow ? caster.occluded(r.origin, r.direction, 0.f, r.t_far) : caster.intersectSlot(r.origin, r.direction).hit;
   const double seconds = clock.seconds();
   if (hits < 0) std::printf("unreachable\n");  // keeps the loop's results alive
   return static_cast<double>(rays.size()) / seconds;
@@ -157,6 +160,25 @@ void measureEfficiency(const solo::RenderScene& scene) {
               median(replay) / 1e6, median(power) / 1e6, 100 * median(power) / median(replay));
 }
 
+// The efficiency line's tracer run alone (power sampler, 1 thread, 4 spp), `repeats` times: a
+// workload for profilers, whose samples then all come from the tracer.
+void traceOnly(const solo::RenderScene& scene, int repeats) {
+  const solo::PreparedRenderScene prepared(scene);
+  tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+  std::vector<double> rate;
+  for (int repeat = 0; repeat < repeats; ++repeat) {
+    solo::PathTracerOptions t;
+    t.progress = false;
+    t.min_samples = t.max_samples = 4;
+    t.seed = 11;
+    t.light_sampler = solo::LightSamplerKind::Power;
+    const solo::RenderOutput out = solo::renderPathTraced(prepared, scene.camera, t);
+    rate.push_back(std::get<double>(*out.report.find("rays_per_second")));
+  }
+  std::printf("tracer alone, power sampler, 1 thread, 4 spp, median of %d: %.3f Mrays/s\n", repeats,
+              median(rate) / 1e6);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -172,6 +194,22 @@ int main(int argc, char** argv) {
       measureEfficiency(solo::bench::pipelineScene(argv[2], width, height));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "bench_render efficiency: %s\n", e.what());
+      return 1;
+    }
+    return 0;
+  }
+  if (argc > 1 && std::string(argv[1]) == "trace") {
+    if (argc < 3) {
+      std::fprintf(stderr, "usage: bench_render trace MANIFEST [WIDTHxHEIGHT] [REPEATS]\n");
+      return 2;
+    }
+    int width = 480, height = 270;
+    if (argc > 3) std::sscanf(argv[3], "%dx%d", &width, &height);
+    const int repeats = argc > 4 ? std::max(1, std::atoi(argv[4])) : 5;
+    try {
+      traceOnly(solo::bench::pipelineScene(argv[2], width, height), repeats);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "bench_render trace: %s\n", e.what());
       return 1;
     }
     return 0;

@@ -121,6 +121,18 @@ TEST(RayCaster, TrianglePairsGivenAsQuadsReportTheInputTriangle) {
   // 24 pixel quads: 20 pairs become quads; the 4 flipped pairs and the lone triangle stay
   // single (a flipped triangle's edges run the same way as its neighbours').
   EXPECT_EQ(caster.primitiveCount(), 20u + 4u * 2u + 1u);
+  // Slots: both halves of each quad; a single triangle fills both halves of its own.
+  const std::vector<std::uint32_t> slots = caster.slotTriangles();
+  ASSERT_EQ(slots.size(), caster.slotCount());
+  ASSERT_EQ(slots.size(), 2 * caster.primitiveCount());
+  std::vector<int> seen(tri.size() / 3, 0);
+  for (std::size_t k = 0; k < slots.size(); k += 2) {
+    ++seen[slots[k]];
+    if (slots[k + 1] != slots[k]) ++seen[slots[k + 1]];
+  }
+  for (std::size_t t = 0; t < seen.size(); ++t) EXPECT_EQ(seen[t], 1) << "triangle " << t << " in one quad";
+  EXPECT_EQ(slots[slots.size() - 1], tri.size() / 3 - 1);  // the lone triangle, in both halves
+  EXPECT_EQ(slots[slots.size() - 2], tri.size() / 3 - 1);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> spread(-3.2f, 3.2f), height(-2.2f, 2.2f);
   int hits = 0, second_halves = 0;
@@ -131,8 +143,13 @@ TEST(RayCaster, TrianglePairsGivenAsQuadsReportTheInputTriangle) {
     const solo::RayHit hit = caster.intersect(origin, d);
     const BruteHit truth = bruteForce(p, tri, origin.cast<double>(), d.cast<double>());
     ASSERT_EQ(hit.hit, truth.triangle >= 0) << "ray " << i;
+    const solo::SlotHit slot_hit = caster.intersectSlot(origin, d);
+    ASSERT_EQ(slot_hit.hit, hit.hit) << "ray " << i;
     if (!hit.hit) continue;
     ++hits;
+    EXPECT_EQ(slot_hit.distance, hit.distance) << "ray " << i;
+    ASSERT_LT(slot_hit.slot, slots.size());
+    EXPECT_EQ(slots[slot_hit.slot], hit.triangle) << "ray " << i;  // the slot's triangle, even on an edge
     if (std::abs(truth.u + truth.v - 1) < 1e-4 || truth.u < 1e-4 || truth.v < 1e-4) continue;  // on an edge
     ASSERT_EQ(static_cast<int>(hit.triangle), truth.triangle) << "ray " << i;
     second_halves += hit.triangle % 2 == 1 && hit.triangle + 1 != tri.size() / 3;

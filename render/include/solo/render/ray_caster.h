@@ -24,6 +24,15 @@ struct RayHit {
   float u = 0, v = 0;                  ///< barycentrics of v1 and v2
 };
 
+/// A closest hit as Embree names it: the half of one of its quads, with no lookup of the input
+/// triangle (on a large mesh that lookup is a cache miss per ray). Renderers that keep their
+/// per-face data by slot (RayCaster::slotTriangles) read one place per hit instead of two.
+struct SlotHit {
+  bool hit = false;
+  float distance = 0;      ///< ray parameter t; metres for a unit direction
+  std::uint32_t slot = 0;  ///< 2 * quad + half, in [0, RayCaster::slotCount())
+};
+
 class RayCaster {
  public:
   /// vertices: x0 y0 z0 x1 y1 z1 ... (metres); triangles: i0 j0 k0 i1 j1 k1 ...
@@ -37,6 +46,9 @@ class RayCaster {
   /// Closest hit along origin + t * direction for t in [t_near, t_far].
   RayHit intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near = 0.f,
                    float t_far = std::numeric_limits<float>::infinity()) const;
+  /// intersect() without the input triangle, its normal or barycentrics.
+  SlotHit intersectSlot(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near = 0.f,
+                        float t_far = std::numeric_limits<float>::infinity()) const;
   /// Whether anything lies on the segment t in [t_near, t_far].
   bool occluded(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near, float t_far) const;
 
@@ -44,6 +56,11 @@ class RayCaster {
   /// Primitives in Embree's BVH: triangles that share an edge with the next one in the input
   /// (the two halves of a pixel quad) are handed over as one quad.
   std::size_t primitiveCount() const;
+  /// 2 * primitiveCount(): the two halves of every quad.
+  std::size_t slotCount() const { return 2 * primitiveCount(); }
+  /// The input triangle in each slot. A quad that holds a single triangle names it in both
+  /// halves, so that a hit on its degenerate half still finds the triangle's data.
+  std::vector<std::uint32_t> slotTriangles() const;
 
  private:
   struct Impl;

@@ -1,0 +1,47 @@
+#include "slot_shading.h"
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace solo {
+
+Eigen::Vector2f encodeOctahedral(const Eigen::Vector3f& unit) {
+  const float l1 = std::abs(unit.x()) + std::abs(unit.y()) + std::abs(unit.z());
+  Eigen::Vector2f e(unit.x() / l1, unit.y() / l1);
+  if (unit.z() < 0.f) {
+    const float x = e.x();
+    e.x() = (1.f - std::abs(e.y())) * (x >= 0.f ? 1.f : -1.f);
+    e.y() = (1.f - std::abs(x)) * (e.y() >= 0.f ? 1.f : -1.f);
+  }
+  return e;
+}
+
+std::vector<QuadShading> buildSlotShading(const RenderScene& scene, const std::vector<std::uint32_t>& slot_triangles,
+                                          const std::vector<int>& face_to_emissive) {
+  if (slot_triangles.size() % 2 != 0) throw std::invalid_argument("buildSlotShading: an odd slot count");
+  const bool has_roughness = !scene.face_roughness.empty();
+  const bool has_emitters = !scene.face_emitter.empty();
+  std::vector<QuadShading> table(slot_triangles.size() / 2);
+  for (std::size_t slot = 0; slot < slot_triangles.size(); ++slot) {
+    const std::uint32_t face = slot_triangles[slot];
+    if (face >= scene.faces.size()) throw std::invalid_argument("buildSlotShading: a slot names no face");
+    const auto& f = scene.faces[face];
+    // The normal in double: a sliver's cross product can underflow in single precision.
+    const Eigen::Vector3d cross = (scene.vertices[f[1]] - scene.vertices[f[0]])
+                                      .cast<double>()
+                                      .cross((scene.vertices[f[2]] - scene.vertices[f[0]]).cast<double>());
+    const double norm = cross.norm();
+    const Eigen::Vector3f normal = norm > 0 ? Eigen::Vector3f((cross / norm).cast<float>()) : Eigen::Vector3f::UnitZ();
+    SlotShading& s = table[slot / 2].half[slot % 2];
+    s.reflectance = scene.face_reflectance[face];
+    s.roughness = has_roughness ? scene.face_roughness[face] : 0.5f;
+    s.normal = encodeOctahedral(normal);
+    s.emitter = has_emitters ? scene.face_emitter[face] : -1;
+    s.emissive = face_to_emissive[face];
+  }
+  return table;
+}
+
+}  // namespace solo
