@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
@@ -192,6 +193,7 @@ struct Context {
   const std::vector<QuadShading>& shading;  // by the caster's slot
   SunDisc sun;
   bool sky_on;  // a non-black sky: next-event estimation toward it
+  bool has_roughness;  // a roughness map: the specular lobe
   std::vector<float> rectangle_area, rectangle_cos_half_spread;  // per rectangle light, computed once
 };
 
@@ -218,64 +220,139 @@ struct FirstHit {
 
 float offsetFor(float distance) { return 1e-4f * std::max(1.f, distance); }
 
-// One path sample from the camera through (px, py). Returns XYZ radiance.
-// `sees_emitter` is set when the camera ray hits an emitting face.
-Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, FirstHit* first, bool& sees_emitter,
-                          std::int64_t& rays, std::int64_t& clamped, std::int64_t& split_vertices,
-                          std::vector<RecordedRay>* log) {
-  // Every ray goes through these two: counted, and recorded when a log is kept.
-  const auto closestHit = [&](const Eigen::Vector3f& o, const Eigen::Vector3f& d) {
-    ++rays;
-    if (log) log->push_back({o, d, std::numeric_limits<float>::infinity(), false});
-    return c.caster.intersectSlot(o, d);
-  };
-  const auto occluded = [&](const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t_far) {
-    ++rays;
-    if (log) log->push_back({o, d, t_far, true});
-    return c.caster.occluded(o, d, 0.f, t_far);
-  };
-  const PinholeCamera& cam = c.camera;
-  Eigen::Vector3f direction(static_cast<float>((px - cam.cx) / cam.fx), static_cast<float>((py - cam.cy) / cam.fy), 1.f);
-  const float z_per_distance = 1.f / direction.norm();
-  direction.normalize();
-  Eigen::Vector3f origin = Eigen::Vector3f::Zero();
+// One camera path in flight: its state between two rays.
+struct Path {
+  Sampler* rng = nullptr;     // its pixel's, positioned at the path's sample
+  FirstHit* first = nullptr;  // the AOVs to fill at the camera ray's hit, or null
+  Eigen::Vector3f origin = Eigen::Vector3f::Zero(), direction = Eigen::Vector3f::UnitZ();
   Eigen::Vector3f radiance = Eigen::Vector3f::Zero(), throughput = Eigen::Vector3f::Ones();
-  float previous_bsdf_pdf = 0.f;
-  Eigen::Vector3f previous_point = origin, previous_normal = Eigen::Vector3f::UnitZ();
-  const bool has_roughness = !c.scene.face_roughness.empty();  // else no specular lobe
-
+  Eigen::Vector3f previous_point = Eigen::Vector3f::Zero(), previous_normal = Eigen::Vector3f::UnitZ();
   // Radiance after at most one scattering; NaN until the second vertex is reached.
   Eigen::Vector3f direct = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  float previous_bsdf_pdf = 0.f;
   float emission_scale = 1.f;  // 1 / the previous vertex's emission splits
-  for (int bounce = 0; bounce <= c.options.max_bounces; ++bounce) {
-    // The vertex's first two numbers (its light choice and its light pick) are drawn before the
-    // ray, so that the light sampler can prefetch while Embree traverses. A path that ends here
-    // draws two numbers it does not use; that moves only the pixel's later independent numbers.
-    const float u_choice = rng.get1D(), u_pick = rng.get1D();
-    c.sampler.prefetch(u_pick);
-    const SlotHit hit = closestHit(origin, direction);
+  float z_per_distance = 1.f;  // the camera ray's depth per unit distance
+  float u_choice = 0.f, u_pick = 0.f;  // the vertex's light choice and light pick
+  int bounce = 0;
+  bool alive = true;
+  bool sees_emitter = false;  // the camera ray hit an emitting face
+  SlotHit hit;
+};
+
+// A shadow ray and what it adds to its path's radiance when nothing blocks it.
+struct ShadowRay {
+  Eigen::Vector3f origin, direction, contribution;
+  float t_far;
+  std::uint32_t path;
+};
+
+// Traces camera paths as a wave: every live path's next ray, then every hit's shading (which
+// queues the vertex's shadow rays and draws the next direction), then every shadow ray, until
+// no path is left. Embree's traversal runs back to back for a whole wave, and a wave's face
+// records are prefetched together before any is shaded, so their cache misses overlap instead
+// of stalling one path at a time. Each path draws its numbers in the order a path traced alone
+// would, and adds to its radiance in the same order, so the result is the same.
+class WaveTracer {
+ public:
+  WaveTracer(const Context& c, std::vector<RecordedRay>* log) : c_(c), log_(log) {}
+
+  // A path from the camera through (px, py), sample `rng` already started.
+  static Path cameraPath(const Context& c, float px, float py, Sampler& rng, FirstHit* first) {
+    Path p;
+    p.rng = &rng;
+    p.first = first;
+    const PinholeCamera& cam = c.camera;
+    p.direction = {static_cast<float>((px - cam.cx) / cam.fx), static_cast<float>((py - cam.cy) / cam.fy), 1.f};
+    p.z_per_distance = 1.f / p.direction.norm();
+    p.direction.normalize();
+    return p;
+  }
+
+  // Traces `paths` to their ends; then each path's radiance is its XYZ sample value.
+  void trace(std::vector<Path>& paths) {
+    for (std::size_t first = 0; first < paths.size(); first += kWaveSize) {
+      active_.clear();
+      for (std::size_t i = first; i < std::min(paths.size(), first + kWaveSize); ++i)
+        active_.push_back(static_cast<std::uint32_t>(i));
+      traceWave(paths);
+    }
+    for (Path& p : paths) p.radiance = clampIndirect(p);
+  }
+
+  std::int64_t rays = 0, clamped = 0, split_vertices = 0;
+
+ private:
+  static constexpr std::size_t kWaveSize = 16;
+
+  // Traces the paths listed in active_ to their ends.
+  void traceWave(std::vector<Path>& paths) {
+    while (!active_.empty()) {
+      // A vertex's first two numbers (its light choice and its light pick) are drawn before
+      // its ray, so that the light sampler can prefetch while Embree traverses. A path that
+      // ends here draws two numbers it does not use; that moves only later independent numbers.
+      for (std::uint32_t i : active_) {
+        Path& p = paths[i];
+        p.u_choice = p.rng->get1D();
+        p.u_pick = p.rng->get1D();
+        c_.sampler.prefetch(p.u_pick);
+      }
+      for (std::uint32_t i : active_) paths[i].hit = closestHit(paths[i].origin, paths[i].direction);
+      for (std::uint32_t i : active_)
+        if (paths[i].hit.hit) __builtin_prefetch(&slotShading(c_.shading, paths[i].hit.slot));
+      shadow_rays_.clear();
+      for (std::uint32_t i : active_) shade(paths[i], i);
+      for (const ShadowRay& s : shadow_rays_)
+        if (!occluded(s.origin, s.direction, s.t_far)) paths[s.path].radiance += s.contribution;
+      active_.erase(std::remove_if(active_.begin(), active_.end(), [&](std::uint32_t i) { return !paths[i].alive; }),
+                    active_.end());
+    }
+  }
+
+  // Every ray goes through these two: counted, and recorded when a log is kept.
+  SlotHit closestHit(const Eigen::Vector3f& o, const Eigen::Vector3f& d) {
+    ++rays;
+    if (log_) log_->push_back({o, d, std::numeric_limits<float>::infinity(), false});
+    return c_.caster.intersectSlot(o, d);
+  }
+  bool occluded(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t_far) {
+    ++rays;
+    if (log_) log_->push_back({o, d, t_far, true});
+    return c_.caster.occluded(o, d, 0.f, t_far);
+  }
+
+  // The path's vertex at its ray's end (or the sky past it): emission found there, the
+  // vertex's shadow rays queued, its next direction drawn; `alive` false when the path ends.
+  void shade(Path& path, std::uint32_t index) {
+    const Context& c = c_;
+    Sampler& rng = *path.rng;
+    const SlotHit& hit = path.hit;
+    const int bounce = path.bounce;
+    const Eigen::Vector3f& direction = path.direction;
+    Eigen::Vector3f& radiance = path.radiance;
+    const Eigen::Vector3f& throughput = path.throughput;
+    path.alive = false;  // until a next direction is drawn
     if (!hit.hit) {
       // Sky and sun: MIS-weighted against their next-event estimation after the first bounce.
       if (c.sky_on) {
-        const float sky_pdf = std::max(0.f, previous_normal.dot(direction)) / kPi;
-        const float weight = bounce == 0 ? 1.f : powerHeuristic(previous_bsdf_pdf, sky_pdf);
+        const float sky_pdf = std::max(0.f, path.previous_normal.dot(direction)) / kPi;
+        const float weight = bounce == 0 ? 1.f : powerHeuristic(path.previous_bsdf_pdf, sky_pdf);
         radiance += throughput.cwiseProduct(skyRadiance(c.scene, direction)) * weight;
       }
       if (c.sun.on && c.sun.contains(direction)) {
-        const float weight = bounce == 0 ? 1.f : powerHeuristic(previous_bsdf_pdf, c.sun.pdf);
+        const float weight = bounce == 0 ? 1.f : powerHeuristic(path.previous_bsdf_pdf, c.sun.pdf);
         radiance += throughput.cwiseProduct(c.sun.radiance) * weight;
       }
-      break;
+      return;
     }
     const SlotShading& face = slotShading(c.shading, hit.slot);
-    const Eigen::Vector3f point = origin + direction * hit.distance;
+    const Eigen::Vector3f point = path.origin + direction * hit.distance;
     Eigen::Vector3f n = decodeOctahedral(face.normal);
     const float cos_hit = n.dot(-direction);
     if (cos_hit < 0.f) n = -n;
     const float abs_cos_hit = std::abs(cos_hit);
-    // The light pick comes first, so that its triangle loads while the face's data does.
+    // The light pick comes first, so that its triangle loads while the rest of the vertex is shaded.
     float pick_pmf = 0.f;
-    const int tri = bounce < c.options.max_bounces ? c.sampler.pick(point, n, u_pick, &pick_pmf) : -1;
+    const int tri = bounce < c.options.max_bounces ? c.sampler.pick(point, n, path.u_pick, &pick_pmf) : -1;
     if (tri >= 0) __builtin_prefetch(&c.emissive[static_cast<std::size_t>(tri)]);
 
     const int emitter_index = face.emitter;
@@ -285,31 +362,36 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       if (bounce == 0) {
         radiance += emitted;
       } else {
-        const float weight = bounceEmissionWeight(c, face.emissive, previous_point, previous_normal, origin, direction,
-                                                  hit.distance, abs_cos_hit, previous_bsdf_pdf);
-        radiance += throughput.cwiseProduct(emitted) * (weight * emission_scale);
+        const float weight = bounceEmissionWeight(c, face.emissive, path.previous_point, path.previous_normal,
+                                                  path.origin, direction, hit.distance, abs_cos_hit,
+                                                  path.previous_bsdf_pdf);
+        radiance += throughput.cwiseProduct(emitted) * (weight * path.emission_scale);
       }
     }
-    if (bounce == 1) direct = radiance;  // light scattered at most once; the rest is indirect
+    if (bounce == 1) path.direct = radiance;  // light scattered at most once; the rest is indirect
     const Eigen::Vector3f wo = -direction;
-    const SurfaceBsdf bsdf(n, wo, face.reflectance, face.roughness,
-                           c.options.diffuse, has_roughness);
-    if (bounce == 0) sees_emitter = emitter_index >= 0;
-    if (bounce == 0 && first) {
-      first->albedo = bsdf.albedo();
-      first->normal = n;
-      first->depth = hit.distance * z_per_distance;
-      first->light_id = emitter_index >= 0 ? c.scene.emitters[static_cast<std::size_t>(emitter_index)].light_id : 0;
+    const SurfaceBsdf bsdf(n, wo, face.reflectance, face.roughness, c.options.diffuse, c.has_roughness);
+    if (bounce == 0) {
+      path.sees_emitter = emitter_index >= 0;
+      if (path.first) {
+        path.first->albedo = bsdf.albedo();
+        path.first->normal = n;
+        path.first->depth = hit.distance * path.z_per_distance;
+        path.first->light_id = emitter_index >= 0 ? c.scene.emitters[static_cast<std::size_t>(emitter_index)].light_id : 0;
+      }
     }
-    if (bounce == c.options.max_bounces) break;
+    if (bounce == c.options.max_bounces) return;
     const Eigen::Vector3f shadow_origin = point + n * offsetFor(hit.distance);
+    const auto queueShadowRay = [&](const Eigen::Vector3f& wi, float t_far, const Eigen::Vector3f& contribution) {
+      shadow_rays_.push_back({shadow_origin, wi, contribution, t_far, index});
+    };
 
     // Next-event estimation toward the scene's lights: one sample on an emissive triangle
     // (MIS-weighted against BSDF sampling) and one on each rectangle light (the headlights, not
     // geometry: light sampling only, weight 1). Their unoccluded contributions are computed
     // first; then one shadow ray goes to a light chosen in proportion to its contribution
     // (one_shadow_ray) or one to each.
-    OneLightChoice choice(u_choice);
+    OneLightChoice choice(path.u_choice);
     const auto offer = [&](const Eigen::Vector3f& contribution, const Eigen::Vector3f& wi, float distance) {
       if (!contribution.allFinite()) {
         radiance += contribution;  // the sample is dropped, as any non-finite one
@@ -318,7 +400,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       } else if (c.options.one_shadow_ray) {
         choice.offer(contribution, wi, distance);
       } else {
-        if (!occluded(shadow_origin, wi, distance * (1.f - 1e-4f))) radiance += contribution;
+        queueShadowRay(wi, distance * (1.f - 1e-4f), contribution);
       }
     };
     const auto [su, sv] = rng.get2D();
@@ -351,10 +433,7 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       const float pdf = distance2 / (cos_light * area);
       offer(throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(light.radiance) * (cos_surface / pdf), wi, distance);
     }
-    if (!choice.empty()) {
-      if (!occluded(shadow_origin, choice.wi(), choice.distance() * (1.f - 1e-4f)))
-        radiance += choice.contribution();
-    }
+    if (!choice.empty()) queueShadowRay(choice.wi(), choice.distance() * (1.f - 1e-4f), choice.contribution());
     // Sky: a cosine-weighted direction, MIS-weighted against BSDF sampling.
     constexpr float kInfinity = std::numeric_limits<float>::infinity();
     if (c.sky_on) {
@@ -362,11 +441,11 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       const Eigen::Vector3f wi = cosineSample(n, u1, u2);
       const float cos_surface = n.dot(wi);
       if (cos_surface > 1e-7f) {
-        if (!occluded(shadow_origin, wi, kInfinity)) {
-          const float sky_pdf = cos_surface / kPi;
-          const float weight = powerHeuristic(sky_pdf, bsdf.pdf(wi));
-          radiance += throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(skyRadiance(c.scene, wi)) * (cos_surface * weight / sky_pdf);
-        }
+        const float sky_pdf = cos_surface / kPi;
+        const float weight = powerHeuristic(sky_pdf, bsdf.pdf(wi));
+        queueShadowRay(wi, kInfinity,
+                       throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(skyRadiance(c.scene, wi)) *
+                           (cos_surface * weight / sky_pdf));
       }
     }
     // Sun: a direction in its disc, MIS-weighted against BSDF sampling.
@@ -375,11 +454,10 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       const Eigen::Vector3f wi = c.sun.sample(u1, u2);
       const float cos_surface = n.dot(wi);
       if (cos_surface > 0.f) {
-        if (!occluded(shadow_origin, wi, kInfinity)) {
-          const float weight = powerHeuristic(c.sun.pdf, bsdf.pdf(wi));
-          radiance += throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(c.sun.radiance) *
-                      (cos_surface * weight / c.sun.pdf);
-        }
+        const float weight = powerHeuristic(c.sun.pdf, bsdf.pdf(wi));
+        queueShadowRay(wi, kInfinity,
+                       throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(c.sun.radiance) *
+                           (cos_surface * weight / c.sun.pdf));
       }
     }
 
@@ -390,8 +468,9 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
     const bool sampled = bsdf.sample(u_lobe, u1, u2, &wi);
     // Emission splitting (PathTracerOptions::emission_splits): beside a large emitter the
     // bounce's emission term is a rare, bright hit; it is averaged over `splits` directions, the
-    // extra ones here, the path's own at the next vertex scaled by emission_scale. The choice
-    // depends only on this vertex, so the estimate stays unbiased.
+    // extra ones here (traced at once, outside the wave: they are rare), the path's own at the
+    // next vertex scaled by emission_scale. The choice depends only on this vertex, so the
+    // estimate stays unbiased.
     int splits = 1;
     if (c.options.emission_splits > 1 && tri >= 0) {
       const EmissiveTriangle& t = c.emissive[static_cast<std::size_t>(tri)];
@@ -417,34 +496,45 @@ Eigen::Vector3f tracePath(const Context& c, float px, float py, Sampler& rng, Fi
       radiance += throughput.cwiseProduct(bsdf.eval(w)).cwiseProduct(e.radiance * profile(e.directional_profile, abs_cos)) *
                   (n.dot(w) / p * weight / static_cast<float>(splits));
     }
-    emission_scale = 1.f / static_cast<float>(splits);
-    if (!sampled) break;
+    path.emission_scale = 1.f / static_cast<float>(splits);
+    if (!sampled) return;
     const float cos_surface = n.dot(wi);
     const float bsdf_pdf = bsdf.pdf(wi);
-    if (!(bsdf_pdf > 0.f)) break;
-    throughput = throughput.cwiseProduct(bsdf.eval(wi)) * (cos_surface / bsdf_pdf);
+    if (!(bsdf_pdf > 0.f)) return;
+    path.throughput = throughput.cwiseProduct(bsdf.eval(wi)) * (cos_surface / bsdf_pdf);
     if (bounce + 1 >= c.options.russian_roulette_after) {
-      const float survive = std::clamp(throughput.maxCoeff(), 0.05f, 1.f);
-      if (rng.get1D() >= survive) break;
-      throughput /= survive;
+      const float survive = std::clamp(path.throughput.maxCoeff(), 0.05f, 1.f);
+      if (rng.get1D() >= survive) return;
+      path.throughput /= survive;
     }
-    if (!(throughput.maxCoeff() > 0.f)) break;
-    previous_bsdf_pdf = bsdf_pdf;
-    previous_point = point;
-    previous_normal = n;
-    origin = shadow_origin;
-    direction = wi;
+    if (!(path.throughput.maxCoeff() > 0.f)) return;
+    path.previous_bsdf_pdf = bsdf_pdf;
+    path.previous_point = point;
+    path.previous_normal = n;
+    path.origin = shadow_origin;
+    path.direction = wi;
+    path.bounce = bounce + 1;
+    path.alive = true;
   }
-  if (c.options.indirect_clamp > 0.f && !std::isnan(direct.x())) {
-    Eigen::Vector3f indirect = radiance - direct;
-    if (indirect.y() > c.options.indirect_clamp) {
-      indirect *= c.options.indirect_clamp / indirect.y();
-      ++clamped;
+
+  // The path's value: its radiance, with light scattered more than once clamped when asked.
+  Eigen::Vector3f clampIndirect(const Path& p) {
+    if (c_.options.indirect_clamp > 0.f && !std::isnan(p.direct.x())) {
+      Eigen::Vector3f indirect = p.radiance - p.direct;
+      if (indirect.y() > c_.options.indirect_clamp) {
+        indirect *= c_.options.indirect_clamp / indirect.y();
+        ++clamped;
+      }
+      return p.direct + indirect;
     }
-    return direct + indirect;
+    return p.radiance;
   }
-  return radiance;
-}
+
+  const Context& c_;
+  std::vector<RecordedRay>* log_;
+  std::vector<std::uint32_t> active_;
+  std::vector<ShadowRay> shadow_rays_;
+};
 
 class ProgressBar {
  public:
@@ -544,7 +634,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   const bool sky_on = scene.sky_radiance.maxCoeff() > 0.f ||
                       (scene.sky_zenith_radiance && scene.sky_zenith_radiance->maxCoeff() > 0.f);
   Context context{scene, camera, options, caster, emissive, sampler, p.shading, SunDisc(scene.sun),
-                  sky_on, {}, {}};
+                  sky_on, !scene.face_roughness.empty(), {}, {}};
   for (const RectangleLight& light : scene.rectangle_lights) {
     context.rectangle_area.push_back(light.edge_u.cross(light.edge_v).norm());
     context.rectangle_cos_half_spread.push_back(std::cos(0.5f * light.spread_rad));
@@ -610,7 +700,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   };
 
   tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
-    std::int64_t rays = 0, samples_taken = 0, nonfinite = 0, clamped = 0, split_vertices = 0;
+    std::int64_t samples_taken = 0, nonfinite = 0;
     std::vector<RecordedRay> tile_rays;
     std::vector<RecordedRay>* log = options.ray_log ? &tile_rays : nullptr;
     const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
@@ -622,27 +712,39 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
                           Sampler(options.sampler, options.seed,
                                   static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(width) + static_cast<std::uint64_t>(x), replicates),
                           {}});
-    const auto takeSample = [&](PixelState& p) {
-      p.rng.startSample(static_cast<std::uint32_t>(p.taken));
-      const auto [jx, jy] = p.rng.get2D();
-      bool sees_emitter = false;
-      const Eigen::Vector3f value = tracePath(context, static_cast<float>(p.x) + jx - 0.5f, static_cast<float>(p.y) + jy - 0.5f, p.rng,
-                                              p.taken == 0 ? &p.first : nullptr, sees_emitter, rays, clamped, split_vertices, log);
-      p.emitter_hits += sees_emitter;
-      const int replicate = p.taken % replicates;
-      ++p.taken;
-      if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
-        ++nonfinite;  // never reaches the image
-        return;
+    // One more sample for each of `wave` (distinct pixels), traced together (WaveTracer).
+    WaveTracer tracer(context, log);
+    std::vector<Path> paths;
+    const auto takeSamples = [&](const std::vector<PixelState*>& wave) {
+      paths.clear();
+      for (PixelState* p : wave) {
+        p->rng.startSample(static_cast<std::uint32_t>(p->taken));
+        const auto [jx, jy] = p->rng.get2D();
+        paths.push_back(WaveTracer::cameraPath(context, static_cast<float>(p->x) + jx - 0.5f,
+                                               static_cast<float>(p->y) + jy - 0.5f, p->rng,
+                                               p->taken == 0 ? &p->first : nullptr));
       }
-      ++p.n;
-      p.sum += value.cast<double>();
-      const double delta = luminance(value) - p.mean_y;
-      p.mean_y += delta / p.n;
-      p.m2_y += delta * (luminance(value) - p.mean_y);
-      p.replicate_sum[static_cast<std::size_t>(replicate)] += luminance(value);
-      ++p.replicate_count[static_cast<std::size_t>(replicate)];
+      tracer.trace(paths);
+      for (std::size_t k = 0; k < wave.size(); ++k) {
+        PixelState& p = *wave[k];
+        const Eigen::Vector3f& value = paths[k].radiance;
+        p.emitter_hits += paths[k].sees_emitter;
+        const int replicate = p.taken % replicates;
+        ++p.taken;
+        if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
+          ++nonfinite;  // never reaches the image
+          continue;
+        }
+        ++p.n;
+        p.sum += value.cast<double>();
+        const double delta = luminance(value) - p.mean_y;
+        p.mean_y += delta / p.n;
+        p.m2_y += delta * (luminance(value) - p.mean_y);
+        p.replicate_sum[static_cast<std::size_t>(replicate)] += luminance(value);
+        ++p.replicate_count[static_cast<std::size_t>(replicate)];
+      }
     };
+    std::vector<PixelState*> wave;
     // The tile's stratification gain: summed replicate variances over summed independent-sample
     // variances. Its numerator and denominator pool every pixel of the tile, so it is steady
     // where one pixel's replicate spread (R - 1 degrees of freedom) is not; pixels with larger
@@ -683,8 +785,11 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
       *sample_variance = sum_variance / count;
       return true;
     };
-    for (PixelState& p : pixels)
-      while (p.taken < min_samples) takeSample(p);
+    // Every pixel's first samples, one wave per sample index; then rounds of up to 8 more for
+    // the pixels still short of their target. A pixel's samples stay in order, so its state
+    // evolves as if it were sampled alone.
+    for (PixelState& p : pixels) wave.push_back(&p);
+    for (int k = 0; k < min_samples; ++k) takeSamples(wave);
     double gain = 1.0;
     for (;;) {
       if (pooled) gain = tileGain();
@@ -709,8 +814,13 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
         }
       }
       if (!active) break;
-      for (PixelState& p : pixels)
-        for (int k = 0; k < 8 && !p.done && p.taken < max_samples; ++k) takeSample(p);
+      for (int k = 0; k < 8; ++k) {
+        wave.clear();
+        for (PixelState& p : pixels)
+          if (!p.done && p.taken < max_samples) wave.push_back(&p);
+        if (wave.empty()) break;
+        takeSamples(wave);
+      }
     }
     for (const PixelState& p : pixels) {
       if (p.stopped_variance >= 0) ++stopped_by_target;
@@ -728,15 +838,15 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
       out.samples.at<int>(y, x) = p.taken;
       out.std_error.at<float>(y, x) = static_cast<float>(standard_error);
     }
-    total_rays += rays;
+    total_rays += tracer.rays;
     if (log) {
       const std::lock_guard<std::mutex> lock(ray_log_mutex);
       options.ray_log->insert(options.ray_log->end(), tile_rays.begin(), tile_rays.end());
     }
     total_samples += samples_taken;
     dropped += nonfinite;
-    total_clamped += clamped;
-    total_split_vertices += split_vertices;
+    total_clamped += tracer.clamped;
+    total_split_vertices += tracer.split_vertices;
     progress.tick();
   });
 
