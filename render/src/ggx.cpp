@@ -197,6 +197,19 @@ float GgxLobe::reflectionPdf(const Eigen::Vector3f& wi) const {
   return g1_o_ * ggxD(h.z(), alpha_) / (4.f * wo_.z());
 }
 
+float GgxLobe::specularAndPdf(const Eigen::Vector3f& wi, float* pdf) const {
+  *pdf = 0.f;
+  if (wo_.z() <= 0.f) return 0.f;
+  Eigen::Vector3f h;
+  if (!halfVector(wo_, wi, &h)) return 0.f;
+  const float d = ggxD(h.z(), alpha_);
+  const float o_dot_h = wo_.dot(h);
+  if (o_dot_h > 0.f) *pdf = g1_o_ * d / (4.f * wo_.z());
+  if (wi.z() <= 0.f) return 0.f;
+  const float g2 = 1.f / (1.f + lambda_o_ + ggxLambda(wi.z(), alpha_));
+  return d * g2 * schlickFresnel(o_dot_h, kDielectricF0) / (4.f * wo_.z() * wi.z());
+}
+
 float GgxLobe::directionalAlbedo(float cos_theta) const {
   return lookupDirectionalInRow(tables(), cos_theta, alpha_node_, alpha_fraction_);
 }

@@ -412,9 +412,11 @@ class WaveTracer {
         const Emitter& e = c.scene.emitters[t.emitter];
         const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, sample.cos_light);
         const float light_pdf = pick_pmf * sample.pdf;
-        const float weight = powerHeuristic(light_pdf, bsdf.pdf(sample.wi));
-        offer(throughput.cwiseProduct(bsdf.eval(sample.wi)).cwiseProduct(emitted) * (cos_surface * weight / light_pdf),
-              sample.wi, sample.distance);
+        float bsdf_pdf = 0.f;
+        const Eigen::Vector3f f = bsdf.evalAndPdf(sample.wi, &bsdf_pdf);
+        const float weight = powerHeuristic(light_pdf, bsdf_pdf);
+        offer(throughput.cwiseProduct(f).cwiseProduct(emitted) * (cos_surface * weight / light_pdf), sample.wi,
+              sample.distance);
       }
     }
     for (std::size_t l = 0; l < c.scene.rectangle_lights.size(); ++l) {
@@ -442,10 +444,11 @@ class WaveTracer {
       const float cos_surface = n.dot(wi);
       if (cos_surface > 1e-7f) {
         const float sky_pdf = cos_surface / kPi;
-        const float weight = powerHeuristic(sky_pdf, bsdf.pdf(wi));
+        float bsdf_pdf = 0.f;
+        const Eigen::Vector3f f = bsdf.evalAndPdf(wi, &bsdf_pdf);
+        const float weight = powerHeuristic(sky_pdf, bsdf_pdf);
         queueShadowRay(wi, kInfinity,
-                       throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(skyRadiance(c.scene, wi)) *
-                           (cos_surface * weight / sky_pdf));
+                       throughput.cwiseProduct(f).cwiseProduct(skyRadiance(c.scene, wi)) * (cos_surface * weight / sky_pdf));
       }
     }
     // Sun: a direction in its disc, MIS-weighted against BSDF sampling.
@@ -454,10 +457,11 @@ class WaveTracer {
       const Eigen::Vector3f wi = c.sun.sample(u1, u2);
       const float cos_surface = n.dot(wi);
       if (cos_surface > 0.f) {
-        const float weight = powerHeuristic(c.sun.pdf, bsdf.pdf(wi));
+        float bsdf_pdf = 0.f;
+        const Eigen::Vector3f f = bsdf.evalAndPdf(wi, &bsdf_pdf);
+        const float weight = powerHeuristic(c.sun.pdf, bsdf_pdf);
         queueShadowRay(wi, kInfinity,
-                       throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(c.sun.radiance) *
-                           (cos_surface * weight / c.sun.pdf));
+                       throughput.cwiseProduct(f).cwiseProduct(c.sun.radiance) * (cos_surface * weight / c.sun.pdf));
       }
     }
 
@@ -484,7 +488,8 @@ class WaveTracer {
       const auto [v1, v2] = rng.get2D();
       Eigen::Vector3f w;
       if (!bsdf.sample(v_lobe, v1, v2, &w)) continue;
-      const float p = bsdf.pdf(w);
+      float p = 0.f;
+      const Eigen::Vector3f f = bsdf.evalAndPdf(w, &p);
       if (!(p > 0.f)) continue;
       const SlotHit h = closestHit(shadow_origin, w);
       if (!h.hit) continue;
@@ -493,15 +498,16 @@ class WaveTracer {
       const Emitter& e = c.scene.emitters[static_cast<std::size_t>(hit_face.emitter)];
       const float abs_cos = std::abs(decodeOctahedral(hit_face.normal).dot(w));
       const float weight = bounceEmissionWeight(c, hit_face.emissive, point, n, shadow_origin, w, h.distance, abs_cos, p);
-      radiance += throughput.cwiseProduct(bsdf.eval(w)).cwiseProduct(e.radiance * profile(e.directional_profile, abs_cos)) *
+      radiance += throughput.cwiseProduct(f).cwiseProduct(e.radiance * profile(e.directional_profile, abs_cos)) *
                   (n.dot(w) / p * weight / static_cast<float>(splits));
     }
     path.emission_scale = 1.f / static_cast<float>(splits);
     if (!sampled) return;
     const float cos_surface = n.dot(wi);
-    const float bsdf_pdf = bsdf.pdf(wi);
+    float bsdf_pdf = 0.f;
+    const Eigen::Vector3f f = bsdf.evalAndPdf(wi, &bsdf_pdf);
     if (!(bsdf_pdf > 0.f)) return;
-    path.throughput = throughput.cwiseProduct(bsdf.eval(wi)) * (cos_surface / bsdf_pdf);
+    path.throughput = throughput.cwiseProduct(f) * (cos_surface / bsdf_pdf);
     if (bounce + 1 >= c.options.russian_roulette_after) {
       const float survive = std::clamp(path.throughput.maxCoeff(), 0.05f, 1.f);
       if (rng.get1D() >= survive) return;

@@ -68,6 +68,24 @@ float SurfaceBsdf::pdf(const Eigen::Vector3f& wi) const {
          specular_probability_ * lobe_.reflectionPdf(toLocal(wi));
 }
 
+Eigen::Vector3f SurfaceBsdf::evalAndPdf(const Eigen::Vector3f& wi, float* pdf) const {
+  const float cos_i = n_.dot(wi);
+  const float diffuse_pdf = std::max(0.f, cos_i) / kPi;
+  if (!specular_) {
+    *pdf = diffuse_pdf;
+    if (cos_i <= 0.f || cos_o_ <= 0.f) return Eigen::Vector3f::Zero();
+    return albedo_.cwiseProduct(diffuseShape(wi, cos_i));
+  }
+  const Eigen::Vector3f wi_local = toLocal(wi);
+  float specular_pdf = 0.f;
+  const float specular = lobe_.specularAndPdf(wi_local, &specular_pdf);
+  *pdf = (1.f - specular_probability_) * diffuse_pdf + specular_probability_ * specular_pdf;
+  if (cos_i <= 0.f || cos_o_ <= 0.f) return Eigen::Vector3f::Zero();
+  Eigen::Vector3f f = albedo_.cwiseProduct(diffuseShape(wi, cos_i));
+  f *= diffuse_coupling_o_ * (1.f - lobe_.directionalAlbedo(cos_i));
+  return f + Eigen::Vector3f::Constant(specular);
+}
+
 bool SurfaceBsdf::sample(float u0, float u1, float u2, Eigen::Vector3f* wi) const {
   if (specular_ && u0 < specular_probability_) {
     const Eigen::Vector3f h = ggxSampleVisibleNormal(wo_local_, alpha_, u1, u2);

@@ -174,9 +174,37 @@ TEST(Ggx, LobeFromOneDirectionEqualsTheFreeFunctionsBitForBit) {
         EXPECT_EQ(lobe.specular(wi), solo::ggxSpecular(wo, wi, alpha)) << roughness << " " << cos_o;
         EXPECT_EQ(lobe.reflectionPdf(wi), solo::ggxReflectionPdf(wo, wi, alpha)) << roughness << " " << cos_o;
         EXPECT_EQ(lobe.directionalAlbedo(wi.z()), solo::ggxDirectionalAlbedo(wi.z(), alpha));
+        float pdf = -1.f;
+        EXPECT_EQ(lobe.specularAndPdf(wi, &pdf), lobe.specular(wi));
+        EXPECT_EQ(pdf, lobe.reflectionPdf(wi));
       }
     }
   }
+}
+
+// The tracer asks for the BRDF and its density together; evalAndPdf must return exactly what
+// eval and pdf return, for either diffuse model, with and without the specular lobe, below
+// the surface as above it.
+TEST(SurfaceBsdf, EvalAndPdfTogetherEqualEvalAndPdfBitForBit) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(0, 1);
+  const Eigen::Vector3f n = Eigen::Vector3f(0.2f, -0.3f, 0.9f).normalized();
+  int above = 0;
+  for (const auto model : {solo::DiffuseModel::Disney, solo::DiffuseModel::Lambert})
+    for (const bool specular : {false, true})
+      for (const float roughness : {0.f, 0.3f, 1.f})
+        for (int k = 0; k < 100; ++k) {
+          const Eigen::Vector3f wo = (n + direction(2 * u(rng) - 1, 2 * kPi * u(rng))).normalized();
+          if (n.dot(wo) <= 0.f) continue;
+          const solo::SurfaceBsdf bsdf(n, wo, Eigen::Vector3f(0.2f, 0.5f, 0.7f), roughness, model, specular);
+          const Eigen::Vector3f wi = direction(2 * u(rng) - 1, 2 * kPi * u(rng));
+          above += n.dot(wi) > 0.f;
+          float pdf = -1.f;
+          const Eigen::Vector3f f = bsdf.evalAndPdf(wi, &pdf);
+          EXPECT_EQ(f, bsdf.eval(wi)) << specular << " " << roughness;
+          EXPECT_EQ(pdf, bsdf.pdf(wi)) << specular << " " << roughness;
+        }
+  EXPECT_GT(above, 300);  // both sides of the surface were tried
 }
 
 TEST(SurfaceBsdf, OrthonormalBasisIsRightHandedAroundAnyUnitNormal) {

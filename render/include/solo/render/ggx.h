@@ -56,6 +56,8 @@ class GgxLobe {
   GgxLobe(const Eigen::Vector3f& wo, float alpha);
   float specular(const Eigen::Vector3f& wi) const;       ///< ggxSpecular(wo, wi, alpha)
   float reflectionPdf(const Eigen::Vector3f& wi) const;  ///< ggxReflectionPdf(wo, wi, alpha)
+  /// specular(wi), and reflectionPdf(wi) in *pdf, sharing their half vector and D.
+  float specularAndPdf(const Eigen::Vector3f& wi, float* pdf) const;
   float directionalAlbedo(float cos_theta) const;        ///< ggxDirectionalAlbedo(cos_theta, alpha)
   float averageAlbedo() const { return average_albedo_; }  ///< ggxAverageAlbedo(alpha)
 

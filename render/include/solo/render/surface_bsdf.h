@@ -33,6 +33,8 @@ class SurfaceBsdf {
   Eigen::Vector3f eval(const Eigen::Vector3f& wi) const;
   /// Solid-angle density with which sample() returns wi.
   float pdf(const Eigen::Vector3f& wi) const;
+  /// eval(wi), and pdf(wi) in *pdf: the same values, with the work they share done once.
+  Eigen::Vector3f evalAndPdf(const Eigen::Vector3f& wi, float* pdf) const;
   /// Draws wi from three uniforms in [0, 1) (u0 picks the lobe and is unused without the
   /// specular lobe). Returns false when the draw leaves the upper hemisphere: the path ends
   /// there, which is unbiased since f is 0 for such directions.
