@@ -127,15 +127,26 @@ std::size_t RayCaster::triangleCount() const { return impl_->triangle_count; }
 
 std::size_t RayCaster::primitiveCount() const { return impl_->quad_sources.size(); }
 
-RayHit RayCaster::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near,
-                            float t_far) const {
+namespace {
+
+// Embree's closest hit: geomID is RTC_INVALID_GEOMETRY_ID for a miss.
+RTCRayHit closestHit(RTCScene scene, const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near,
+                     float t_far) {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit query;
   query.ray = makeRay(origin, direction, t_near, t_far);
   query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(impl_->scene, &context, &query);
+  rtcIntersect1(scene, &context, &query);
+  return query;
+}
+
+}  // namespace
+
+RayHit RayCaster::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near,
+                            float t_far) const {
+  const RTCRayHit query = closestHit(impl_->scene, origin, direction, t_near, t_far);
   RayHit hit;
   if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
   hit.hit = true;
@@ -163,13 +174,7 @@ RayHit RayCaster::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f
 
 SlotHit RayCaster::intersectSlot(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near,
                                  float t_far) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRayHit query;
-  query.ray = makeRay(origin, direction, t_near, t_far);
-  query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(impl_->scene, &context, &query);
+  const RTCRayHit query = closestHit(impl_->scene, origin, direction, t_near, t_far);
   SlotHit hit;
   if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
   hit.hit = true;

@@ -102,6 +102,16 @@ double relativeRmse(const cv::Mat& image, const cv::Mat& reference, const cv::Ma
   return norm > 0 ? std::sqrt(sum / norm) : 0;
 }
 
+// The efficiency line's tracer: 4 spp everywhere, seed 11, no progress bar.
+solo::PathTracerOptions efficiencyOptions(solo::LightSamplerKind kind) {
+  solo::PathTracerOptions t;
+  t.progress = false;
+  t.min_samples = t.max_samples = 4;
+  t.seed = 11;
+  t.light_sampler = kind;
+  return t;
+}
+
 // Efficiency: raw Embree against the tracer's rays per second on one thread each (so "per
 // thread" means the same thing for both, whatever the cores are), alternated five times so
 // that machine load hits all alike; medians, with the load average before and after.
@@ -119,11 +129,7 @@ void measureEfficiency(const solo::RenderScene& scene) {
   std::vector<solo::RecordedRay> recorded;
   {
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-    solo::PathTracerOptions t;
-    t.progress = false;
-    t.min_samples = t.max_samples = 4;
-    t.seed = 11;
-    t.light_sampler = solo::LightSamplerKind::Power;
+    solo::PathTracerOptions t = efficiencyOptions(solo::LightSamplerKind::Power);
     t.ray_log = &recorded;
     solo::renderPathTraced(prepared, scene.camera, t);
   }
@@ -138,12 +144,7 @@ void measureEfficiency(const solo::RenderScene& scene) {
     replay_lookup.push_back(replayRaysPerSecond(caster, recorded, true));
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
     for (auto kind : {solo::LightSamplerKind::Power, solo::LightSamplerKind::Hierarchy}) {
-      solo::PathTracerOptions t;
-      t.progress = false;
-      t.min_samples = t.max_samples = 4;
-      t.seed = 11;
-      t.light_sampler = kind;
-      const solo::RenderOutput out = solo::renderPathTraced(prepared, scene.camera, t);
+      const solo::RenderOutput out = solo::renderPathTraced(prepared, scene.camera, efficiencyOptions(kind));
       const double rate = std::get<double>(*out.report.find("rays_per_second"));
       const double samples = 4.0 * scene.camera.width * scene.camera.height / out.report.seconds;
       (kind == solo::LightSamplerKind::Power ? power : hierarchy).push_back(rate);
@@ -151,11 +152,7 @@ void measureEfficiency(const solo::RenderScene& scene) {
     }
     // The power sampler with a shadow ray per light (the tracer before one_shadow_ray): more,
     // cheaper rays per sample, so more rays per second for fewer samples per second.
-    solo::PathTracerOptions t;
-    t.progress = false;
-    t.min_samples = t.max_samples = 4;
-    t.seed = 11;
-    t.light_sampler = solo::LightSamplerKind::Power;
+    solo::PathTracerOptions t = efficiencyOptions(solo::LightSamplerKind::Power);
     t.one_shadow_ray = false;
     const solo::RenderOutput out = solo::renderPathTraced(prepared, scene.camera, t);
     per_light.push_back(std::get<double>(*out.report.find("rays_per_second")));
@@ -186,13 +183,9 @@ void traceOnly(const solo::RenderScene& scene, int repeats) {
   tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
   std::vector<double> rate, cpu_rate;
   for (int repeat = 0; repeat < repeats; ++repeat) {
-    solo::PathTracerOptions t;
-    t.progress = false;
-    t.min_samples = t.max_samples = 4;
-    t.seed = 11;
-    t.light_sampler = solo::LightSamplerKind::Power;
     const double cpu_start = cpuSeconds();
-    const solo::RenderOutput out = solo::renderPathTraced(prepared, scene.camera, t);
+    const solo::RenderOutput out =
+        solo::renderPathTraced(prepared, scene.camera, efficiencyOptions(solo::LightSamplerKind::Power));
     const double cpu = cpuSeconds() - cpu_start;
     rate.push_back(std::get<double>(*out.report.find("rays_per_second")));
     cpu_rate.push_back(static_cast<double>(std::get<std::int64_t>(*out.report.find("rays"))) / cpu);
