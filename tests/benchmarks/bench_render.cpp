@@ -200,33 +200,21 @@ void traceOnly(const solo::RenderScene& scene, int repeats) {
 
 int main(int argc, char** argv) {
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // lines appear as they are measured
-  if (argc > 1 && std::string(argv[1]) == "efficiency") {
+  const std::string mode = argc > 1 ? argv[1] : "";
+  if (mode == "efficiency" || mode == "trace") {
     if (argc < 3) {
-      std::fprintf(stderr, "usage: bench_render efficiency MANIFEST [WIDTHxHEIGHT]\n");
+      std::fprintf(stderr, "usage: bench_render %s MANIFEST [WIDTHxHEIGHT]%s\n", mode.c_str(),
+                   mode == "trace" ? " [REPEATS]" : "");
       return 2;
     }
     int width = 480, height = 270;
     if (argc > 3) std::sscanf(argv[3], "%dx%d", &width, &height);
     try {
-      measureEfficiency(solo::bench::pipelineScene(argv[2], width, height));
+      const solo::RenderScene scene = solo::bench::pipelineScene(argv[2], width, height);
+      if (mode == "efficiency") measureEfficiency(scene);
+      else traceOnly(scene, argc > 4 ? std::max(1, std::atoi(argv[4])) : 5);
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "bench_render efficiency: %s\n", e.what());
-      return 1;
-    }
-    return 0;
-  }
-  if (argc > 1 && std::string(argv[1]) == "trace") {
-    if (argc < 3) {
-      std::fprintf(stderr, "usage: bench_render trace MANIFEST [WIDTHxHEIGHT] [REPEATS]\n");
-      return 2;
-    }
-    int width = 480, height = 270;
-    if (argc > 3) std::sscanf(argv[3], "%dx%d", &width, &height);
-    const int repeats = argc > 4 ? std::max(1, std::atoi(argv[4])) : 5;
-    try {
-      traceOnly(solo::bench::pipelineScene(argv[2], width, height), repeats);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "bench_render trace: %s\n", e.what());
+      std::fprintf(stderr, "bench_render %s: %s\n", mode.c_str(), e.what());
       return 1;
     }
     return 0;
