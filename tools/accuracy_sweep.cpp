@@ -440,8 +440,9 @@ struct AccuracySweep::Impl {
     SweepTable t;
     t.stage = "render";
     t.columns = {"seed", "width", "height", "mode", "light_sampler", "min_spp", "max_spp", "relative_error_target",
-                 "mean_spp", "repeats", "seconds", "relative_rmse", "relative_rmse_noise_corrected",
-                 "relative_rmse_unclipped", "luminance_ratio", "white_cd_m2", "reference_spp", "reference_relative_noise", "load_1min"};
+                 "noise_factor", "shadow_roulette", "mean_spp", "repeats", "seconds", "rays", "relative_rmse",
+                 "relative_rmse_noise_corrected", "relative_rmse_unclipped", "luminance_ratio", "white_cd_m2",
+                 "reference_spp", "reference_relative_noise", "load_1min"};
     const NightScene& n = defaultNight();
     say("[render] reference: " + integer(o.reference_spp) + " spp, power sampler ...");
     double reference_s = 0;
@@ -449,12 +450,26 @@ struct AccuracySweep::Impl {
     const RadianceError self = radianceError(ref, ref);
     say("[render] reference: " + seconds(reference_s) + " s");
 
-    const auto point = [&](const std::string& mode, LightSamplerKind kind, int min_spp, int max_spp, double target) {
+    // The noise-matched target's sensor noise, at the reference's auto-exposure white (solo
+    // night meters its own on a preview).
+    const double exposure = exposureScale(PostProcessOptions{}.exposure_options);
+    const auto sensor_sigma = sensorNoiseSigma(1.0 / (self.white * exposure), exposure, PostProcessOptions{}.noise_options);
+    constexpr double kNoiseFactor = 0.5;  // the default preset's
+    // roulette < 0: a relative-error target (or none); >= 0: the noise-matched target with
+    // that shadow-ray roulette fraction.
+    const auto point = [&](const std::string& mode, LightSamplerKind kind, int min_spp, int max_spp, double target,
+                           double roulette = -1) {
       PathTracerOptions options;
       options.light_sampler = kind;
       options.min_samples = min_spp;
       options.max_samples = max_spp;
       if (target > 0) options.relative_error = target;
+      if (roulette >= 0) {
+        options.noise_sigma = sensor_sigma;
+        options.noise_factor = kNoiseFactor;
+        options.relative_error = 0;
+        options.shadow_roulette = roulette;
+      }
       options.seed = o.seed;
       options.progress = false;
       RenderOutput out;
@@ -462,13 +477,17 @@ struct AccuracySweep::Impl {
       const RadianceError e = radianceError(out, ref);
       std::vector<std::string> row = head();
       row.insert(row.end(), {mode, lightSamplerName(kind), integer(min_spp), integer(max_spp),
-                             target > 0 ? num(target) : "", num(metricDouble(out.report, "samples_per_pixel_mean")),
-                             integer(repeats), seconds(s), num(e.relative_rmse), num(e.noise_corrected),
+                             target > 0 ? num(target) : "", roulette >= 0 ? num(kNoiseFactor) : "",
+                             roulette >= 0 ? num(roulette) : "", num(metricDouble(out.report, "samples_per_pixel_mean")),
+                             integer(repeats), seconds(s), num(metricDouble(out.report, "rays")), num(e.relative_rmse),
+                             num(e.noise_corrected),
                              num(e.relative_rmse_unclipped), num(e.luminance_ratio), num(e.white), integer(o.reference_spp),
                              num(self.reference_noise), num(loadAverage1Min())});
       t.rows.push_back(row);
       say("[render] " + mode + " " + lightSamplerName(kind) + " " + integer(min_spp) + "-" + integer(max_spp) +
-          " spp" + (target > 0 ? " target " + num(target) : "") + ": " + seconds(s) + " s, relative RMSE " +
+          " spp" + (target > 0 ? " target " + num(target) : "") +
+          (roulette >= 0 ? " noise target, shadow roulette " + num(roulette) : "") + ": " + seconds(s) +
+          " s, relative RMSE " +
           num(e.relative_rmse));
     };
     const std::vector<int> power_spp = o.quick ? std::vector<int>{1, 4, 16} : std::vector<int>{1, 2, 4, 8, 16};
@@ -483,6 +502,9 @@ struct AccuracySweep::Impl {
     const std::vector<Adaptive> adaptive = o.quick ? std::vector<Adaptive>{{4, 16, 0.1}}
                                                    : std::vector<Adaptive>{{2, 8, 0.2}, {4, 16, 0.1}, {8, 32, 0.05}};
     for (const Adaptive& a : adaptive) point("adaptive", LightSamplerKind::Power, a.min_spp, a.max_spp, a.target);
+    // The default preset's noise-matched target (2-8 spp), shadow-ray roulette off and on.
+    const std::vector<double> roulettes = o.quick ? std::vector<double>{0, 0.3} : std::vector<double>{0, 0.1, 0.3, 1};
+    for (double roulette : roulettes) point("noise_target", LightSamplerKind::Power, 2, 8, 0, roulette);
     t.notes.push_back("the night scene of the default refinement, mesh and lights (seed " +
                       integer(static_cast<std::int64_t>(o.seed)) + "); reference: " + integer(o.reference_spp) +
                       " spp, power sampler, seed " + integer(static_cast<std::int64_t>(o.seed + kReferenceSeedOffset)) +

@@ -54,6 +54,9 @@ struct NightOptions {
   /// sigma there (instead of the relative error); docs/rendering.md.
   bool noise_target = true;
   double noise_factor = 0.5;
+  /// Shadow-ray roulette below this fraction of the sensor noise at black (with noise_target;
+  /// PathTracerOptions::shadow_roulette; preset). 0 = off.
+  double shadow_roulette = 0.3;
   bool glare = true, noise = true;
   double glare_threshold = -1;  ///< Y before exposure; < 0: what will clip (the reference uses 0)
   /// Luminance exposed to sensor white, cd/m^2; <= 0: auto exposure (metering the street).

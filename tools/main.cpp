@@ -59,6 +59,10 @@ int main(int argc, char** argv) {
                       "Adaptive sampling to the sensor noise: stop at noise-factor x its sigma (replaces --relative-error; preset)");
   night_cmd->add_option("--noise-factor", night.noise_factor, "Render noise allowed, as a fraction of the sensor noise")
       ->capture_default_str();
+  night_cmd->add_option("--shadow-roulette", night.shadow_roulette,
+                        "Shadow rays of contributions below this fraction of the sensor noise at black are cast by "
+                        "roulette (unbiased; with --noise-target; 0 = off; preset)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   night_cmd->add_option("--max-bounces", night.max_bounces, "Path length limit of the tracer (preset)")
       ->capture_default_str()->check(CLI::Range(1, 64));
   night_cmd->add_option("--indirect-clamp", night.indirect_clamp_cd_m2,

@@ -185,6 +185,7 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
     const double exposure = exposureScale(PostProcessOptions{}.exposure_options);
     tracer.noise_sigma = sensorNoiseSigma(1.0 / (sensor_white * exposure), exposure, PostProcessOptions{}.noise_options);
     tracer.noise_factor = o.noise_factor;
+    tracer.shadow_roulette = o.shadow_roulette;
     tracer.relative_error = 0;  // the sensor's noise is the target now; max_samples still caps
     char note[128];
     std::snprintf(note, sizeof note, "noise-matched target: standard error <= %.2f x sensor noise sigma; ", o.noise_factor);

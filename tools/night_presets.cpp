@@ -26,16 +26,17 @@ struct PresetValues {
   bool glare, noise;
   bool noise_target;    // adaptive sampling to the sensor noise instead of relative_error
   double noise_factor;  // render noise allowed, fraction of the sensor noise sigma
+  double shadow_roulette;  // shadow-ray roulette below this fraction of the sensor noise at black
   int max_bounces;
   int mesh_downsample;    // mesh from the depth downsampled by this factor
   int render_downsample;  // render at the image size divided by this factor
 };
 
 //                                spp     rel.err sampler  opt   iter  tol   eval   glare noise  n.target factor
-//                                bounces mesh/ render/
-constexpr PresetValues kDraft = {1, 2, 0.3, "power", true, 3, 1e-6, false, true, true, false, 0.5, 12, 2, 2};
-constexpr PresetValues kDefault = {2, 8, 0.1, "power", true, 10, 1e-9, false, true, true, true, 0.5, 12, 1, 1};
-constexpr PresetValues kFinal = {8, 64, 0.03, "power", true, 10, 1e-9, true, true, true, true, 0.25, 12, 1, 1};
+//                                roulette bounces mesh/ render/
+constexpr PresetValues kDraft = {1, 2, 0.3, "power", true, 3, 1e-6, false, true, true, false, 0.5, 0.3, 12, 2, 2};
+constexpr PresetValues kDefault = {2, 8, 0.1, "power", true, 10, 1e-9, false, true, true, true, 0.5, 0.3, 12, 1, 1};
+constexpr PresetValues kFinal = {8, 64, 0.03, "power", true, 10, 1e-9, true, true, true, true, 0.25, 0.3, 12, 1, 1};
 
 struct Knob {
   const char* flag;
@@ -43,7 +44,7 @@ struct Knob {
 };
 
 // Every knob names its command-line flag: a knob the user gave keeps the user's value.
-const std::array<Knob, 15> kKnobs = {{
+const std::array<Knob, 16> kKnobs = {{
     {"--min-spp", [](NightOptions& o, const PresetValues& p) { o.min_samples = p.min_spp; }},
     {"--max-spp", [](NightOptions& o, const PresetValues& p) { o.max_samples = p.max_spp; }},
     {"--relative-error", [](NightOptions& o, const PresetValues& p) { o.relative_error = p.relative_error; }},
@@ -58,6 +59,7 @@ const std::array<Knob, 15> kKnobs = {{
     {"--noise", [](NightOptions& o, const PresetValues& p) { o.noise = p.noise; }},
     {"--noise-target", [](NightOptions& o, const PresetValues& p) { o.noise_target = p.noise_target; }},
     {"--noise-factor", [](NightOptions& o, const PresetValues& p) { o.noise_factor = p.noise_factor; }},
+    {"--shadow-roulette", [](NightOptions& o, const PresetValues& p) { o.shadow_roulette = p.shadow_roulette; }},
     {"--max-bounces", [](NightOptions& o, const PresetValues& p) { o.max_bounces = p.max_bounces; }},
     {"--mesh-downsample", [](NightOptions& o, const PresetValues& p) { o.mesh_downsample = p.mesh_downsample; }},
     {"--render-downsample", [](NightOptions& o, const PresetValues& p) { o.render_downsample = p.render_downsample; }},
@@ -132,6 +134,7 @@ std::string nightConfigText(const NightOptions& o) {
   line("relative-error", number(o.relative_error));
   flag("noise-target", o.noise_target);
   line("noise-factor", number(o.noise_factor));
+  line("shadow-roulette", number(o.shadow_roulette));
   line("max-bounces", std::to_string(o.max_bounces));
   line("indirect-clamp", number(o.indirect_clamp_cd_m2));
   line("mesh-downsample", std::to_string(o.mesh_downsample));

@@ -26,7 +26,6 @@
 #include <functional>
 #include <iterator>
 #include <set>
-#include <unordered_map>
 #include <utility>
 
 namespace solo {
@@ -496,7 +495,10 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
       if (backdrop) return 0.0;
       return affine_c + affine_gu * (p.x() - centre_u) + affine_gv * (p.y() - centre_v);
     };
-    std::unordered_map<std::uint64_t, double> weight;
+    // Each edge's weight: its faces' halves summed (sorted by edge, not hashed: a backdrop has
+    // hundreds of thousands of edges, and a hash map cost a quarter of its fill).
+    std::vector<std::pair<std::uint64_t, double>> weight;
+    weight.reserve(3 * faces.size());
     for (const auto& t : faces)
       for (int k = 0; k < 3; ++k) {
         const int i = t[(k + 1) % 3], j = t[(k + 2) % 3];
@@ -504,8 +506,14 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
         const auto e1 = position[i] - position[t[k]], e2 = position[j] - position[t[k]];
         const double cross = std::abs(e1.x() * e2.y() - e1.y() * e2.x());
         const std::uint64_t key = (std::uint64_t(std::min(i, j)) << 32) | std::uint32_t(std::max(i, j));
-        weight[key] += 0.5 * (e1 * e2) / std::max(cross, 1e-300);
+        weight.emplace_back(key, 0.5 * (e1 * e2) / std::max(cross, 1e-300));
       }
+    std::sort(weight.begin(), weight.end());
+    std::size_t edge_count = 0;
+    for (std::size_t q = 0; q < weight.size(); ++q)
+      if (edge_count > 0 && weight[edge_count - 1].first == weight[q].first) weight[edge_count - 1].second += weight[q].second;
+      else weight[edge_count++] = weight[q];
+    weight.resize(edge_count);
     if (m > 0) {
       // Where an obstacle (a nearer surface of the mesh) covers a vertex's pixel and the
       // harmonic surface comes in front of it, that vertex is pinned behind the obstacle and

@@ -309,7 +309,7 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
   step = Stopwatch();
   const DepthLoops remaining = classifyDepthLoops(m, had_depth, depth_m, backdrop_mode);
   addLoopCounts(report, "after_", remaining);
-  mesh.garbage_collection();
+  collectGarbage(mesh);
   rebuildPixelIndex(m);
   report.add("after_vertices_live", static_cast<std::int64_t>(mesh.n_vertices()));
   report.add("after_faces_live", static_cast<std::int64_t>(mesh.n_faces()));
@@ -406,7 +406,7 @@ TriangleMesh cleanMesh(const TriangleMesh& input, const MeshCleanupOptions& opti
     for (std::size_t k = 0; k < order.size() && k < 100; ++k)
       report.notes.push_back("hole of " + std::to_string(loops[order[k]].size()) +
                              " boundary vertices: " + closing.hole_methods[order[k]]);
-    mesh.garbage_collection();
+    collectGarbage(mesh);
   } else {
     report.notes.push_back("hole filling off: " + std::to_string(loops.size()) + " holes left open");
   }

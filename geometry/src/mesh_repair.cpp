@@ -157,7 +157,7 @@ SurfaceMesh repairSoup(const TriangleMesh& soup, SoupRepair* stats) {
       ++s.degenerate_faces_removed;
     }
   }
-  if (s.degenerate_faces_removed > 0) mesh.garbage_collection();
+  if (s.degenerate_faces_removed > 0) collectGarbage(mesh);
   if (stats) *stats = s;
   return mesh;
 }

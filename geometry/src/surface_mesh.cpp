@@ -18,6 +18,13 @@ std::optional<ImageVertexProperties> ImageVertexProperties::find(const SurfaceMe
   return p;
 }
 
+void collectGarbage(SurfaceMesh& mesh) {
+  std::vector<OpenMesh::VertexHandle*> vertices_to_update;
+  std::vector<OpenMesh::HalfedgeHandle*> halfedges_to_update;
+  std::vector<OpenMesh::FaceHandle*> faces_to_update;
+  mesh.garbage_collection(vertices_to_update, halfedges_to_update, faces_to_update);
+}
+
 TriangleMesh toTriangleMesh(const SurfaceMesh& mesh, std::vector<int>* vertex_of_index) {
   TriangleMesh soup;
   std::vector<std::uint32_t> index(mesh.n_vertices(), UINT32_MAX);

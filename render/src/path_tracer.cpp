@@ -173,6 +173,9 @@ class OneLightChoice {
   }
   bool empty() const { return !(weight_ > 0.f); }
   Eigen::Vector3f contribution() const { return contribution_ * (total_ / weight_); }
+  /// The uniform number left after the choice: uniform again, and independent of which light
+  /// was kept (each offer rescales it into the part of [0, 1) its outcome took).
+  float leftover() const { return u_; }
   const Eigen::Vector3f& wi() const { return wi_; }
   float distance() const { return distance_; }
 
@@ -195,6 +198,7 @@ struct Context {
   bool sky_on;  // a non-black sky: next-event estimation toward it
   bool has_roughness;  // a roughness map: the specular lobe
   std::vector<float> rectangle_area, rectangle_cos_half_spread;  // per rectangle light, computed once
+  float shadow_roulette_y = 0.f;  // render units; 0 = off (PathTracerOptions::shadow_roulette)
 };
 
 // The MIS weight of emission that a bounce from `from_point` (receiver normal `from_normal`,
@@ -279,7 +283,7 @@ class WaveTracer {
     for (Path& p : paths) p.radiance = clampIndirect(p);
   }
 
-  std::int64_t rays = 0, clamped = 0, split_vertices = 0;
+  std::int64_t rays = 0, clamped = 0, split_vertices = 0, shadow_rays_skipped = 0;
 
  private:
   static constexpr std::size_t kWaveSize = 16;
@@ -435,7 +439,21 @@ class WaveTracer {
       const float pdf = distance2 / (cos_light * area);
       offer(throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(light.radiance) * (cos_surface / pdf), wi, distance);
     }
-    if (!choice.empty()) queueShadowRay(choice.wi(), choice.distance() * (1.f - 1e-4f), choice.contribution());
+    if (!choice.empty()) {
+      Eigen::Vector3f contribution = choice.contribution();
+      const float largest = contribution.maxCoeff();
+      // Shadow-ray roulette: a contribution far below the noise the sensor will add is traced
+      // with probability largest / threshold and, when traced, divided by it (unbiased; it adds
+      // at most largest x threshold of variance to the sample).
+      bool traced = true;
+      if (largest < c.shadow_roulette_y) {
+        const float keep = largest / c.shadow_roulette_y;
+        traced = choice.leftover() < keep;
+        contribution /= keep;
+        shadow_rays_skipped += !traced;
+      }
+      if (traced) queueShadowRay(choice.wi(), choice.distance() * (1.f - 1e-4f), contribution);
+    }
     // Sky: a cosine-weighted direction, MIS-weighted against BSDF sampling.
     constexpr float kInfinity = std::numeric_limits<float>::infinity();
     if (c.sky_on) {
@@ -645,6 +663,8 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     context.rectangle_area.push_back(light.edge_u.cross(light.edge_v).norm());
     context.rectangle_cos_half_spread.push_back(std::cos(0.5f * light.spread_rad));
   }
+  if (options.noise_sigma && options.shadow_roulette > 0)
+    context.shadow_roulette_y = static_cast<float>(options.shadow_roulette * options.noise_sigma(0.0));
 
   RenderOutput out;
   out.radiance.create(height, width, CV_32FC3);
@@ -661,7 +681,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   ProgressBar progress(options.progress, tiles_x * tiles_y);
   std::mutex ray_log_mutex;
   std::atomic<std::int64_t> total_rays{0}, total_samples{0}, dropped{0}, total_clamped{0}, stopped_by_target{0},
-      total_split_vertices{0};
+      total_split_vertices{0}, total_shadow_skipped{0};
   const bool adaptive = std::max(2, options.min_samples) < options.max_samples;
   // Replicates (sampler.h) only where stopping decisions are made: a fixed sample count keeps
   // the single, best stratified point set.
@@ -853,6 +873,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     dropped += nonfinite;
     total_clamped += tracer.clamped;
     total_split_vertices += tracer.split_vertices;
+    total_shadow_skipped += tracer.shadow_rays_skipped;
     progress.tick();
   });
 
@@ -885,6 +906,16 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     r.add("split_distance", static_cast<double>(options.split_distance_m), "m");
     r.add("vertices_split_per_sample", static_cast<double>(total_split_vertices.load()) /
                                            static_cast<double>(std::max<std::int64_t>(1, total_samples.load())));
+  }
+  if (context.shadow_roulette_y > 0.f) {
+    r.add("shadow_roulette_threshold_y", static_cast<double>(context.shadow_roulette_y));
+    r.add("shadow_rays_skipped", total_shadow_skipped.load());
+    char note[200];
+    std::snprintf(note, sizeof note,
+                  "shadow-ray roulette: next-event contributions below %.3g cd/m2 (%.2f x the sensor noise at black) "
+                  "cast their shadow ray with probability contribution / threshold",
+                  static_cast<double>(context.shadow_roulette_y), options.shadow_roulette);
+    r.notes.push_back(note);
   }
   // Noise estimate: median relative standard error over pixels that received light.
   std::vector<float> relative;

@@ -301,6 +301,64 @@ TEST(PathTracer, OneShadowRayPerVertexKeepsTheMeanOfSeveralLights) {
               p[0].mean, p[0].variance, p[1].mean, p[1].variance, shaded);
 }
 
+TEST(PathTracer, ShadowRayRouletteKeepsTheMeanAndBoundsTheAddedVariance) {
+  // The scene of the test above (two rectangle lights and an emitting quad over a plane, one
+  // bounce). With a sensor noise sigma whose roulette threshold is twice the pixel's value,
+  // about half the shadow rays are skipped; the mean stays the closed form, unshaded and with
+  // a plate hiding part of one light, and the variance grows by at most threshold^2 / 4 per
+  // sample (the largest added variance, at a contribution of half the threshold).
+  solo::RenderScene s = planeUnderTwoRectangleLights(3.f, 1.f);
+  s.emitters.push_back({Eigen::Vector3f::Constant(2.f), false, 5});
+  addQuad(s, {-0.2f, 0.6f, 4.5f}, {0.4f, 0, 0}, {0, 0.4f, 0}, 0.f, 0);
+  const double irradiance = 3 * rectangleIntegral(-0.7, -0.3, -0.2, 0.2, 1) + 1 * rectangleIntegral(0.5, 0.9, -0.2, 0.2, 1) +
+                            2 * rectangleIntegral(-0.2, 0.2, 0.6, 1.0, 0.5);
+  const double expected = 0.5 / kPi * irradiance;
+  constexpr int kSamples = 64;
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.max_bounces = 1;
+  o.min_samples = o.max_samples = kSamples;
+  o.sampler = solo::SamplerKind::Independent;
+  o.progress = false;
+  const double sigma = 4 * expected;  // a constant sensor noise, render units
+  o.noise_sigma = [sigma](double) { return sigma; };
+  const double threshold = 0.5 * sigma;
+  const auto rays = [](const solo::RenderOutput& out) { return std::get<std::int64_t>(*out.report.find("rays")); };
+
+  // A threshold below every contribution changes nothing, bit for bit.
+  o.shadow_roulette = 1e-6;
+  const solo::RenderOutput below = solo::renderPathTraced(s, o);
+  o.shadow_roulette = 0;
+  const solo::RenderOutput off = solo::renderPathTraced(s, o);
+  EXPECT_EQ(cv::norm(below.radiance, off.radiance, cv::NORM_INF), 0.0);
+  EXPECT_EQ(std::get<std::int64_t>(*below.report.find("shadow_rays_skipped")), 0);
+  EXPECT_EQ(rays(off), kSamples * 3);
+
+  o.shadow_roulette = threshold / sigma;
+  const solo::RenderOutput on = solo::renderPathTraced(s, o);
+  const std::int64_t skipped = std::get<std::int64_t>(*on.report.find("shadow_rays_skipped"));
+  EXPECT_EQ(rays(on) + skipped, kSamples * 3) << "every skipped ray is a shadow ray not cast";
+  EXPECT_GT(skipped, kSamples / 4);
+  EXPECT_LT(skipped, 3 * kSamples / 4);
+  EXPECT_NEAR(std::get<double>(*on.report.find("shadow_roulette_threshold_y")), threshold, 1e-6 * threshold);
+
+  for (const bool plate : {false, true}) {
+    if (plate) addQuad(s, {-0.4f, -0.3f, 4.5f}, {0.15f, 0, 0}, {0, 0.6f, 0}, 0.f);
+    const double truth = plate ? expected - 0.5 / kPi * 3 * rectangleIntegral(-0.7, -0.5, -0.2, 0.2, 1) : expected;
+    o.shadow_roulette = 0;
+    const PixelStatistics plain = pixelStatistics(s, o, 200, 0, 0);
+    o.shadow_roulette = threshold / sigma;
+    const PixelStatistics roulette = pixelStatistics(s, o, 200, 0, 0);
+    EXPECT_NEAR(roulette.mean, truth, 4 * std::sqrt(roulette.variance / 200)) << plate;
+    const double bound = plain.variance + threshold * threshold / 4 / kSamples;
+    EXPECT_LT(roulette.variance, 1.5 * bound) << plate;  // 1.5: the estimates' own spread at 200 seeds
+    EXPECT_GT(roulette.variance, plain.variance) << plate << ": the roulette adds variance here";
+    std::printf("%s: closed form %.5f; no roulette %.5f (variance %.3g); roulette %.5f (variance %.3g, bound %.3g)\n",
+                plate ? "half shaded" : "unshaded", truth, plain.mean, plain.variance, roulette.mean, roulette.variance,
+                bound);
+  }
+}
+
 TEST(PathTracer, RayLogRecordsEveryRayAsCast) {
   // A plane at z = 5 seen through one narrow pixel, two rectangle lights at z = 4 facing it, one
   // bounce: each sample casts the camera ray, one shadow ray toward a light and the bounce ray.

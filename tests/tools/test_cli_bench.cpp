@@ -116,11 +116,13 @@ TEST(CliBench, AccuracyQuickWritesEveryStageAndTheRenderErrorFallsWithSamples) {
   const Csv render = readCsv(out / "render.csv");
   EXPECT_EQ(render.columns,
             (std::vector<std::string>{"seed", "width", "height", "mode", "light_sampler", "min_spp", "max_spp",
-                                      "relative_error_target", "mean_spp", "repeats", "seconds", "relative_rmse",
-                                      "relative_rmse_noise_corrected", "relative_rmse_unclipped", "luminance_ratio",
-                                      "white_cd_m2", "reference_spp", "reference_relative_noise", "load_1min"}));
-  // power at 1, 4, 16 spp, uniform 4, hierarchy 4, one adaptive point.
-  ASSERT_EQ(render.rows.size(), 6u);
+                                      "relative_error_target", "noise_factor", "shadow_roulette", "mean_spp", "repeats",
+                                      "seconds", "rays", "relative_rmse", "relative_rmse_noise_corrected",
+                                      "relative_rmse_unclipped", "luminance_ratio", "white_cd_m2", "reference_spp",
+                                      "reference_relative_noise", "load_1min"}));
+  // power at 1, 4, 16 spp, uniform 4, hierarchy 4, one adaptive point, the noise target with
+  // shadow-ray roulette off and at 0.3.
+  ASSERT_EQ(render.rows.size(), 8u);
   expectFiniteNonNegative(render, {"seconds", "mean_spp", "relative_rmse", "relative_rmse_noise_corrected",
                                    "relative_rmse_unclipped", "luminance_ratio", "white_cd_m2",
                                    "reference_relative_noise"},
@@ -139,6 +141,16 @@ TEST(CliBench, AccuracyQuickWritesEveryStageAndTheRenderErrorFallsWithSamples) {
   EXPECT_LT(power_error[16], power_error[4]);
   EXPECT_LT(power_error[16], 0.75 * power_error[1]);
   EXPECT_GT(power_error[1], 0);
+  // The roulette casts fewer rays at the same samples (it draws no number, and these 2-8 spp
+  // pixels stop on the neighbours' noise, which it barely moves), for about the same error.
+  const auto& no_roulette = render.rows[6];
+  const auto& roulette = render.rows[7];
+  EXPECT_EQ(no_roulette.at("mode"), "noise_target");
+  EXPECT_EQ(number(no_roulette, "shadow_roulette"), 0.0);
+  EXPECT_EQ(number(roulette, "shadow_roulette"), 0.3);
+  EXPECT_LT(number(roulette, "rays"), number(no_roulette, "rays"));
+  EXPECT_NEAR(number(roulette, "relative_rmse"), number(no_roulette, "relative_rmse"),
+              0.1 * number(no_roulette, "relative_rmse"));
 
   const Csv e2e = readCsv(out / "end_to_end.csv");
   ASSERT_EQ(e2e.rows.size(), 2u);

@@ -98,4 +98,27 @@ TEST(NightNoiseTarget, MetersAPreviewStopsAtTheSensorNoiseAndReportsTheShareReac
   ASSERT_EQ(by_default.exit_code, 0) << by_default.output;
   const auto default_report = nlohmann::json::parse(readText(dir / "d.report.json"));
   EXPECT_FALSE(noteStartingWith(stage(default_report, "render"), "noise-matched target: standard error <= 0.50").empty());
+
+  // Shadow-ray roulette (on in the default preset, 0.3 x the sensor noise at black): at a fixed
+  // sample count the paths are the same with it and without (it draws no number), so the rays
+  // it skipped are exactly the difference.
+  const std::string fixed = "night " + q(dir / "street" / "scene.json") +
+                            " --no-optimize --no-solids --min-spp 4 --max-spp 4 --noise-target --sensor-white 5";
+  const auto with = runSolo(fixed + " -o " + q(dir / "w.png"));
+  ASSERT_EQ(with.exit_code, 0) << with.output;
+  const auto without = runSolo(fixed + " --shadow-roulette 0 -o " + q(dir / "o.png"));
+  ASSERT_EQ(without.exit_code, 0) << without.output;
+  const auto with_report = nlohmann::json::parse(readText(dir / "w.report.json"));
+  const auto without_report = nlohmann::json::parse(readText(dir / "o.report.json"));
+  const auto& with_render = stage(with_report, "render");
+  const auto& without_render = stage(without_report, "render");
+  const double skipped = metric(with_render, "shadow_rays_skipped");
+  EXPECT_GT(skipped, 0.0);
+  EXPECT_GT(metric(with_render, "shadow_roulette_threshold_y"), 0.0);
+  EXPECT_EQ(metric(with_render, "rays") + skipped, metric(without_render, "rays"));
+  EXPECT_FALSE(without_render["metrics"].contains("shadow_rays_skipped"));
+  EXPECT_FALSE(noteStartingWith(with_render, "shadow-ray roulette: next-event contributions below").empty());
+  const auto bad = runSolo(fixed + " --shadow-roulette 2 -o " + q(dir / "b.png"));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("shadow-roulette"), std::string::npos) << bad.output;
 }

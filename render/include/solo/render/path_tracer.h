@@ -65,6 +65,11 @@ struct PathTracerOptions {
   /// error of k sigma raises the final noise to sqrt(1 + k^2) sigma, +12 % at k = 0.5; below
   /// that, more samples buy little that can be seen.
   double noise_factor = 0.5;
+  /// Shadow-ray roulette, with noise_sigma only: a next-event contribution whose largest XYZ
+  /// component is below this fraction of the sensor noise at black, noise_sigma(0), casts its
+  /// shadow ray with probability (that component / the threshold) and is divided by it when
+  /// cast. Unbiased; a sample's variance grows by at most threshold^2. 0 = off.
+  double shadow_roulette = 0.0;
   int max_bounces = 12;
   /// One shadow ray per path vertex, to one light chosen among the emitter sample and the
   /// rectangle lights in proportion to their unoccluded contributions (unbiased; adds only
