@@ -284,3 +284,39 @@ TEST(SharedMeshesBunny, UnreferencedVerticesAreDropped) {
 }
 
 }  // namespace
+
+TEST(SurfaceMesh, CollectGarbageMatchesOpenMeshsOwnAndKeepsTheImageProperties) {
+  // collectGarbage instantiates OpenMesh's compaction in solo (Debian's library runs it with
+  // its assertions on): the same mesh as OpenMesh's garbage_collection(), element for element,
+  // with the per-vertex image properties moved along with their vertices.
+  const TriangleMesh m = grid(5, {}, flat);  // 6 x 6 vertices
+  solo::SurfaceMesh ours = solo::toSurfaceMesh(m);
+  const solo::ImageVertexProperties props = solo::ImageVertexProperties::getOrAdd(ours);
+  for (const auto v : ours.vertices()) {
+    ours.property(props.pixel, v) = OpenMesh::Vec2i(v.idx() % 6, v.idx() / 6);
+    ours.property(props.instance, v) = 1000 + v.idx();
+  }
+  // Delete a vertex inside (its fan goes with it) and one face elsewhere.
+  ours.delete_vertex(OpenMesh::VertexHandle(2 + 6 * 2), true);
+  ours.delete_face(OpenMesh::FaceHandle(0), true);
+  solo::SurfaceMesh theirs = ours;
+  solo::collectGarbage(ours);
+  theirs.garbage_collection();
+  ASSERT_EQ(ours.n_vertices(), theirs.n_vertices());
+  ASSERT_EQ(ours.n_faces(), theirs.n_faces());
+  ASSERT_EQ(ours.n_edges(), theirs.n_edges());
+  EXPECT_EQ(ours.n_vertices(), 35u);
+  EXPECT_EQ(ours.n_faces(), 2u * 25u - 6u - 1u);  // the vertex's six faces and one more
+  for (const auto v : ours.vertices()) {
+    EXPECT_EQ(ours.point(v), theirs.point(v));
+    const OpenMesh::Vec2i pixel = ours.property(props.pixel, v);
+    EXPECT_EQ(ours.property(props.instance, v), 1000 + pixel[0] + 6 * pixel[1]) << v.idx();
+    EXPECT_EQ(ours.point(v)[0], m.vertices[static_cast<std::size_t>(pixel[0] + 6 * pixel[1])].x()) << v.idx();
+  }
+  for (const auto f : ours.faces()) {
+    std::vector<int> a, b;
+    for (const auto v : ours.fv_range(f)) a.push_back(v.idx());
+    for (const auto v : theirs.fv_range(OpenMesh::FaceHandle(f.idx()))) b.push_back(v.idx());
+    EXPECT_EQ(a, b) << f.idx();
+  }
+}
