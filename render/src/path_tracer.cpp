@@ -663,8 +663,12 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     context.rectangle_area.push_back(light.edge_u.cross(light.edge_v).norm());
     context.rectangle_cos_half_spread.push_back(std::cos(0.5f * light.spread_rad));
   }
-  if (options.noise_sigma && options.shadow_roulette > 0)
-    context.shadow_roulette_y = static_cast<float>(options.shadow_roulette * options.noise_sigma(0.0));
+  if (options.noise_sigma && options.shadow_roulette > 0) {
+    // A threshold that is not a finite positive float would skip every shadow ray (or none
+    // reliably): the roulette is then off.
+    const float threshold = static_cast<float>(options.shadow_roulette * options.noise_sigma(0.0));
+    if (std::isfinite(threshold) && threshold > 0.f) context.shadow_roulette_y = threshold;
+  }
 
   RenderOutput out;
   out.radiance.create(height, width, CV_32FC3);

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace {
 
@@ -333,6 +334,16 @@ TEST(PathTracer, ShadowRayRouletteKeepsTheMeanAndBoundsTheAddedVariance) {
   EXPECT_EQ(cv::norm(below.radiance, off.radiance, cv::NORM_INF), 0.0);
   EXPECT_EQ(std::get<std::int64_t>(*below.report.find("shadow_rays_skipped")), 0);
   EXPECT_EQ(rays(off), kSamples * 3);
+
+  // A sensor noise that is infinite, NaN or zero at black gives no usable threshold: off.
+  for (const double bad : {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN(), 0.0}) {
+    solo::PathTracerOptions b = o;
+    b.noise_sigma = [bad](double) { return bad; };
+    b.shadow_roulette = 0.5;
+    const solo::RenderOutput out = solo::renderPathTraced(s, b);
+    EXPECT_EQ(cv::norm(out.radiance, off.radiance, cv::NORM_INF), 0.0) << bad;
+    EXPECT_EQ(out.report.find("shadow_rays_skipped"), nullptr) << bad;
+  }
 
   o.shadow_roulette = threshold / sigma;
   const solo::RenderOutput on = solo::renderPathTraced(s, o);
