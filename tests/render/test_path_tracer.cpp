@@ -262,6 +262,24 @@ solo::RenderScene planeUnderTwoRectangleLights(float left, float right) {
   return s;
 }
 
+// The plane of planeUnderTwoRectangleLights(3, 1) with an emitting quad (radiance 2) at z = 4.5
+// over x, y in [-0.2, 0.2] x [0.6, 1.0] too, and the radiance of its centre point in closed form.
+solo::RenderScene planeUnderThreeLights() {
+  solo::RenderScene s = planeUnderTwoRectangleLights(3.f, 1.f);
+  s.emitters.push_back({Eigen::Vector3f::Constant(2.f), false, 5});
+  addQuad(s, {-0.2f, 0.6f, 4.5f}, {0.4f, 0, 0}, {0, 0.4f, 0}, 0.f, 0);
+  return s;
+}
+const double kPlaneUnderThreeLightsRadiance =
+    0.5 / kPi *
+    (3 * rectangleIntegral(-0.7, -0.3, -0.2, 0.2, 1) + 1 * rectangleIntegral(0.5, 0.9, -0.2, 0.2, 1) +
+     2 * rectangleIntegral(-0.2, 0.2, 0.6, 1.0, 0.5));
+// A black plate at z = 4.5 over x in [-0.4, -0.25] hides the brighter light's half x < -0.5.
+void addPlateHidingHalfTheBrighterLight(solo::RenderScene& s) {
+  addQuad(s, {-0.4f, -0.3f, 4.5f}, {0.15f, 0, 0}, {0, 0.6f, 0}, 0.f);
+}
+const double kHalfShadedRadiance = kPlaneUnderThreeLightsRadiance - 0.5 / kPi * 3 * rectangleIntegral(-0.7, -0.5, -0.2, 0.2, 1);
+
 }  // namespace
 
 TEST(PathTracer, OneShadowRayPerVertexKeepsTheMeanOfSeveralLights) {
@@ -269,12 +287,8 @@ TEST(PathTracer, OneShadowRayPerVertexKeepsTheMeanOfSeveralLights) {
   // sum of the three. One shadow ray per vertex to a light chosen by its contribution gives the
   // same mean with one shadow ray per vertex instead of three (unoccluded: the same value);
   // with a black plate shading part of one light, still the closed form.
-  solo::RenderScene s = planeUnderTwoRectangleLights(3.f, 1.f);
-  s.emitters.push_back({Eigen::Vector3f::Constant(2.f), false, 5});
-  addQuad(s, {-0.2f, 0.6f, 4.5f}, {0.4f, 0, 0}, {0, 0.4f, 0}, 0.f, 0);
-  const double irradiance = 3 * rectangleIntegral(-0.7, -0.3, -0.2, 0.2, 1) + 1 * rectangleIntegral(0.5, 0.9, -0.2, 0.2, 1) +
-                            2 * rectangleIntegral(-0.2, 0.2, 0.6, 1.0, 0.5);
-  const double expected = 0.5 / kPi * irradiance;
+  solo::RenderScene s = planeUnderThreeLights();
+  const double expected = kPlaneUnderThreeLightsRadiance;
   solo::PathTracerOptions o;
   o.diffuse = solo::DiffuseModel::Lambert;
   o.max_bounces = 1;
@@ -289,9 +303,8 @@ TEST(PathTracer, OneShadowRayPerVertexKeepsTheMeanOfSeveralLights) {
     const auto out = solo::renderPathTraced(s, o);
     EXPECT_EQ(std::get<std::int64_t>(*out.report.find("rays")), 64 * (one ? 3 : 5));  // camera, bounce and shadow rays
   }
-  // A black plate at z = 4.5 over x in [-0.4, -0.25] hides the brighter light's half x < -0.5.
-  addQuad(s, {-0.4f, -0.3f, 4.5f}, {0.15f, 0, 0}, {0, 0.6f, 0}, 0.f);
-  const double shaded = expected - 0.5 / kPi * 3 * rectangleIntegral(-0.7, -0.5, -0.2, 0.2, 1);
+  addPlateHidingHalfTheBrighterLight(s);
+  const double shaded = kHalfShadedRadiance;
   PixelStatistics p[2];
   for (const bool one : {true, false}) {
     o.one_shadow_ray = one;
@@ -308,12 +321,8 @@ TEST(PathTracer, ShadowRayRouletteKeepsTheMeanAndBoundsTheAddedVariance) {
   // about half the shadow rays are skipped; the mean stays the closed form, unshaded and with
   // a plate hiding part of one light, and the variance grows by at most threshold^2 / 4 per
   // sample (the largest added variance, at a contribution of half the threshold).
-  solo::RenderScene s = planeUnderTwoRectangleLights(3.f, 1.f);
-  s.emitters.push_back({Eigen::Vector3f::Constant(2.f), false, 5});
-  addQuad(s, {-0.2f, 0.6f, 4.5f}, {0.4f, 0, 0}, {0, 0.4f, 0}, 0.f, 0);
-  const double irradiance = 3 * rectangleIntegral(-0.7, -0.3, -0.2, 0.2, 1) + 1 * rectangleIntegral(0.5, 0.9, -0.2, 0.2, 1) +
-                            2 * rectangleIntegral(-0.2, 0.2, 0.6, 1.0, 0.5);
-  const double expected = 0.5 / kPi * irradiance;
+  solo::RenderScene s = planeUnderThreeLights();
+  const double expected = kPlaneUnderThreeLightsRadiance;
   constexpr int kSamples = 64;
   solo::PathTracerOptions o;
   o.diffuse = solo::DiffuseModel::Lambert;
@@ -354,8 +363,8 @@ TEST(PathTracer, ShadowRayRouletteKeepsTheMeanAndBoundsTheAddedVariance) {
   EXPECT_NEAR(std::get<double>(*on.report.find("shadow_roulette_threshold_y")), threshold, 1e-6 * threshold);
 
   for (const bool plate : {false, true}) {
-    if (plate) addQuad(s, {-0.4f, -0.3f, 4.5f}, {0.15f, 0, 0}, {0, 0.6f, 0}, 0.f);
-    const double truth = plate ? expected - 0.5 / kPi * 3 * rectangleIntegral(-0.7, -0.5, -0.2, 0.2, 1) : expected;
+    if (plate) addPlateHidingHalfTheBrighterLight(s);
+    const double truth = plate ? kHalfShadedRadiance : expected;
     o.shadow_roulette = 0;
     const PixelStatistics plain = pixelStatistics(s, o, 200, 0, 0);
     o.shadow_roulette = threshold / sigma;
