@@ -68,7 +68,7 @@ struct PathTracerOptions {
   /// Shadow-ray roulette, with noise_sigma only: a next-event contribution whose largest XYZ
   /// component is below this fraction of the sensor noise at black, noise_sigma(0), casts its
   /// shadow ray with probability (that component / the threshold) and is divided by it when
-  /// cast. Unbiased; a sample's variance grows by at most threshold^2. 0 = off.
+  /// cast. Unbiased; a sample's variance grows by at most threshold^2 / 4 per path vertex. 0 = off.
   double shadow_roulette = 0.0;
   int max_bounces = 12;
   /// One shadow ray per path vertex, to one light chosen among the emitter sample and the
