@@ -219,7 +219,7 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   std::vector<int> emitter_of_light(record.tree.lights.size(), -1);
   std::map<std::string, std::int64_t> lights_on_by_category;
   std::int64_t lights_on_without_faces = 0;
-  double flux_area_mesh_m2 = 0, flux_area_record_m2 = 0;
+  double flux_area_mesh_m2 = 0, flux_area_record_m2 = 0, luminance_area_mesh_m2 = 0, luminance_area_record_m2 = 0;
   for (std::size_t i = 0; i < record.tree.lights.size(); ++i) {
     if (!light_on[i]) continue;
     const Light& light = record.tree.lights[i];
@@ -231,6 +231,9 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     if (state.unit == StrengthUnit::FluxLm) {
       flux_area_mesh_m2 += seen_area_m2[i];
       flux_area_record_m2 += record.geometry[i].area_m2;
+    } else {
+      luminance_area_mesh_m2 += seen_area_m2[i];
+      luminance_area_record_m2 += record.geometry[i].area_m2;
     }
     const double luminance = emittedLuminance(state, light.category, seen_area_m2[i]);
     if (!(luminance > 0) || !std::isfinite(luminance)) continue;
@@ -275,6 +278,9 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   report.add("lights_on_without_faces", lights_on_without_faces);
   report.add("flux_lights_area_mesh", flux_area_mesh_m2, "m2");
   report.add("flux_lights_area_record", flux_area_record_m2, "m2");
+  // A luminance light's flux follows its emitting area: the mesh's against the record's.
+  report.add("luminance_lights_area_mesh", luminance_area_mesh_m2, "m2");
+  report.add("luminance_lights_area_record", luminance_area_record_m2, "m2");
   for (const auto& [category, count] : lights_on_by_category) report.add("on_" + category, count);
   if (scene.emitters.empty()) report.notes.push_back("no active light in view");
   report.seconds = clock.seconds();

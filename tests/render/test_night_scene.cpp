@@ -132,6 +132,19 @@ TEST(NightScene, AnOnLightEmitsItsLuminanceInItsColourAndAnOffLightNothing) {
   for (int e : night.scene.face_emitter) emitting += e == 0;
   EXPECT_GT(emitting, 0);
   EXPECT_LT(emitting, 30) << "faces over the light that is off do not emit";
+  // The report compares the luminance lights' emitting area on the mesh with the record's (the
+  // light that is on only).
+  double emitting_area_m2 = 0;
+  for (std::size_t f = 0; f < night.scene.faces.size(); ++f)
+    if (night.scene.face_emitter[f] == 0) emitting_area_m2 += frontoParallelArea(night.scene, f);
+  const auto area = [&](const std::string& name) {
+    const solo::MetricValue* value = night.report.find(name);
+    EXPECT_NE(value, nullptr) << name;
+    return value ? std::get<double>(*value) : -1.0;
+  };
+  EXPECT_NEAR(area("luminance_lights_area_mesh"), emitting_area_m2, 1e-6);
+  EXPECT_EQ(area("luminance_lights_area_record"), 1.0);
+  EXPECT_EQ(area("flux_lights_area_mesh"), 0.0);
 }
 
 TEST(NightScene, AMeshFromADownsampledDepthMapTakesTheAlbedoUnderItsFacesAtFullResolution) {
