@@ -452,9 +452,8 @@ struct AccuracySweep::Impl {
 
     // The noise-matched target's sensor noise, at the reference's auto-exposure white (solo
     // night meters its own on a preview).
-    const double exposure = exposureScale(PostProcessOptions{}.exposure_options);
-    const auto sensor_sigma = sensorNoiseSigma(1.0 / (self.white * exposure), exposure, PostProcessOptions{}.noise_options);
-    constexpr double kNoiseFactor = 0.5;  // the default preset's
+    const auto sensor_sigma = renderNoiseSigma(self.white);
+    const double kNoiseFactor = NightOptions{}.noise_factor;  // the default preset's
     // roulette < 0: a relative-error target (or none); >= 0: the noise-matched target with
     // that shadow-ray roulette fraction.
     const auto point = [&](const std::string& mode, LightSamplerKind kind, int min_spp, int max_spp, double target,
@@ -503,7 +502,9 @@ struct AccuracySweep::Impl {
                                                    : std::vector<Adaptive>{{2, 8, 0.2}, {4, 16, 0.1}, {8, 32, 0.05}};
     for (const Adaptive& a : adaptive) point("adaptive", LightSamplerKind::Power, a.min_spp, a.max_spp, a.target);
     // The default preset's noise-matched target (2-8 spp), shadow-ray roulette off and on.
-    const std::vector<double> roulettes = o.quick ? std::vector<double>{0, 0.3} : std::vector<double>{0, 0.1, 0.3, 1};
+    const double preset_roulette = NightOptions{}.shadow_roulette;
+    const std::vector<double> roulettes = o.quick ? std::vector<double>{0, preset_roulette}
+                                                  : std::vector<double>{0, 0.1, preset_roulette, 1};
     for (double roulette : roulettes) point("noise_target", LightSamplerKind::Power, 2, 8, 0, roulette);
     t.notes.push_back("the night scene of the default refinement, mesh and lights (seed " +
                       integer(static_cast<std::int64_t>(o.seed)) + "); reference: " + integer(o.reference_spp) +

@@ -182,8 +182,7 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   // will get at that exposure.
   std::string render_note = exposure_note;
   if (o.noise_target && o.noise) {
-    const double exposure = exposureScale(PostProcessOptions{}.exposure_options);
-    tracer.noise_sigma = sensorNoiseSigma(1.0 / (sensor_white * exposure), exposure, PostProcessOptions{}.noise_options);
+    tracer.noise_sigma = renderNoiseSigma(sensor_white);
     tracer.noise_factor = o.noise_factor;
     tracer.shadow_roulette = o.shadow_roulette;
     tracer.relative_error = 0;  // the sensor's noise is the target now; max_samples still caps

@@ -92,4 +92,9 @@ PostProcessResult postProcess(const cv::Mat& xyz_e, const PostProcessOptions& op
   return result;
 }
 
+std::function<double(double)> renderNoiseSigma(double sensor_white_cd_m2, const PostProcessOptions& options) {
+  const double exposure = exposureScale(options.exposure_options);
+  return sensorNoiseSigma(1.0 / (sensor_white_cd_m2 * exposure), exposure, options.noise_options);
+}
+
 }  // namespace solo

@@ -113,3 +113,16 @@ TEST(PostProcess, RejectsBadImagesAndOptionsBeforeWorking) {
   options.noise_options.iso = 12800;
   EXPECT_THROW(solo::postProcess(cv::Mat::zeros(4, 4, CV_32FC3), options), std::invalid_argument);
 }
+
+TEST(PostProcess, RenderNoiseSigmaScalesWithTheSensorWhite) {
+  // The noise target is set in render units: a scene rendered twice as bright and exposed to a
+  // twice higher white gets the same image, so its noise sigma at twice the luminance is twice
+  // as large.
+  const auto at_5 = solo::renderNoiseSigma(5.0), at_10 = solo::renderNoiseSigma(10.0);
+  for (const double y : {0.0, 0.01, 0.5, 2.0, 5.0}) {
+    EXPECT_GT(at_5(y), 0.0) << y;
+    EXPECT_NEAR(at_10(2 * y), 2 * at_5(y), 1e-9 * at_5(y)) << y;
+  }
+  // More light, more shot noise.
+  EXPECT_GT(at_5(5.0), at_5(0.0));
+}

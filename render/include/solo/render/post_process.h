@@ -14,6 +14,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <functional>
 #include <vector>
 
 namespace solo {
@@ -44,5 +45,11 @@ struct PostProcessResult {
 /// 0 and counted (step "input"). Throws std::invalid_argument for an empty or non-CV_32FC3
 /// image and for invalid options (an ISO outside the noise calibration, ...).
 PostProcessResult postProcess(const cv::Mat& xyz_e, const PostProcessOptions& options);
+
+/// The standard deviation of the sensor noise the post-process adds, in render units
+/// (cd/m^2), as a function of a pixel's luminance Y, for a render whose auto-exposure white is
+/// `sensor_white_cd_m2` (> 0): the noise-matched target of PathTracerOptions::noise_sigma.
+/// Uses the options' exposure and noise settings.
+std::function<double(double)> renderNoiseSigma(double sensor_white_cd_m2, const PostProcessOptions& options = {});
 
 }  // namespace solo
