@@ -176,9 +176,11 @@ float ggxAverageAlbedo(float alpha) {
 }
 
 GgxLobe::GgxLobe(const Eigen::Vector3f& wo, float alpha)
-    : wo_(wo), alpha_(alpha), lambda_o_(ggxLambda(wo.z(), alpha)), g1_o_(ggxG1(wo.z(), alpha)) {
+    : wo_(wo), alpha_(alpha), lambda_o_(ggxLambda(wo.z(), alpha)), g1_o_(1.f / (1.f + lambda_o_)) {
   alphaRow(alpha, &alpha_node_, &alpha_fraction_);
-  average_albedo_ = ggxAverageAlbedo(alpha);
+  const AlbedoTables& t = tables();  // as ggxAverageAlbedo, on the row found above
+  average_albedo_ = (1 - alpha_fraction_) * t.average[static_cast<std::size_t>(alpha_node_)] +
+                    alpha_fraction_ * t.average[static_cast<std::size_t>(alpha_node_ + 1)];
 }
 
 float GgxLobe::specular(const Eigen::Vector3f& wi) const {

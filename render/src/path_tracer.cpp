@@ -237,6 +237,11 @@ struct Path {
   float emission_scale = 1.f;  // 1 / the previous vertex's emission splits
   float z_per_distance = 1.f;  // the camera ray's depth per unit distance
   float u_choice = 0.f, u_pick = 0.f;  // the vertex's light choice and light pick
+  // Set by locate() at the ray's hit: the point, the normal on the ray's side, the picked
+  // emissive triangle (-1: none) and its probability.
+  Eigen::Vector3f point = Eigen::Vector3f::Zero(), normal = Eigen::Vector3f::UnitZ();
+  int picked = -1;
+  float pick_pmf = 0.f;
   int bounce = 0;
   bool alive = true;
   bool sees_emitter = false;  // the camera ray hit an emitting face
@@ -303,6 +308,10 @@ class WaveTracer {
       for (std::uint32_t i : active_) paths[i].hit = closestHit(paths[i].origin, paths[i].direction);
       for (std::uint32_t i : active_)
         if (paths[i].hit.hit) __builtin_prefetch(&slotShading(c_.shading, paths[i].hit.slot));
+      // The light picks for the whole wave before any shading, so that each picked triangle
+      // loads while the wave's other vertices are located and shaded.
+      for (std::uint32_t i : active_)
+        if (paths[i].hit.hit) locate(paths[i]);
       shadow_rays_.clear();
       for (std::uint32_t i : active_) shade(paths[i], i);
       for (const ShadowRay& s : shadow_rays_)
@@ -322,6 +331,20 @@ class WaveTracer {
     ++rays;
     if (log_) log_->push_back({o, d, t_far, true});
     return c_.caster.occluded(o, d, 0.f, t_far);
+  }
+
+  // The hit point of the path's ray, the face's normal turned toward the ray's origin, and the
+  // light pick there (next-event estimation's triangle, prefetched).
+  void locate(Path& path) {
+    const SlotShading& face = slotShading(c_.shading, path.hit.slot);
+    path.point = path.origin + path.direction * path.hit.distance;
+    path.normal = decodeOctahedral(face.normal);
+    if (path.normal.dot(-path.direction) < 0.f) path.normal = -path.normal;
+    path.pick_pmf = 0.f;
+    path.picked = path.bounce < c_.options.max_bounces
+                      ? c_.sampler.pick(path.point, path.normal, path.u_pick, &path.pick_pmf)
+                      : -1;
+    if (path.picked >= 0) __builtin_prefetch(&c_.emissive[static_cast<std::size_t>(path.picked)]);
   }
 
   // The path's vertex at its ray's end (or the sky past it): emission found there, the
@@ -349,15 +372,11 @@ class WaveTracer {
       return;
     }
     const SlotShading& face = slotShading(c.shading, hit.slot);
-    const Eigen::Vector3f point = path.origin + direction * hit.distance;
-    Eigen::Vector3f n = decodeOctahedral(face.normal);
-    const float cos_hit = n.dot(-direction);
-    if (cos_hit < 0.f) n = -n;
-    const float abs_cos_hit = std::abs(cos_hit);
-    // The light pick comes first, so that its triangle loads while the rest of the vertex is shaded.
-    float pick_pmf = 0.f;
-    const int tri = bounce < c.options.max_bounces ? c.sampler.pick(point, n, path.u_pick, &pick_pmf) : -1;
-    if (tri >= 0) __builtin_prefetch(&c.emissive[static_cast<std::size_t>(tri)]);
+    const Eigen::Vector3f& point = path.point;
+    const Eigen::Vector3f& n = path.normal;
+    const float abs_cos_hit = std::abs(n.dot(direction));
+    const int tri = path.picked;
+    const float pick_pmf = path.pick_pmf;
 
     const int emitter_index = face.emitter;
     if (emitter_index >= 0) {

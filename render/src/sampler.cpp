@@ -103,14 +103,15 @@ Sampler::Sampler(SamplerKind kind, std::uint64_t seed, std::uint64_t pixel, int 
     throw std::invalid_argument("Sampler: replicates must be in [1, " + std::to_string(kMaxReplicates) + "], got " +
                                 std::to_string(replicates));
   if (kind_ != SamplerKind::Sobol) return;
-  const std::uint32_t pixel_hash = hash32(static_cast<std::uint32_t>(pixel) ^
+  pixel_hash_ = hash32(static_cast<std::uint32_t>(pixel) ^
                                           hash32(static_cast<std::uint32_t>(pixel >> 32) ^
                                                  hash32(static_cast<std::uint32_t>(seed) ^ hash32(static_cast<std::uint32_t>(seed >> 32)))));
-  // Per replicate and dimension: the index shuffle's seed and one scrambling seed per
-  // coordinate. Replicate 0's seeds do not depend on the replicate count.
-  const std::size_t used = static_cast<std::size_t>(3 * kLowDiscrepancyDimensions) * replicates_;
-  for (std::size_t i = 0; i < used; ++i) scramble_[i] = hash32(pixel_hash + 0x632be5abU * static_cast<std::uint32_t>(i + 1));
 }
+
+// Seed i of the pixel: per replicate and dimension, the index shuffle's
+// seed and one scrambling seed per coordinate. Replicate 0's seeds do not depend on the
+// replicate count.
+std::uint32_t Sampler::scrambleSeed(std::uint32_t i) const { return hash32(pixel_hash_ + 0x632be5abU * (i + 1)); }
 
 void Sampler::startSample(std::uint32_t index) {
   if (replicates_ == 1) {
@@ -124,13 +125,13 @@ void Sampler::startSample(std::uint32_t index) {
 
 float Sampler::get1D() {
   if (kind_ == SamplerKind::Independent || dimension_ >= kLowDiscrepancyDimensions) return rng_.uniform();
-  const std::uint32_t* seed = &scramble_[seed_offset_ + static_cast<std::uint32_t>(3 * dimension_)];
+  const std::uint32_t seed = seed_offset_ + static_cast<std::uint32_t>(3 * dimension_);
   ++dimension_;
   // Shuffling the index (an Owen scramble of its reversed bits keeps every aligned block of
   // 2^k indices together) decorrelates this dimension from the others sharing the index; the
   // van der Corput value of the shuffled index, held reversed, is the shuffled index itself.
-  const std::uint32_t shuffled = reverseBits(laineKarras(index_reversed_, seed[0]));
-  return toUnit(reverseBits(laineKarras(shuffled, seed[1])));
+  const std::uint32_t shuffled = reverseBits(laineKarras(index_reversed_, scrambleSeed(seed)));
+  return toUnit(reverseBits(laineKarras(shuffled, scrambleSeed(seed + 1))));
 }
 
 std::pair<float, float> Sampler::get2D() {
@@ -138,11 +139,11 @@ std::pair<float, float> Sampler::get2D() {
     const float u = rng_.uniform();
     return {u, rng_.uniform()};
   }
-  const std::uint32_t* seed = &scramble_[seed_offset_ + static_cast<std::uint32_t>(3 * dimension_)];
+  const std::uint32_t seed = seed_offset_ + static_cast<std::uint32_t>(3 * dimension_);
   ++dimension_;
-  const std::uint32_t shuffled = reverseBits(laineKarras(index_reversed_, seed[0]));
-  const std::uint64_t both = (static_cast<std::uint64_t>(laineKarras(shuffled, seed[1])) << 32) |
-                             laineKarras(sobolSecondReversed(shuffled), seed[2]);
+  const std::uint32_t shuffled = reverseBits(laineKarras(index_reversed_, scrambleSeed(seed)));
+  const std::uint64_t both = (static_cast<std::uint64_t>(laineKarras(shuffled, scrambleSeed(seed + 1))) << 32) |
+                             laineKarras(sobolSecondReversed(shuffled), scrambleSeed(seed + 2));
   const std::uint64_t fractions = reverseBits64(both);  // x in the low word, y in the high word
   return {toUnit(static_cast<std::uint32_t>(fractions)), toUnit(static_cast<std::uint32_t>(fractions >> 32))};
 }

@@ -19,7 +19,6 @@
 // then independent and unbiased, so their spread estimates the error of the pixel's mean
 // without assuming independent samples (path_tracer.cpp's stopping rule).
 
-#include <array>
 #include <cstdint>
 #include <string_view>
 #include <utility>
@@ -79,9 +78,13 @@ class Sampler {
   std::uint32_t index_reversed_ = 0;  // the point index within its replicate, bit-reversed
   std::uint32_t seed_offset_ = 0;  // where the current replicate's scrambling seeds start
   int dimension_ = 0;
-  // Seeds per replicate and dimension; only the first replicates_ blocks are filled.
-  std::array<std::uint32_t, 3 * kLowDiscrepancyDimensions * kMaxReplicates> scramble_;
+  // The scrambling seeds (per replicate and dimension, three each) are hashed from this when
+  // used rather than stored: a table of them made each pixel's state 1.5 KiB, and a tile's
+  // states outgrew the caches the traversal needs.
+  std::uint32_t pixel_hash_ = 0;
   Pcg32 rng_;
+
+  std::uint32_t scrambleSeed(std::uint32_t i) const;
 };
 
 }  // namespace solo
