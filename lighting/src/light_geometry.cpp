@@ -81,6 +81,25 @@ std::vector<LightGeometry> measureLightGeometry(const LightGroupTree& tree, cons
     LightGeometry& g = result[i];
     g.pixels_with_depth = static_cast<std::int64_t>(points.size());
     if (points.empty()) continue;
+    // Mixed pixels at the light's silhouette see the background, metres to hundreds of metres
+    // behind a lamp, and a pixel's footprint grows with its depth squared: a few of them would
+    // dominate the area and drag the centroid away. Only pixels within median +- max(3 MAD,
+    // 0.25 m) of the light's depth count (the night scene keeps its faces by the same rule). A
+    // flat light seen at grazing (depth spread evenly over its width w: MAD = w / 4) keeps all.
+    {
+      std::vector<double> z(points.size());
+      for (std::size_t k = 0; k < points.size(); ++k) z[k] = points[k].z;
+      const auto middle = z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2);
+      std::nth_element(z.begin(), middle, z.end());
+      const double median = *middle;
+      for (double& d : z) d = std::abs(d - median);
+      std::nth_element(z.begin(), middle, z.end());
+      const double band = std::max(3.0 * *middle, 0.25);
+      const auto off = std::remove_if(points.begin(), points.end(),
+                                      [&](const WeightedPoint& p) { return std::abs(p.z - median) > band; });
+      g.pixels_off_depth = std::distance(off, points.end());
+      points.erase(off, points.end());
+    }
 
     // Fit with equal weights first (the areas depend on the normal), then drop outliers
     // (depth bleeding at the light's border) and refit with area weights.

@@ -78,6 +78,8 @@ std::string lightRecordJson(const LightRecord& record) {
                 {"strength", "cd/m2: luminance of the emitting surface; lm: luminous flux of the light"},
                 {"centroid_m", "camera frame, x right, y down, z forward, metres"},
                 {"area_m2", "emitting surface seen by the light's pixels, square metres"},
+                {"pixels_off_depth", "pixels whose depth lies off the light's (its silhouette's mixed pixels): not in "
+                                     "area_m2 nor centroid_m"},
                 {"runs", "[row, first column, last column] of the light's pixels"}};
   ordered_json groups = ordered_json::array();
   for (const LightGroup& g : record.tree.groups) {
@@ -126,6 +128,7 @@ std::string lightRecordJson(const LightRecord& record) {
     o["colour_source"] = s.colour_source;
     o["pixels"] = l.pixels;
     o["pixels_with_depth"] = g.pixels_with_depth;
+    o["pixels_off_depth"] = g.pixels_off_depth;
     o["area_m2"] = g.area_m2;
     o["centroid_m"] = vector3(g.centroid_m);
     o["normal"] = vector3(g.normal);
@@ -238,6 +241,7 @@ LightRecord recordFromJson(const json& j, const std::filesystem::path& file) {
       l.bbox = l.bbox.empty() ? box : (l.bbox | box);
     }
     g.pixels_with_depth = o.value("pixels_with_depth", std::int64_t{0});
+    g.pixels_off_depth = o.value("pixels_off_depth", std::int64_t{0});
     g.area_m2 = o.value("area_m2", 0.0);
     if (!std::isfinite(g.area_m2) || g.area_m2 < 0) r.fail(where, "\"area_m2\" must be a non-negative number");
     if (o.contains("centroid_m")) g.centroid_m = r.vector(o, "centroid_m", where);

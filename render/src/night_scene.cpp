@@ -216,26 +216,104 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   // One emitter per light that is on and shown by some face. A flux (street and front lights)
   // is spread over the area of those faces, so the rendered light keeps its flux whatever the
   // mesh made of the light's pixels; a luminance is emitted as it is.
+  //
+  // A light that is on but shows no face would lose its light: the mesh stage removes a lamp
+  // head a few pixels high whole (it lies in the uncertain band of its silhouette). A flux light
+  // whose faces cover more than `max_flux_area_ratio` times the record's area is crumpled or
+  // stretched toward the background, and its faces' normals send its light where the lamp does
+  // not (on the 960x540 street a lamp's flux lit the wall beside it instead of the road). Both
+  // emit from a proxy instead (their faces stay dark): the light's own pixels, each run of them
+  // a quad on the record's plane (its centroid and normal, with the 85 degree incidence limit
+  // the record's area uses; past it the plane faces the camera), moved toward the camera by
+  // 1 cm + 0.2 % of its distance so that it lies in front of the surface behind it. It covers
+  // exactly the light's pixels, so the light-id AOV and the labels still agree.
   std::vector<int> emitter_of_light(record.tree.lights.size(), -1);
   std::map<std::string, std::int64_t> lights_on_by_category;
-  std::int64_t lights_on_without_faces = 0;
+  std::int64_t lights_on_without_faces = 0, light_proxies = 0, light_proxies_for_area = 0;
   double flux_area_mesh_m2 = 0, flux_area_record_m2 = 0, luminance_area_mesh_m2 = 0, luminance_area_record_m2 = 0;
+  double proxy_area_m2 = 0;
+  const double min_incidence_cosine = std::cos(85.0 * 3.14159265358979 / 180.0);
+  // Adds light i's proxy faces; returns their area, 0 when the record has no usable plane.
+  const auto addProxy = [&](std::size_t i) -> double {
+    if (i >= record.geometry.size()) return 0;
+    const LightGeometry& geometry = record.geometry[i];
+    if (!geometry.valid() || !geometry.centroid_m.allFinite() || !(geometry.centroid_m.z() > 0) ||
+        !geometry.normal.allFinite() || !(geometry.normal.norm() > 0.5))
+      return 0;
+    const PinholeCamera& camera = scene.camera;
+    const double distance = geometry.centroid_m.norm();
+    const Eigen::Vector3d centre = geometry.centroid_m * (1.0 - (0.01 + 0.002 * distance) / distance);
+    const auto corner = [&](const PixelRun& run, bool right, bool below) {
+      const double u = right ? run.last_col + 0.5 : run.first_col - 0.5, v = below ? run.row + 0.5 : run.row - 0.5;
+      return Eigen::Vector3d((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+    };
+    Eigen::Vector3d normal = geometry.normal.normalized();
+    for (const PixelRun& run : record.tree.lights[i].runs)
+      for (const bool right : {false, true})
+        for (const bool below : {false, true}) {
+          const Eigen::Vector3d ray = corner(run, right, below);
+          if (std::abs(normal.dot(ray)) < min_incidence_cosine * ray.norm()) normal = -centre.normalized();
+        }
+    // The emitting quads, and half way back to the centroid a black plate behind them: emitters
+    // are two-sided, and a lamp's back, unlike a mesh face's (backed by the lamp's solid or the
+    // surface behind), would light the wall behind it.
+    const double plane = normal.dot(centre), plate = normal.dot(0.5 * (centre + geometry.centroid_m));
+    std::vector<std::array<std::uint32_t, 3>> faces;
+    double area = 0;
+    const std::size_t first_vertex = scene.vertices.size();
+    for (const PixelRun& run : record.tree.lights[i].runs) {
+      const auto first = static_cast<std::uint32_t>(scene.vertices.size());
+      std::array<Eigen::Vector3d, 8> q;
+      int k = 0;
+      for (const double offset : {plane, plate})
+        for (const auto& [right, below] : {std::pair{false, false}, {true, false}, {true, true}, {false, true}}) {
+          const Eigen::Vector3d ray = corner(run, right, below);
+          q[static_cast<std::size_t>(k++)] = ray * (offset / normal.dot(ray));
+        }
+      if (!std::all_of(q.begin(), q.end(), [](const Eigen::Vector3d& p) { return p.allFinite(); })) continue;
+      for (const Eigen::Vector3d& p : q) scene.vertices.push_back(p.cast<float>());
+      area += 0.5 * ((q[1] - q[0]).cross(q[2] - q[0]).norm() + (q[2] - q[0]).cross(q[3] - q[0]).norm());
+      for (const std::uint32_t base : {first, first + 4}) {
+        faces.push_back({base, base + 1, base + 2});
+        faces.push_back({base, base + 2, base + 3});
+      }
+    }
+    if (!(area > 0) || !std::isfinite(area)) {
+      scene.vertices.resize(first_vertex);
+      return 0;
+    }
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      scene.faces.push_back(faces[f]);
+      scene.face_reflectance.push_back(Eigen::Vector3f::Zero());
+      if (!roughness.empty()) scene.face_roughness.push_back(0.5f);
+      light_of_face.push_back(f % 4 < 2 ? static_cast<int>(i) : -1);  // per run: 2 emitting, 2 plate
+    }
+    return area;
+  };
   for (std::size_t i = 0; i < record.tree.lights.size(); ++i) {
     if (!light_on[i]) continue;
     const Light& light = record.tree.lights[i];
     const LightState& state = record.instantiation.lights[i];
-    if (!(seen_area_m2[i] > 0)) {
-      ++lights_on_without_faces;
-      continue;
+    const bool flux = state.unit == StrengthUnit::FluxLm;
+    const double record_area_m2 = i < record.geometry.size() ? record.geometry[i].area_m2 : 0.0;
+    const bool too_large = flux && seen_area_m2[i] > options.max_flux_area_ratio * record_area_m2;
+    double emitting_area_m2 = seen_area_m2[i];
+    if (!(seen_area_m2[i] > 0) || too_large) {
+      const double area = addProxy(i);
+      if (area > 0) {
+        for (const SeenFace& face : seen_faces[i]) light_of_face[face.face] = -1;
+        emitting_area_m2 = area;
+        ++light_proxies;
+        light_proxies_for_area += seen_area_m2[i] > 0;
+        proxy_area_m2 += area;
+      } else if (!(seen_area_m2[i] > 0)) {
+        ++lights_on_without_faces;
+        continue;
+      }
     }
-    if (state.unit == StrengthUnit::FluxLm) {
-      flux_area_mesh_m2 += seen_area_m2[i];
-      flux_area_record_m2 += record.geometry[i].area_m2;
-    } else {
-      luminance_area_mesh_m2 += seen_area_m2[i];
-      luminance_area_record_m2 += record.geometry[i].area_m2;
-    }
-    const double luminance = emittedLuminance(state, light.category, seen_area_m2[i]);
+    (flux ? flux_area_mesh_m2 : luminance_area_mesh_m2) += emitting_area_m2;
+    (flux ? flux_area_record_m2 : luminance_area_record_m2) += record_area_m2;
+    const double luminance = emittedLuminance(state, light.category, emitting_area_m2);
     if (!(luminance > 0) || !std::isfinite(luminance)) continue;
     Emitter e;
     e.radiance = xyzFromChromaticity(state.xy, luminance).cast<float>();
@@ -276,6 +354,15 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   report.add("faces_off_light_depth", faces_off_light_depth);
   report.add("flux_light_faces_edge_on", faces_seen_edge_on);
   report.add("lights_on_without_faces", lights_on_without_faces);
+  report.add("light_proxies", light_proxies);
+  report.add("light_proxies_for_area", light_proxies_for_area);
+  report.add("light_proxies_area", proxy_area_m2, "m2");
+  if (light_proxies > 0)
+    report.notes.push_back(std::to_string(light_proxies - light_proxies_for_area) +
+                           " lights that are on show no mesh face, and the faces of " +
+                           std::to_string(light_proxies_for_area) + " flux lights cover more than " +
+                           std::to_string(options.max_flux_area_ratio) +
+                           " times their record's area: they emit from their pixels on their record's plane");
   report.add("flux_lights_area_mesh", flux_area_mesh_m2, "m2");
   report.add("flux_lights_area_record", flux_area_record_m2, "m2");
   // A luminance light's flux follows its emitting area: the mesh's against the record's.

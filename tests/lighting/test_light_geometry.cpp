@@ -93,6 +93,26 @@ TEST(LightGeometry, PixelsWithoutDepthAreLeftOutAndTinyLightsFaceTheCamera) {
   EXPECT_EQ(g[0].area_m2, 0);
 }
 
+TEST(LightGeometry, MixedPixelsOfTheSilhouetteCountInNeitherTheAreaNorTheCentroid) {
+  // A lamp 10 m away over a 20 x 10 block; its rightmost column sees a wall 60 m behind it
+  // (mixed pixels). Counted, those 10 pixels would add 10 x (60 / 100)^2 = 3.6 m^2 to the lamp's
+  // 190 x 0.01 = 1.9 m^2 and pull the centroid 14 m back.
+  const solo::PinholeCamera camera = camera100();
+  cv::Mat depth(80, 100, CV_32F, cv::Scalar(10));
+  depth(cv::Rect(49, 20, 1, 10)).setTo(60);
+  const auto g = solo::measureLightGeometry(treeWithRectangle({30, 20, 20, 10}), depth, camera);
+  EXPECT_EQ(g[0].pixels_with_depth, 200);
+  EXPECT_EQ(g[0].pixels_off_depth, 10);
+  EXPECT_NEAR(g[0].area_m2, 190 * 0.1 * 0.1, 1e-9);
+  EXPECT_NEAR(g[0].centroid_m.z(), 10, 1e-9);
+  EXPECT_NEAR(g[0].centroid_m.x(), 10 * (39.0 - 49.5) / 100, 1e-9);  // mean column of 30..48
+  EXPECT_NEAR(g[0].normal.z(), -1, 1e-9);
+  // A facade seen at grazing spreads its depth evenly: none of it is off.
+  cv::Mat slanted(80, 100, CV_32F);
+  for (int x = 0; x < 100; ++x) slanted.col(x).setTo(5.f + 0.5f * x);
+  EXPECT_EQ(solo::measureLightGeometry(treeWithRectangle({30, 20, 20, 10}), slanted, camera)[0].pixels_off_depth, 0);
+}
+
 TEST(LightGeometry, SyntheticStreetWindowsHaveTheirTrueSizeAndFacing) {
   solo::StreetSceneOptions options;
   options.width = 960;

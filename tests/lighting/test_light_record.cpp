@@ -28,6 +28,7 @@ solo::LightRecord smallRecord() {
   camera.cx = 9.5;
   camera.cy = 5.5;
   r.geometry = solo::measureLightGeometry(r.tree, cv::Mat(12, 20, CV_32F, cv::Scalar(4)), camera);
+  r.geometry[0].pixels_off_depth = 3;  // as if three of its pixels saw the background
   solo::IlluminantTable table;
   table.samples.push_back({solo::LightCategory::MovingFront, {0.42, 0.40}, "halogen"});
   table.samples.push_back({solo::LightCategory::StreetLightHighCct, {0.37, 0.38}, "metal halide"});
@@ -75,6 +76,7 @@ TEST(LightRecord, RoundTripKeepsEveryField) {
     EXPECT_DOUBLE_EQ(written.instantiation.lights[i].strength, read.instantiation.lights[i].strength);
     EXPECT_EQ(written.instantiation.lights[i].unit, read.instantiation.lights[i].unit);
     EXPECT_DOUBLE_EQ(written.geometry[i].area_m2, read.geometry[i].area_m2);
+    EXPECT_EQ(written.geometry[i].pixels_off_depth, read.geometry[i].pixels_off_depth);
     EXPECT_TRUE(written.geometry[i].centroid_m.isApprox(read.geometry[i].centroid_m));
   }
   EXPECT_EQ(read.instantiation.draws.size(), written.instantiation.draws.size());

@@ -6,6 +6,8 @@
 
 #include "test_support.h"
 
+#include <Eigen/Geometry>
+
 namespace {
 
 // A fronto-parallel plane 4 m away, 6x4 pixels: 5 x 3 quads = 30 faces.
@@ -329,4 +331,139 @@ TEST(NightScene, AFluxLightDropsTheFacesItShowsEdgeOn) {
   EXPECT_EQ(emitting, 15);
   EXPECT_EQ(countMetric(night.report, "flux_light_faces_edge_on"), 6);
   EXPECT_EQ(countMetric(night.report, "faces_off_light_depth"), 0);
+}
+
+namespace {
+
+// The record's plane for a light over columns 3-5 of the 6x4 plane 4 m away: what the light
+// stage measures before the mesh stage removes the lamp's faces.
+void setRecordPlane(solo::LightRecord& record, const Eigen::Vector3d& normal) {
+  solo::LightGeometry& g = record.geometry.at(0);
+  g.centroid_m = {4.0 * (4 - 2.5) / 10, 0.0, 4.0};  // mean column 4, mean row 1.5
+  g.normal = normal;
+  g.area_m2 = 12 * 0.4 * 0.4;
+  g.pixels_with_depth = 12;
+}
+
+// Camera-frame point -> pixel coordinates of the 6x4 test camera (fx = fy = 10, c = (2.5, 1.5)).
+Eigen::Vector2d pixelOf(const Eigen::Vector3f& p) {
+  return {10.0 * p.x() / p.z() + 2.5, 10.0 * p.y() / p.z() + 1.5};
+}
+
+double faceArea(const solo::RenderScene& scene, std::size_t f) {
+  const auto& face = scene.faces[f];
+  const Eigen::Vector3d a = scene.vertices[face[0]].cast<double>();
+  return 0.5 * (scene.vertices[face[1]].cast<double>() - a).cross(scene.vertices[face[2]].cast<double>() - a).norm();
+}
+
+}  // namespace
+
+TEST(NightScene, ALightWithoutFacesEmitsItsFluxFromItsPixelsOnTheRecordsPlane) {
+  // Columns 3-5 have no depth (the mesh stage took the lamp's faces), so no face shows the
+  // 6000 lm street light there. It emits from its pixels on its record's plane: per row a quad
+  // whose corners project to the pixel corners (columns 2.5 and 5.5), on z = 4 (1 - d / |c|)
+  // with d = 1 cm + 0.2 % of the centroid's distance |c|, a black plate half way behind it.
+  cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
+  depth.colRange(3, 6).setTo(0.f);
+  const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
+  solo::LightRecord record =
+      oneLightRecord(solo::LightCategory::StreetLightHighCct, 3, 5, 6000, solo::StrengthUnit::FluxLm, 7001, {0.38, 0.37}, 0);
+  setRecordPlane(record, {0, 0, -1});
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  ASSERT_EQ(night.scene.emitters.size(), 1u);
+  const double distance = std::sqrt(0.6 * 0.6 + 16.0);
+  const double z_front = 4.0 * (1.0 - (0.01 + 0.002 * distance) / distance), z_plate = 0.5 * (z_front + 4.0);
+  int emitting = 0, plates = 0;
+  double area = 0;
+  for (std::size_t f = 0; f < night.scene.faces.size(); ++f) {
+    const bool emits = night.scene.face_emitter[f] >= 0;
+    bool plate = false;
+    for (const std::uint32_t v : night.scene.faces[f]) plate |= std::abs(night.scene.vertices[v].z() - z_plate) < 1e-5;
+    if (!emits && !plate) continue;
+    EXPECT_EQ(night.scene.face_reflectance[f], Eigen::Vector3f::Zero()) << "face " << f;
+    for (const std::uint32_t v : night.scene.faces[f]) {
+      const Eigen::Vector3f& p = night.scene.vertices[v];
+      EXPECT_NEAR(p.z(), emits ? z_front : z_plate, 1e-5) << "face " << f;
+      const Eigen::Vector2d pixel = pixelOf(p);
+      EXPECT_TRUE(std::abs(pixel.x() - 2.5) < 1e-4 || std::abs(pixel.x() - 5.5) < 1e-4) << pixel.transpose();
+      EXPECT_NEAR(pixel.y() - std::round(pixel.y() + 0.5), -0.5, 1e-4) << pixel.transpose();
+    }
+    if (emits) {
+      ++emitting;
+      area += faceArea(night.scene, f);
+    } else {
+      ++plates;
+    }
+  }
+  EXPECT_EQ(emitting, 8) << "two per row";
+  EXPECT_EQ(plates, 8);
+  EXPECT_NEAR(area, 12 * (z_front / 10) * (z_front / 10), 1e-5) << "12 pixel footprints at the plane's depth";
+  const double flux = night.scene.emitters[0].radiance.y() * area *
+                      solo::profileProjectedSolidAngle(solo::EmissionProfile::CosineLobe);
+  EXPECT_NEAR(flux, 6000.0, 6000.0 * 1e-5);
+  EXPECT_EQ(countMetric(night.report, "light_proxies"), 1);
+  EXPECT_EQ(countMetric(night.report, "light_proxies_for_area"), 0);
+  EXPECT_EQ(countMetric(night.report, "lights_on_without_faces"), 0);
+
+  // Without a usable plane (no depth under the light) there is nothing to emit from.
+  record.geometry[0] = {};
+  const solo::NightScene unlit = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  EXPECT_TRUE(unlit.scene.emitters.empty());
+  EXPECT_EQ(countMetric(unlit.report, "lights_on_without_faces"), 1);
+  EXPECT_EQ(countMetric(unlit.report, "light_proxies"), 0);
+}
+
+TEST(NightScene, AFluxLightWhoseFacesOutgrowItsRecordEmitsFromItsPixelsInstead) {
+  // The plane's faces under columns 3-5 cover 15 x 0.08 = 1.2 m^2; the record measured 0.5 m^2 of
+  // lamp. Past max_flux_area_ratio (2) the faces stay dark and the proxy emits the flux.
+  const solo::DepthMesh mesh = planeMesh();
+  solo::LightRecord record =
+      oneLightRecord(solo::LightCategory::StreetLightHighCct, 3, 5, 6000, solo::StrengthUnit::FluxLm, 7001, {0.38, 0.37}, 0);
+  setRecordPlane(record, {0, 0, -1});
+  record.geometry[0].area_m2 = 0.5;
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const auto emittingFaces = [](const solo::NightScene& night) {
+    int n = 0;
+    for (const std::int32_t e : night.scene.face_emitter) n += e >= 0;
+    return n;
+  };
+  const solo::NightScene proxied = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  EXPECT_EQ(emittingFaces(proxied), 8) << "the proxy's two faces per row, none of the mesh's";
+  EXPECT_EQ(proxied.scene.faces.size(), 30u + 16u);
+  EXPECT_EQ(countMetric(proxied.report, "light_proxies_for_area"), 1);
+  for (std::size_t f = 0; f < 30; ++f) EXPECT_EQ(proxied.scene.face_emitter[f], -1) << "mesh face " << f;
+
+  options.max_flux_area_ratio = 10;  // the mesh's faces are within it: they emit
+  const solo::NightScene meshed = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  EXPECT_EQ(meshed.scene.faces.size(), 30u);
+  EXPECT_GT(emittingFaces(meshed), 8);
+  EXPECT_EQ(countMetric(meshed.report, "light_proxies"), 0);
+}
+
+TEST(NightScene, AProxyOnAGrazingRecordPlaneFacesTheCameraAndStaysFinite) {
+  // A record normal across the camera's rays (the plane fit of a sliver, or a normal map's
+  // grazing estimate) would put the pixel corners kilometres away or at infinity. Past 85
+  // degrees of incidence the proxy's plane faces the camera instead.
+  cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
+  depth.colRange(3, 6).setTo(0.f);
+  const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
+  solo::LightRecord record =
+      oneLightRecord(solo::LightCategory::WindowBuilding, 3, 5, 50, solo::StrengthUnit::LuminanceCdPerM2, 1001, {0.45, 0.41}, 0);
+  setRecordPlane(record, {1, 0, 0});
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  ASSERT_EQ(night.scene.emitters.size(), 1u);
+  EXPECT_NEAR(night.scene.emitters[0].radiance.y(), 50.f, 1e-3f) << "a luminance is emitted as it is";
+  double area = 0;
+  for (std::size_t f = 0; f < night.scene.faces.size(); ++f) {
+    for (const std::uint32_t v : night.scene.faces[f]) ASSERT_TRUE(night.scene.vertices[v].allFinite());
+    if (night.scene.face_emitter[f] >= 0) area += faceArea(night.scene, f);
+  }
+  // Facing the camera through the centroid 4.04 m away: close to the pixels' 1.92 m^2 at 4 m.
+  EXPECT_GT(area, 1.7);
+  EXPECT_LT(area, 2.0);
 }

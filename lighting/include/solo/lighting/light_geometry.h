@@ -40,6 +40,9 @@ NormalSource normalSourceFromName(const std::string& name);
 
 struct LightGeometry {
   std::int64_t pixels_with_depth = 0;  ///< pixels of the light with valid depth
+  /// Of those, pixels whose depth lies off the light's (beyond median +- max(3 MAD, 0.25 m)):
+  /// mixed pixels of its silhouette. They count in neither the area nor the centroid.
+  std::int64_t pixels_off_depth = 0;
   double area_m2 = 0;                  ///< emitting surface area, square metres
   Eigen::Vector3d centroid_m = Eigen::Vector3d::Zero();  ///< area-weighted, camera frame
   Eigen::Vector3d normal = Eigen::Vector3d(0, 0, -1);    ///< unit, toward the camera

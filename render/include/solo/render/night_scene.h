@@ -21,6 +21,9 @@ struct NightSceneOptions {
   double headlight_flux_lm = 1200;
   double sky_luminance_cd_m2 = 0.0;  ///< a dim night sky for rays that leave the scene; 0 = black
   float default_reflectance = 0.3f;  ///< faces with no pixel (mesh-file input) or no albedo map
+  /// A flux light (a compact lamp) whose mesh faces cover more than this many times the area
+  /// its record measured emits from its pixels on the record's plane instead (night_scene.cpp).
+  double max_flux_area_ratio = 2.0;
 };
 
 struct NightScene {
