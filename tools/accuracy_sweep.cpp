@@ -171,6 +171,7 @@ PipelineSetting presetSetting(const std::string& preset) {
 
 struct AccuracySweep::Impl {
   Scene scene, truth;
+  Scene refine_scene;  ///< scene as the refinement sees it (sceneForRefinement)
   TriangleMesh truth_mesh;
   AccuracySweepOptions o;
 
@@ -194,7 +195,7 @@ struct AccuracySweep::Impl {
     if (!prefix) {
       DepthRefinementOptions options;
       options.optimize = false;
-      const auto [s, n] = timed([&] { prefix = refineDepth(scene, options); }, o.repeats, o.cheap_seconds);
+      const auto [s, n] = timed([&] { prefix = refineDepth(refine_scene, options); }, o.repeats, o.cheap_seconds);
       prefix_seconds = s, prefix_repeats = n;
     }
     return *prefix;
@@ -203,7 +204,7 @@ struct AccuracySweep::Impl {
   const DepthRefinementResult& defaultRefinement() {
     if (!refined) {
       say("default refinement (for the mesh and render sweeps) ...");
-      refined = refineDepth(scene, DepthRefinementOptions{});
+      refined = refineDepth(refine_scene, DepthRefinementOptions{});
     }
     return *refined;
   }
@@ -298,7 +299,7 @@ struct AccuracySweep::Impl {
       DepthRefinementOptions options;
       options.filter = options.uncertain_regions = options.optimize = false;
       DepthRefinementResult r;
-      const auto [s, n] = timed([&] { r = refineDepth(scene, options); }, o.repeats, o.cheap_seconds);
+      const auto [s, n] = timed([&] { r = refineDepth(refine_scene, options); }, o.repeats, o.cheap_seconds);
       add("upsample_only", "", "", "", n, s, "", "", r.depth_m);
     }
     const DepthRefinementResult& p = refinementPrefix();
@@ -620,6 +621,7 @@ struct AccuracySweep::Impl {
 AccuracySweep::AccuracySweep(Scene scene, Scene truth, TriangleMesh truth_mesh, AccuracySweepOptions options)
     : impl_(std::make_unique<Impl>()) {
   impl_->scene = std::move(scene);
+  impl_->refine_scene = sceneForRefinement(impl_->scene);
   impl_->truth = std::move(truth);
   impl_->truth_mesh = std::move(truth_mesh);
   impl_->o = std::move(options);

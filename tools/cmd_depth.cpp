@@ -1,6 +1,7 @@
 // `solo depth SCENE -o refined.exr [--report r.json]`: the depth refinement stage alone.
 
 #include "commands.h"
+#include "night_pipeline.h"
 
 #include <solo/geometry/depth_refinement.h>
 #include <solo/geometry/image_io.h>
@@ -48,7 +49,7 @@ int runDepth(const DepthOptions& options) {
   const TangentModel model = options.tangent_model == "paper" ? TangentModel::kPaperGraph : TangentModel::kPerspective;
   refine.optimization.objective.tangent_model = model;
   refine.adam.objective.tangent_model = model;
-  const DepthRefinementResult result = refineDepth(scene, refine);
+  const DepthRefinementResult result = refineDepth(sceneForRefinement(scene), refine);
   for (const StageReport& step : result.steps) report.stages.push_back(step);
   report.stages.push_back(result.report);
 

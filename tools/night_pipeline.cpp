@@ -6,6 +6,7 @@
 #include <solo/geometry/error.h>
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/lighting/light_stage.h>
+#include <solo/lighting/street_light_instances.h>
 #include <solo/render/exposure.h>
 #include <solo/render/night_scene.h>
 #include <solo/render/sensor_noise.h>
@@ -57,6 +58,12 @@ SamplerKind samplerOption(const NightOptions& o) {
   }
 }
 
+Scene sceneForRefinement(const Scene& scene, std::int64_t* changed) {
+  Scene out = scene;  // cv::Mat copies share their pixels; only the instance map is new
+  out.instances = streetLightsAsPoles(scene.instances, scene.lights, changed);
+  return out;
+}
+
 NightScene runNightSceneStages(const Scene& scene, const NightOptions& o, const NightPipelineExtras& extras,
                                NightPipelineResult& r) {
   const auto say = [&](const std::string& line) {
@@ -72,7 +79,16 @@ NightScene runNightSceneStages(const Scene& scene, const NightOptions& o, const 
   refine_options.optimize = o.refine && o.optimize;
   refine_options.optimization.max_iterations = o.optimize_iterations;
   refine_options.optimization.function_tolerance = o.optimize_tolerance;
-  r.refined = refineDepth(scene, refine_options);
+  std::int64_t street_light_pixels = 0;
+  r.refined = refineDepth(sceneForRefinement(scene, &street_light_pixels), refine_options);
+  if (!r.refined.steps.empty()) {
+    r.refined.steps.front().add("street_light_pixels_relabelled", street_light_pixels);
+    if (street_light_pixels > 0)
+      r.refined.steps.front().notes.push_back(
+          std::to_string(street_light_pixels) +
+          " street-light pixels given an instance of their own lamp (class 17, pole) for the depth filter and "
+          "the mesh: the light map outlines a lamp better than the instance map");
+  }
   const DepthRefinementResult& refined = r.refined;
   for (const StageReport& step : refined.steps) stages.push_back(step);
   if (!o.refine) stages.back().notes.push_back("refinement switched off (--no-refine): upsampling only");

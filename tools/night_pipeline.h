@@ -45,6 +45,11 @@ struct NightPipelineResult {
 
 /// The light sampler and per-sample numbers named by the options; InputError naming the option
 /// for an unknown name.
+/// The scene the depth refinement and the mesh stage see: `scene` with each street light an
+/// instance of its own in the instance map (streetLightsAsPoles; the light map outlines a lamp
+/// better than an estimated segmentation does). `changed` receives the pixels changed.
+Scene sceneForRefinement(const Scene& scene, std::int64_t* changed = nullptr);
+
 LightSamplerKind lightSamplerOption(const NightOptions& options);
 SamplerKind samplerOption(const NightOptions& options);
 
