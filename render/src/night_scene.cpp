@@ -235,7 +235,7 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   const double min_incidence_cosine = std::cos(85.0 * 3.14159265358979 / 180.0);
   // Adds light i's proxy faces; returns their area, 0 when the record has no usable plane.
   const auto addProxy = [&](std::size_t i) -> double {
-    if (i >= record.geometry.size()) return 0;
+    if (!lights_match || i >= record.geometry.size()) return 0;  // the runs are pixels of scene.camera's grid
     const LightGeometry& geometry = record.geometry[i];
     if (!geometry.valid() || !geometry.centroid_m.allFinite() || !(geometry.centroid_m.z() > 0) ||
         !geometry.normal.allFinite() || !(geometry.normal.norm() > 0.5))

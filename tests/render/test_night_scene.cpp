@@ -407,6 +407,15 @@ TEST(NightScene, ALightWithoutFacesEmitsItsFluxFromItsPixelsOnTheRecordsPlane) {
   EXPECT_EQ(countMetric(night.report, "light_proxies_for_area"), 0);
   EXPECT_EQ(countMetric(night.report, "lights_on_without_faces"), 0);
 
+  // A record of another resolution than the maps' is not mapped at all: its runs are not the
+  // render camera's pixels.
+  solo::LightRecord other_size = record;
+  other_size.tree.width = 12;
+  other_size.tree.height = 8;
+  const cv::Mat albedo(4, 6, CV_32FC3, cv::Scalar(0.5f, 0.5f, 0.5f));
+  EXPECT_TRUE(solo::buildNightScene(mesh, albedo, {}, {}, other_size, options).scene.emitters.empty());
+  EXPECT_EQ(solo::buildNightScene(mesh, albedo, {}, {}, record, options).scene.emitters.size(), 1u);
+
   // Without a usable plane (no depth under the light) there is nothing to emit from.
   record.geometry[0] = {};
   const solo::NightScene unlit = solo::buildNightScene(mesh, {}, {}, {}, record, options);
