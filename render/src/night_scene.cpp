@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 
@@ -357,12 +358,15 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   report.add("light_proxies", light_proxies);
   report.add("light_proxies_for_area", light_proxies_for_area);
   report.add("light_proxies_area", proxy_area_m2, "m2");
-  if (light_proxies > 0)
-    report.notes.push_back(std::to_string(light_proxies - light_proxies_for_area) +
-                           " lights that are on show no mesh face, and the faces of " +
-                           std::to_string(light_proxies_for_area) + " flux lights cover more than " +
-                           std::to_string(options.max_flux_area_ratio) +
-                           " times their record's area: they emit from their pixels on their record's plane");
+  if (light_proxies > 0) {
+    char note[256];
+    std::snprintf(note, sizeof note,
+                  "%lld lights that are on show no mesh face, and the faces of %lld flux lights cover more than %g "
+                  "times their record's area: they emit from their pixels on their record's plane",
+                  static_cast<long long>(light_proxies - light_proxies_for_area),
+                  static_cast<long long>(light_proxies_for_area), options.max_flux_area_ratio);
+    report.notes.push_back(note);
+  }
   report.add("flux_lights_area_mesh", flux_area_mesh_m2, "m2");
   report.add("flux_lights_area_record", flux_area_record_m2, "m2");
   // A luminance light's flux follows its emitting area: the mesh's against the record's.
