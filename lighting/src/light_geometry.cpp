@@ -59,6 +59,18 @@ NormalSource normalSourceFromName(const std::string& name) {
   throw std::invalid_argument("unknown normal source \"" + name + "\"");
 }
 
+LightDepthBand lightDepthBand(std::vector<double> depths_m) {
+  if (depths_m.empty()) throw std::invalid_argument("lightDepthBand: no depths");
+  const auto middle = depths_m.begin() + static_cast<std::ptrdiff_t>(depths_m.size() / 2);
+  std::nth_element(depths_m.begin(), middle, depths_m.end());
+  LightDepthBand band;
+  band.median_m = *middle;
+  for (double& d : depths_m) d = std::abs(d - band.median_m);
+  std::nth_element(depths_m.begin(), middle, depths_m.end());
+  band.half_width_m = std::max(3.0 * *middle, 0.25);
+  return band;
+}
+
 std::vector<LightGeometry> measureLightGeometry(const LightGroupTree& tree, const cv::Mat& depth_m,
                                                 const PinholeCamera& camera, const LightGeometryOptions& options,
                                                 const cv::Mat& normals) {
@@ -83,20 +95,13 @@ std::vector<LightGeometry> measureLightGeometry(const LightGroupTree& tree, cons
     if (points.empty()) continue;
     // Mixed pixels at the light's silhouette see the background, metres to hundreds of metres
     // behind a lamp, and a pixel's footprint grows with its depth squared: a few of them would
-    // dominate the area and drag the centroid away. Only pixels within median +- max(3 MAD,
-    // 0.25 m) of the light's depth count (the night scene keeps its faces by the same rule). A
-    // flat light seen at grazing (depth spread evenly over its width w: MAD = w / 4) keeps all.
+    // dominate the area and drag the centroid away. Only the pixels in the light's depth band count.
     {
       std::vector<double> z(points.size());
       for (std::size_t k = 0; k < points.size(); ++k) z[k] = points[k].z;
-      const auto middle = z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2);
-      std::nth_element(z.begin(), middle, z.end());
-      const double median = *middle;
-      for (double& d : z) d = std::abs(d - median);
-      std::nth_element(z.begin(), middle, z.end());
-      const double band = std::max(3.0 * *middle, 0.25);
-      const auto off = std::remove_if(points.begin(), points.end(),
-                                      [&](const WeightedPoint& p) { return std::abs(p.z - median) > band; });
+      const LightDepthBand band = lightDepthBand(std::move(z));
+      const auto off =
+          std::remove_if(points.begin(), points.end(), [&](const WeightedPoint& p) { return !band.contains(p.z); });
       g.pixels_off_depth = std::distance(off, points.end());
       points.erase(off, points.end());
     }

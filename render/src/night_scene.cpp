@@ -1,6 +1,7 @@
 #include "solo/render/night_scene.h"
 
 #include <solo/lighting/colorimetry.h>
+#include <solo/lighting/light_geometry.h>
 
 #include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
@@ -202,15 +203,10 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     if (record.instantiation.lights[i].unit == StrengthUnit::FluxLm && !std::all_of(faces.begin(), faces.end(), is_edge_on))
       dropFaces(faces, is_edge_on, faces_seen_edge_on);
     if (faces.empty()) continue;
-    std::vector<float> depths(faces.size());
+    std::vector<double> depths(faces.size());
     for (std::size_t k = 0; k < faces.size(); ++k) depths[k] = faces[k].depth_m;
-    const auto middle = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
-    std::nth_element(depths.begin(), middle, depths.end());
-    const float median = *middle;
-    for (float& d : depths) d = std::abs(d - median);
-    std::nth_element(depths.begin(), middle, depths.end());
-    const float band = std::max(3.f * *middle, 0.25f);
-    dropFaces(faces, [&](const SeenFace& face) { return std::abs(face.depth_m - median) > band; }, faces_off_light_depth);
+    const LightDepthBand band = lightDepthBand(std::move(depths));
+    dropFaces(faces, [&](const SeenFace& face) { return !band.contains(face.depth_m); }, faces_off_light_depth);
     for (const SeenFace& face : faces) seen_area_m2[i] += face.area_m2;
   }
 

@@ -113,6 +113,22 @@ TEST(LightGeometry, MixedPixelsOfTheSilhouetteCountInNeitherTheAreaNorTheCentroi
   EXPECT_EQ(solo::measureLightGeometry(treeWithRectangle({30, 20, 20, 10}), slanted, camera)[0].pixels_off_depth, 0);
 }
 
+TEST(LightGeometry, TheDepthBandIsTheMedianPlusMinusThreeMadsAtLeastAQuarterMetre) {
+  // Three pixels of a lamp at 10 m and one of the wall behind: MAD 0, so the 0.25 m floor.
+  const solo::LightDepthBand lamp = solo::lightDepthBand({10, 10, 10, 60});
+  EXPECT_DOUBLE_EQ(lamp.median_m, 10);
+  EXPECT_DOUBLE_EQ(lamp.half_width_m, 0.25);
+  EXPECT_TRUE(lamp.contains(10.25));
+  EXPECT_FALSE(lamp.contains(10.26));
+  EXPECT_FALSE(lamp.contains(60));
+  // Depth spread evenly: median 3, deviations 0 1 1 2 2, MAD 1, half width 3: all inside.
+  const solo::LightDepthBand slope = solo::lightDepthBand({5, 1, 4, 2, 3});
+  EXPECT_DOUBLE_EQ(slope.median_m, 3);
+  EXPECT_DOUBLE_EQ(slope.half_width_m, 3);
+  for (double z : {1.0, 5.0}) EXPECT_TRUE(slope.contains(z));
+  EXPECT_THROW(solo::lightDepthBand({}), std::invalid_argument);
+}
+
 TEST(LightGeometry, SyntheticStreetWindowsHaveTheirTrueSizeAndFacing) {
   solo::StreetSceneOptions options;
   options.width = 960;

@@ -345,6 +345,13 @@ void setRecordPlane(solo::LightRecord& record, const Eigen::Vector3d& normal) {
   g.pixels_with_depth = 12;
 }
 
+// The 6x4 plane 4 m away without depth in columns 3-5: the mesh stage took the lamp's faces.
+solo::DepthMesh planeWithoutTheLamp() {
+  cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
+  depth.colRange(3, 6).setTo(0.f);
+  return solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
+}
+
 // Camera-frame point -> pixel coordinates of the 6x4 test camera (fx = fy = 10, c = (2.5, 1.5)).
 Eigen::Vector2d pixelOf(const Eigen::Vector3f& p) {
   return {10.0 * p.x() / p.z() + 2.5, 10.0 * p.y() / p.z() + 1.5};
@@ -363,9 +370,7 @@ TEST(NightScene, ALightWithoutFacesEmitsItsFluxFromItsPixelsOnTheRecordsPlane) {
   // 6000 lm street light there. It emits from its pixels on its record's plane: per row a quad
   // whose corners project to the pixel corners (columns 2.5 and 5.5), on z = 4 (1 - d / |c|)
   // with d = 1 cm + 0.2 % of the centroid's distance |c|, a black plate half way behind it.
-  cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
-  depth.colRange(3, 6).setTo(0.f);
-  const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
+  const solo::DepthMesh mesh = planeWithoutTheLamp();
   solo::LightRecord record =
       oneLightRecord(solo::LightCategory::StreetLightHighCct, 3, 5, 6000, solo::StrengthUnit::FluxLm, 7001, {0.38, 0.37}, 0);
   setRecordPlane(record, {0, 0, -1});
@@ -456,9 +461,7 @@ TEST(NightScene, AProxyOnAGrazingRecordPlaneFacesTheCameraAndStaysFinite) {
   // A record normal across the camera's rays (the plane fit of a sliver, or a normal map's
   // grazing estimate) would put the pixel corners kilometres away or at infinity. Past 85
   // degrees of incidence the proxy's plane faces the camera instead.
-  cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
-  depth.colRange(3, 6).setTo(0.f);
-  const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
+  const solo::DepthMesh mesh = planeWithoutTheLamp();
   solo::LightRecord record =
       oneLightRecord(solo::LightCategory::WindowBuilding, 3, 5, 50, solo::StrengthUnit::LuminanceCdPerM2, 1001, {0.45, 0.41}, 0);
   setRecordPlane(record, {1, 0, 0});

@@ -20,6 +20,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -49,6 +50,18 @@ struct LightGeometry {
   NormalSource normal_source = NormalSource::FacingCamera;
   bool valid() const { return pixels_with_depth > 0; }
 };
+
+/// The depth band of one light: median +- max(3 MAD, 0.25 m) of its depths (the upper median
+/// for an even count). What lies outside it belongs to the light's silhouette, mixed pixels or
+/// faces stretched toward the background. A flat light seen at grazing spreads its depth evenly
+/// over its width w (MAD = w / 4) and lies wholly inside. Used by measureLightGeometry for the
+/// light's pixels and by the night scene for its faces.
+struct LightDepthBand {
+  double median_m = 0, half_width_m = 0;
+  bool contains(double depth_m) const { return std::abs(depth_m - median_m) <= half_width_m; }
+};
+/// `depths_m` must not be empty.
+LightDepthBand lightDepthBand(std::vector<double> depths_m);
 
 /// One entry per tree.lights (same order). `depth_m`: CV_32F metres at the tree's
 /// resolution, 0 = invalid; `camera` at the same resolution; `normals`: CV_32FC3 unit
