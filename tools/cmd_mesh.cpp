@@ -1,6 +1,7 @@
 // solo mesh from-depth / solo mesh clean: the mesh stage on its own (docs/mesh.md).
 
 #include "commands.h"
+#include "night_pipeline.h"
 
 #include <solo/geometry/depth_mesh.h>
 #include <solo/geometry/error.h>
@@ -80,8 +81,12 @@ int runMeshFromDepth(const MeshFromDepthOptions& options) {
   cleanup.backdrops = !options.no_backdrops;
   cleanup.evaluate = !options.no_evaluation;
   StageReport stage;
-  DepthMesh mesh = meshFromScene(scene.depth_m, scene.camera, scene.instances, uncertain, cleanup, stage, true_depth,
-                                 true_normals);
+  // The instance map as solo night's mesh stage sees it: each street light an instance of its own.
+  std::int64_t street_light_pixels = 0;
+  const cv::Mat instances = sceneForRefinement(scene, &street_light_pixels).instances;
+  DepthMesh mesh =
+      meshFromScene(scene.depth_m, scene.camera, instances, uncertain, cleanup, stage, true_depth, true_normals);
+  stage.add("street_light_pixels_relabelled", street_light_pixels);
   const Stopwatch clock;
   writeMesh(options.output, toTriangleMesh(mesh.mesh));
   stage.add("seconds_write", clock.seconds(), "s");
