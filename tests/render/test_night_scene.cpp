@@ -479,3 +479,30 @@ TEST(NightScene, AProxyOnAGrazingRecordPlaneFacesTheCameraAndStaysFinite) {
   EXPECT_GT(area, 1.7);
   EXPECT_LT(area, 2.0);
 }
+
+TEST(NightScene, AProxyAKilometreAwayKeepsItsFluxAndFiniteCorners) {
+  // A lamp at the far end of a 1 km depth range: the proxy's quads are 100 m pixel footprints
+  // (fx = 10), moved 2.01 m toward the camera, and the flux still comes out whole.
+  const solo::DepthMesh mesh = planeWithoutTheLamp();
+  solo::LightRecord record =
+      oneLightRecord(solo::LightCategory::StreetLightHighCct, 3, 5, 6000, solo::StrengthUnit::FluxLm, 7001, {0.38, 0.37}, 0);
+  setRecordPlane(record, {0, 0, -1});
+  record.geometry[0].centroid_m *= 250.0;  // (150, 0, 1000) m
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  ASSERT_EQ(night.scene.emitters.size(), 1u);
+  const double distance = std::sqrt(150.0 * 150.0 + 1000.0 * 1000.0);
+  const double z_front = 1000.0 * (1.0 - (0.01 + 0.002 * distance) / distance);
+  double area = 0;
+  for (std::size_t f = 0; f < night.scene.faces.size(); ++f) {
+    for (const std::uint32_t v : night.scene.faces[f]) ASSERT_TRUE(night.scene.vertices[v].allFinite());
+    if (night.scene.face_emitter[f] < 0) continue;
+    for (const std::uint32_t v : night.scene.faces[f]) EXPECT_NEAR(night.scene.vertices[v].z(), z_front, 1e-3);
+    area += faceArea(night.scene, f);
+  }
+  EXPECT_NEAR(area, 12 * (z_front / 10) * (z_front / 10), 1e-4 * area);
+  const double flux = night.scene.emitters[0].radiance.y() * area *
+                      solo::profileProjectedSolidAngle(solo::EmissionProfile::CosineLobe);
+  EXPECT_NEAR(flux, 6000.0, 6000.0 * 1e-4);
+}
