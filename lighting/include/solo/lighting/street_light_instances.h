@@ -19,9 +19,10 @@ inline constexpr int kCityscapesPoleClass = 17;
 
 /// `instances` (CV_32S Cityscapes instanceIds) with every street-light pixel of `lights`
 /// (CV_32S categoryId * 1000 + k; categories street_light_HT and street_light_LT) set to
-/// kCityscapesPoleClass * 1000 + k: one instance per lamp, of the pole's class, which the filter
-/// averages with nothing else and the mesh stage treats as a foreground thing. A copy, the
-/// input is untouched. `lights` at another size is sampled
+/// kCityscapesPoleClass * 1000 + k: one instance per lamp (a high- and a low-CCT lamp with the
+/// same k share one), of the pole's class, which the filter averages with nothing else and the
+/// mesh stage treats as a foreground thing. A copy, the input is untouched. `lights` at another
+/// size is sampled
 /// at the nearest pixel. Either map empty: `instances` as it is. `changed`, when given, receives
 /// how many pixels changed.
 cv::Mat streetLightsAsPoles(const cv::Mat& instances, const cv::Mat& lights, std::int64_t* changed = nullptr);
