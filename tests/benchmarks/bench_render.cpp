@@ -19,8 +19,12 @@
 #include <solo/render/street_scene.h>
 
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -70,6 +74,32 @@ double rawEmbreeRaysPerSecond(const solo::RenderScene& scene, const solo::RayCas
         ++rays;
       }
   return static_cast<double>(rays) / clock.seconds();
+}
+
+// The same workload on every thread the machine has (rows in parallel, each row's bounces from
+// its own seeded generator): raw Embree at the thread count the tracer renders with.
+double rawEmbreeRaysPerSecondAllThreads(const solo::RenderScene& scene, const solo::RayCaster& caster) {
+  std::atomic<std::int64_t> rays{0};
+  solo::Stopwatch clock;
+  tbb::parallel_for(0, scene.camera.height, [&](int y) {
+    std::mt19937 rng(static_cast<std::uint32_t>(y) + 1);
+    std::normal_distribution<float> g(0, 1);
+    std::int64_t row_rays = 0;
+    for (int pass = 0; pass < 4; ++pass)
+      for (int x = 0; x < scene.camera.width; ++x) {
+        const Eigen::Vector3f d = Eigen::Vector3f(static_cast<float>((x - scene.camera.cx) / scene.camera.fx),
+                                                  static_cast<float>((y - scene.camera.cy) / scene.camera.fy), 1.f)
+                                      .normalized();
+        const solo::SlotHit hit = caster.intersectSlot(Eigen::Vector3f::Zero(), d);
+        ++row_rays;
+        if (!hit.hit) continue;
+        const Eigen::Vector3f p = d * hit.distance * 0.999f;
+        caster.intersectSlot(p, Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
+        ++row_rays;
+      }
+    rays += row_rays;
+  });
+  return static_cast<double>(rays.load()) / clock.seconds();
 }
 
 // The tracer's own rays (recorded by PathTracerOptions::ray_log) cast again by a bare loop on
@@ -140,7 +170,12 @@ void measureEfficiency(const solo::RenderScene& scene) {
   double load_before[3] = {0, 0, 0}, load_after[3] = {0, 0, 0};
   getloadavg(load_before, 3);
   std::vector<double> raw, replay, replay_lookup, power, hierarchy, power_samples, hierarchy_samples, per_light, per_light_samples;
+  std::vector<double> raw_all, power_all;
   for (int repeat = 0; repeat < 5; ++repeat) {
+    raw_all.push_back(rawEmbreeRaysPerSecondAllThreads(scene, caster));
+    power_all.push_back(std::get<double>(*solo::renderPathTraced(prepared, scene.camera,
+                                                                 efficiencyOptions(solo::LightSamplerKind::Power))
+                                              .report.find("rays_per_second")));
     raw.push_back(rawEmbreeRaysPerSecond(scene, caster));
     replay.push_back(replayRaysPerSecond(caster, recorded));
     replay_lookup.push_back(replayRaysPerSecond(caster, recorded, true));
@@ -169,6 +204,10 @@ void measureEfficiency(const solo::RenderScene& scene) {
               median(power_samples) / 1e6, median(hierarchy) / 1e6, 100 * median(hierarchy) / raw_median,
               median(hierarchy_samples) / 1e6, median(per_light) / 1e6, 100 * median(per_light) / raw_median,
               median(per_light_samples) / 1e6);
+  std::printf("efficiency on all %d threads, median of 5: raw Embree %.3f Mrays/s; tracer power %.3f Mrays/s (%.1f %% "
+              "of raw)\n",
+              tbb::this_task_arena::max_concurrency(), median(raw_all) / 1e6, median(power_all) / 1e6,
+              100 * median(power_all) / median(raw_all));
   std::printf("efficiency against the same rays, 1 thread, median of 5: the tracer's (power) %zu rays (%.0f %% shadow "
               "rays) replayed through bare Embree calls %.3f Mrays/s; the tracer %.3f Mrays/s, %.1f %% of it\n",
               recorded.size(), 100.0 * static_cast<double>(shadow_rays) / static_cast<double>(recorded.size()),
