@@ -122,7 +122,7 @@ struct RadianceError {
 RadianceError radianceError(const RenderOutput& image, const RenderOutput& reference) {
   CV_Assert(image.radiance.size() == reference.radiance.size());
   RadianceError e;
-  e.white = meteredSensorWhite(reference.radiance, reference.light_id);
+  e.white = meteredSensorWhite(reference.radiance, reference.emitter_coverage);
   double squared = 0, norm = 0, variance = 0, squared_raw = 0, norm_raw = 0, sum = 0, sum_ref = 0;
   for (int y = 0; y < reference.radiance.rows; ++y)
     for (int x = 0; x < reference.radiance.cols; ++x) {

@@ -187,7 +187,7 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
     preview.progress = false;
     const RenderOutput metered =
         renderPathTraced(prepared, render_camera.scaledTo(preview_size.width, preview_size.height), preview);
-    sensor_white = meteredSensorWhite(metered.radiance, metered.light_id);
+    sensor_white = meteredSensorWhite(metered.radiance, metered.emitter_coverage);
     preview_seconds = preview_clock.seconds();
     char note[160];
     std::snprintf(note, sizeof note, "exposure metered on a %dx%d preview at %d spp (%.2f s), sensor white %.6g cd/m2",

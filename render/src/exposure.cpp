@@ -58,13 +58,17 @@ cv::Size meteringPreviewSize(int width, int height, int max_pixels) {
   return {std::max(16, width / divisor), std::max(16, height / divisor)};
 }
 
-double meteredSensorWhite(const cv::Mat& radiance_xyz, const cv::Mat& light_id, double percentile, double level) {
+double meteredSensorWhite(const cv::Mat& radiance_xyz, const cv::Mat& emitter_coverage, double percentile, double level) {
+  if (radiance_xyz.type() != CV_32FC3 || emitter_coverage.type() != CV_32F ||
+      radiance_xyz.size() != emitter_coverage.size())
+    throw std::invalid_argument("meteredSensorWhite: expects a CV_32FC3 radiance and a CV_32F emitter coverage of the "
+                                "same size");
   std::vector<float> y;
   y.reserve(radiance_xyz.total());
   for (int r = 0; r < radiance_xyz.rows; ++r)
     for (int c = 0; c < radiance_xyz.cols; ++c) {
       const float v = radiance_xyz.at<cv::Vec3f>(r, c)[1];
-      if (light_id.at<int>(r, c) == 0 && v > 0.f) y.push_back(v);
+      if (emitter_coverage.at<float>(r, c) == 0.f && v > 0.f) y.push_back(v);
     }
   if (y.empty()) return 1.0;
   const auto k = static_cast<std::ptrdiff_t>(percentile * static_cast<double>(y.size() - 1));

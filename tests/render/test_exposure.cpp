@@ -3,6 +3,7 @@
 #include "test_support.h"
 
 #include <cmath>
+#include <stdexcept>
 
 TEST(Exposure, DefaultIsTheReferencesPlus325Stops) {
   const solo::ExposureOptions options;
@@ -39,19 +40,33 @@ TEST(Exposure, ZeroStopsIsSkippedAndLeavesTheImage) {
 }
 
 TEST(Exposure, MeteringPutsThe95thPercentileOfTheStreetAt80PercentOfWhite) {
-  // 100 street pixels with Y = 1..100, one lamp far brighter and one unlit pixel: the lamp and
-  // the unlit pixel are ignored; the 95th percentile is element floor(0.95 * 99) = 94 of the
-  // sorted luminances, Y = 95, so sensor white is 95 / 0.8.
-  cv::Mat radiance(1, 102, CV_32FC3, cv::Scalar(0, 0, 0));
-  cv::Mat light_id(1, 102, CV_32S, cv::Scalar(0));
+  // 100 street pixels with Y = 1..100, one lamp far brighter, one pixel a lamp covers a quarter
+  // of (its first sample may have missed the lamp, so it shows no light id, but it carries the
+  // lamp's light) and one unlit pixel: the lamp, the partly covered pixel and the unlit pixel are
+  // ignored; the 95th percentile is element floor(0.95 * 99) = 94 of the sorted luminances,
+  // Y = 95, so sensor white is 95 / 0.8.
+  cv::Mat radiance(1, 103, CV_32FC3, cv::Scalar(0, 0, 0));
+  cv::Mat coverage(1, 103, CV_32F, cv::Scalar(0));
   for (int i = 0; i < 100; ++i) radiance.at<cv::Vec3f>(0, (i * 37) % 100) = cv::Vec3f(0, static_cast<float>(i + 1), 0);
   radiance.at<cv::Vec3f>(0, 100) = cv::Vec3f(0, 1e6f, 0);
-  light_id.at<int>(0, 100) = 7;
-  EXPECT_DOUBLE_EQ(solo::meteredSensorWhite(radiance, light_id), 95.0 / 0.8);
-  EXPECT_DOUBLE_EQ(solo::meteredSensorWhite(radiance, light_id, 0.5, 1.0), 50.0);
+  coverage.at<float>(0, 100) = 1.f;
+  radiance.at<cv::Vec3f>(0, 101) = cv::Vec3f(0, 2.5e5f, 0);
+  coverage.at<float>(0, 101) = 0.25f;
+  EXPECT_DOUBLE_EQ(solo::meteredSensorWhite(radiance, coverage), 95.0 / 0.8);
+  EXPECT_DOUBLE_EQ(solo::meteredSensorWhite(radiance, coverage, 0.5, 1.0), 50.0);
+  // Counted, the partly covered pixel would be the brightest street pixel and move the 95th
+  // percentile to element floor(0.95 * 100) = 95, Y = 96.
+  coverage.at<float>(0, 101) = 0.f;
+  EXPECT_DOUBLE_EQ(solo::meteredSensorWhite(radiance, coverage), 96.0 / 0.8);
   // Nothing lit: white stays 1 rather than dividing by zero.
-  EXPECT_EQ(solo::meteredSensorWhite(cv::Mat(2, 2, CV_32FC3, cv::Scalar(0, 0, 0)), cv::Mat(2, 2, CV_32S, cv::Scalar(0))),
+  EXPECT_EQ(solo::meteredSensorWhite(cv::Mat(2, 2, CV_32FC3, cv::Scalar(0, 0, 0)), cv::Mat(2, 2, CV_32F, cv::Scalar(0))),
             1.0);
+}
+
+TEST(Exposure, MeteringRejectsACoverageMapOfAnotherTypeOrSize) {
+  const cv::Mat radiance(2, 2, CV_32FC3, cv::Scalar(0, 1, 0));
+  EXPECT_THROW(solo::meteredSensorWhite(radiance, cv::Mat(2, 2, CV_32S, cv::Scalar(0))), std::invalid_argument);
+  EXPECT_THROW(solo::meteredSensorWhite(radiance, cv::Mat(2, 3, CV_32F, cv::Scalar(0))), std::invalid_argument);
 }
 
 TEST(Exposure, ThePreviewIsAQuarterOfEachSideUnlessThatExceeds10000Pixels) {
