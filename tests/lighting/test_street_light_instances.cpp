@@ -55,6 +55,32 @@ TEST(StreetLightInstances, EachStreetLightBecomesAPoleInstanceOfItsOwnAndNothing
   EXPECT_EQ(changed, 0);
 }
 
+TEST(StreetLightInstances, LampsWithTheSameNumberOrAPoleIdInUseGetIdsOfTheirOwn) {
+  // A high-CCT lamp 7003 (columns 4-7 of rows 2-3), a low-CCT lamp 8003 (columns 0-1 of rows
+  // 0-1) and a pole that the instance map already calls 17004 (column 11, rows 0-3): 7003 keeps
+  // 17003; 8003 finds 17003 taken by 7003 and 17004 by the pole, so it gets 17005.
+  Maps m;
+  m.lights(cv::Rect(0, 0, 2, 2)).setTo(8003);
+  m.instances(cv::Rect(11, 0, 1, 4)).setTo(17004);
+  std::int64_t changed = -1;
+  const cv::Mat out = solo::streetLightsAsPoles(m.instances, m.lights, &changed);
+  EXPECT_EQ(changed, 12);
+  EXPECT_EQ(out.at<int>(2, 4), 17003);
+  EXPECT_EQ(out.at<int>(3, 7), 17003);
+  EXPECT_EQ(out.at<int>(0, 0), 17005);
+  EXPECT_EQ(out.at<int>(1, 1), 17005);
+  EXPECT_EQ(out.at<int>(0, 11), 17004);
+  // The same ids again from the result: nothing more changes.
+  EXPECT_EQ(cv::countNonZero(solo::streetLightsAsPoles(out, m.lights, &changed) != out), 0);
+  EXPECT_EQ(changed, 0);
+  // Lamp 999 starts at 17999; taken, it wraps to 17001.
+  cv::Mat lights(1, 2, CV_32S, cv::Scalar(7999));
+  cv::Mat instances(1, 2, CV_32S, cv::Scalar(0));
+  lights.at<int>(0, 1) = 0;
+  instances.at<int>(0, 1) = 17999;
+  EXPECT_EQ(solo::streetLightsAsPoles(instances, lights).at<int>(0, 0), 17001);
+}
+
 TEST(StreetLightInstances, TheDepthFilterKeepsALampsDepthOnceItIsItsOwnInstance) {
   // With the lamp called building, the instance-reference filter averages its 8 pixels at
   // 10 m with the 88 wall pixels at 30 m around it; as an instance of its own it keeps 10 m.

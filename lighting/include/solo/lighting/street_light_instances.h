@@ -18,13 +18,15 @@ namespace solo {
 inline constexpr int kCityscapesPoleClass = 17;
 
 /// `instances` (CV_32S Cityscapes instanceIds) with every street-light pixel of `lights`
-/// (CV_32S categoryId * 1000 + k; categories street_light_HT and street_light_LT) set to
-/// kCityscapesPoleClass * 1000 + k: one instance per lamp (a high- and a low-CCT lamp with the
-/// same k share one), of the pole's class, which the filter averages with nothing else and the
-/// mesh stage treats as a foreground thing. A copy, the input is untouched. `lights` at another
-/// size is sampled
-/// at the nearest pixel. Either map empty: `instances` as it is. `changed`, when given, receives
-/// how many pixels changed.
+/// (CV_32S categoryId * 1000 + k; categories street_light_HT and street_light_LT) set to a pole
+/// instance of that lamp's own (class kCityscapesPoleClass: 17000 + k unless another lamp or a
+/// pixel off the street lights already has it, else the next free id, wrapping within
+/// 17001-17999): one instance per lamp, also for a high- and a low-CCT lamp with the same k,
+/// which the filter averages with nothing else and the mesh stage treats as a foreground thing.
+/// Depends on the maps alone, so applying it twice changes nothing more. A copy, the input is
+/// untouched. `lights` at another size is sampled at the nearest pixel. Either map empty:
+/// `instances` as it is. `changed`, when given, receives how many pixels changed. Throws
+/// std::invalid_argument when no free pole id is left.
 cv::Mat streetLightsAsPoles(const cv::Mat& instances, const cv::Mat& lights, std::int64_t* changed = nullptr);
 
 }  // namespace solo
