@@ -55,11 +55,16 @@ double median(std::vector<double> v) {
 // Raw Embree: camera rays then one random bounce per hit, single rays as the tracer casts
 // them, on the calling thread. Closest-hit rays only (the tracer's shadow rays are cheaper),
 // through intersectSlot: Embree's rtcIntersect1 and nothing after it.
-double rawEmbreeRaysPerSecond(const solo::RenderScene& scene, const solo::RayCaster& caster) {
+struct RawRun {
+  std::int64_t rays = 0;
+  double wall_seconds = 0, cpu_seconds = 0;  // the process's CPU time
+};
+RawRun rawEmbreeRun(const solo::RenderScene& scene, const solo::RayCaster& caster) {
   std::mt19937 rng(1);
   std::normal_distribution<float> g(0, 1);
   solo::Stopwatch clock;
-  std::int64_t rays = 0;
+  const double cpu_start = cpuSeconds();
+  RawRun run;
   for (int pass = 0; pass < 4; ++pass)
     for (int y = 0; y < scene.camera.height; ++y)
       for (int x = 0; x < scene.camera.width; ++x) {
@@ -67,25 +72,33 @@ double rawEmbreeRaysPerSecond(const solo::RenderScene& scene, const solo::RayCas
                                                   static_cast<float>((y - scene.camera.cy) / scene.camera.fy), 1.f)
                                       .normalized();
         const solo::SlotHit hit = caster.intersectSlot(Eigen::Vector3f::Zero(), d);
-        ++rays;
+        ++run.rays;
         if (!hit.hit) continue;
         const Eigen::Vector3f p = d * hit.distance * 0.999f;
         caster.intersectSlot(p, Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
-        ++rays;
+        ++run.rays;
       }
-  return static_cast<double>(rays) / clock.seconds();
+  run.wall_seconds = clock.seconds();
+  run.cpu_seconds = cpuSeconds() - cpu_start;
+  return run;
+}
+double rawEmbreeRaysPerSecond(const solo::RenderScene& scene, const solo::RayCaster& caster) {
+  const RawRun run = rawEmbreeRun(scene, caster);
+  return static_cast<double>(run.rays) / run.wall_seconds;
 }
 
-// The same workload on every thread the machine has (rows in parallel, each row's bounces from
+// The same workload on every thread the machine has (each pass's rows in parallel, each row's bounces from
 // its own seeded generator): raw Embree at the thread count the tracer renders with.
 double rawEmbreeRaysPerSecondAllThreads(const solo::RenderScene& scene, const solo::RayCaster& caster) {
   std::atomic<std::int64_t> rays{0};
   solo::Stopwatch clock;
-  tbb::parallel_for(0, scene.camera.height, [&](int y) {
-    std::mt19937 rng(static_cast<std::uint32_t>(y) + 1);
-    std::normal_distribution<float> g(0, 1);
-    std::int64_t row_rays = 0;
-    for (int pass = 0; pass < 4; ++pass)
+  // The passes stay the outer loop, as on one thread: a row traced four times in a row finds
+  // its camera rays' nodes in the cache and ran 1.2x faster, which the tracer never gets.
+  for (int pass = 0; pass < 4; ++pass)
+    tbb::parallel_for(0, scene.camera.height, [&](int y) {
+      std::mt19937 rng(static_cast<std::uint32_t>(pass * scene.camera.height + y) + 1);
+      std::normal_distribution<float> g(0, 1);
+      std::int64_t row_rays = 0;
       for (int x = 0; x < scene.camera.width; ++x) {
         const Eigen::Vector3f d = Eigen::Vector3f(static_cast<float>((x - scene.camera.cx) / scene.camera.fx),
                                                   static_cast<float>((y - scene.camera.cy) / scene.camera.fy), 1.f)
@@ -97,8 +110,8 @@ double rawEmbreeRaysPerSecondAllThreads(const solo::RenderScene& scene, const so
         caster.intersectSlot(p, Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
         ++row_rays;
       }
-    rays += row_rays;
-  });
+      rays += row_rays;
+    });
   return static_cast<double>(rays.load()) / clock.seconds();
 }
 
@@ -146,7 +159,8 @@ solo::PathTracerOptions efficiencyOptions(solo::LightSamplerKind kind) {
 
 // Efficiency: raw Embree against the tracer's rays per second on one thread each (so "per
 // thread" means the same thing for both, whatever the cores are), alternated five times so
-// that machine load hits all alike; medians, with the load average before and after.
+// that machine load hits all alike; medians, with the load average before and after. Then
+// nine back-to-back pairs by CPU time (the steadier figure), and both on every thread.
 void measureEfficiency(const solo::RenderScene& scene) {
   std::vector<float> vertices;
   for (const auto& v : scene.vertices) vertices.insert(vertices.end(), {v.x(), v.y(), v.z()});
@@ -195,6 +209,36 @@ void measureEfficiency(const solo::RenderScene& scene) {
     per_light.push_back(std::get<double>(*out.report.find("rays_per_second")));
     per_light_samples.push_back(4.0 * scene.camera.width * scene.camera.height / out.report.seconds);
   }
+  // Paired: raw Embree and the tracer back to back on one thread, by the process's CPU time
+  // (which also counts any work or spinning of another thread against the run), in ABBA order
+  // (each pair's second run first in the next pair), so that drift in the host's speed hits both
+  // alike; the ratio per pair, then its median. The medians above compare runs up to a minute
+  // apart, between which this host's speed moves by 10 %.
+  std::vector<double> paired;
+  {
+    tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    for (int pair = 0; pair < 9; ++pair) {
+      RawRun raw_run;
+      double tracer_cpu_seconds = 0;
+      std::int64_t tracer_rays = 0;
+      const auto trace = [&] {
+        const double start = cpuSeconds();
+        const solo::RenderOutput out =
+            solo::renderPathTraced(prepared, scene.camera, efficiencyOptions(solo::LightSamplerKind::Power));
+        tracer_cpu_seconds = cpuSeconds() - start;
+        tracer_rays = std::get<std::int64_t>(*out.report.find("rays"));
+      };
+      if (pair % 2 == 0) {
+        raw_run = rawEmbreeRun(scene, caster);
+        trace();
+      } else {
+        trace();
+        raw_run = rawEmbreeRun(scene, caster);
+      }
+      paired.push_back((static_cast<double>(tracer_rays) / tracer_cpu_seconds) /
+                       (static_cast<double>(raw_run.rays) / raw_run.cpu_seconds));
+    }
+  }
   getloadavg(load_after, 3);
   const double raw_median = median(raw);
   std::printf("efficiency, 1 thread, 4 spp, median of 5 (load average %.1f before, %.1f after): raw Embree %.3f Mrays/s; "
@@ -204,6 +248,10 @@ void measureEfficiency(const solo::RenderScene& scene) {
               median(power_samples) / 1e6, median(hierarchy) / 1e6, 100 * median(hierarchy) / raw_median,
               median(hierarchy_samples) / 1e6, median(per_light) / 1e6, 100 * median(per_light) / raw_median,
               median(per_light_samples) / 1e6);
+  std::printf("efficiency, 1 thread, paired by process CPU time, 9 pairs in ABBA order: tracer (power) / raw Embree "
+              "rays per CPU second, median %.1f %% (range %.1f-%.1f %%)\n",
+              100 * median(paired), 100 * *std::min_element(paired.begin(), paired.end()),
+              100 * *std::max_element(paired.begin(), paired.end()));
   std::printf("efficiency on all %d threads, median of 5: raw Embree %.3f Mrays/s; tracer power %.3f Mrays/s (%.1f %% "
               "of raw)\n",
               tbb::this_task_arena::max_concurrency(), median(raw_all) / 1e6, median(power_all) / 1e6,
