@@ -20,7 +20,6 @@
 
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
-
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -52,32 +51,39 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// Raw Embree: camera rays then one random bounce per hit, single rays as the tracer casts
-// them, on the calling thread. Closest-hit rays only (the tracer's shadow rays are cheaper),
-// through intersectSlot: Embree's rtcIntersect1 and nothing after it.
+// Raw Embree, one pass over image row y: its camera rays, then one random bounce per hit,
+// single rays as the tracer casts them, on the calling thread. Closest-hit rays only (the
+// tracer's shadow rays are cheaper), through intersectSlot: Embree's rtcIntersect1 and nothing
+// after it. Returns the rays cast.
+std::int64_t rawEmbreeRow(const solo::RenderScene& scene, const solo::RayCaster& caster, int y, std::mt19937& rng) {
+  std::normal_distribution<float> g(0, 1);
+  std::int64_t rays = 0;
+  for (int x = 0; x < scene.camera.width; ++x) {
+    const Eigen::Vector3f d = Eigen::Vector3f(static_cast<float>((x - scene.camera.cx) / scene.camera.fx),
+                                              static_cast<float>((y - scene.camera.cy) / scene.camera.fy), 1.f)
+                                  .normalized();
+    const solo::SlotHit hit = caster.intersectSlot(Eigen::Vector3f::Zero(), d);
+    ++rays;
+    if (!hit.hit) continue;
+    const Eigen::Vector3f p = d * hit.distance * 0.999f;
+    caster.intersectSlot(p, Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
+    ++rays;
+  }
+  return rays;
+}
+
+// Four passes over the image, row by row, on the calling thread.
 struct RawRun {
   std::int64_t rays = 0;
   double wall_seconds = 0, cpu_seconds = 0;  // the process's CPU time
 };
 RawRun rawEmbreeRun(const solo::RenderScene& scene, const solo::RayCaster& caster) {
   std::mt19937 rng(1);
-  std::normal_distribution<float> g(0, 1);
   solo::Stopwatch clock;
   const double cpu_start = cpuSeconds();
   RawRun run;
   for (int pass = 0; pass < 4; ++pass)
-    for (int y = 0; y < scene.camera.height; ++y)
-      for (int x = 0; x < scene.camera.width; ++x) {
-        const Eigen::Vector3f d = Eigen::Vector3f(static_cast<float>((x - scene.camera.cx) / scene.camera.fx),
-                                                  static_cast<float>((y - scene.camera.cy) / scene.camera.fy), 1.f)
-                                      .normalized();
-        const solo::SlotHit hit = caster.intersectSlot(Eigen::Vector3f::Zero(), d);
-        ++run.rays;
-        if (!hit.hit) continue;
-        const Eigen::Vector3f p = d * hit.distance * 0.999f;
-        caster.intersectSlot(p, Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
-        ++run.rays;
-      }
+    for (int y = 0; y < scene.camera.height; ++y) run.rays += rawEmbreeRow(scene, caster, y, rng);
   run.wall_seconds = clock.seconds();
   run.cpu_seconds = cpuSeconds() - cpu_start;
   return run;
@@ -87,30 +93,17 @@ double rawEmbreeRaysPerSecond(const solo::RenderScene& scene, const solo::RayCas
   return static_cast<double>(run.rays) / run.wall_seconds;
 }
 
-// The same workload on every thread the machine has (each pass's rows in parallel, each row's bounces from
-// its own seeded generator): raw Embree at the thread count the tracer renders with.
+// The same four passes on every thread the machine has: each pass's rows in parallel, each
+// row's bounces from its own seeded generator. The passes stay the outer loop, as on one
+// thread: a row traced four times in a row finds its camera rays' nodes in the cache and ran
+// 1.2x faster, which the tracer never gets.
 double rawEmbreeRaysPerSecondAllThreads(const solo::RenderScene& scene, const solo::RayCaster& caster) {
   std::atomic<std::int64_t> rays{0};
   solo::Stopwatch clock;
-  // The passes stay the outer loop, as on one thread: a row traced four times in a row finds
-  // its camera rays' nodes in the cache and ran 1.2x faster, which the tracer never gets.
   for (int pass = 0; pass < 4; ++pass)
     tbb::parallel_for(0, scene.camera.height, [&](int y) {
       std::mt19937 rng(static_cast<std::uint32_t>(pass * scene.camera.height + y) + 1);
-      std::normal_distribution<float> g(0, 1);
-      std::int64_t row_rays = 0;
-      for (int x = 0; x < scene.camera.width; ++x) {
-        const Eigen::Vector3f d = Eigen::Vector3f(static_cast<float>((x - scene.camera.cx) / scene.camera.fx),
-                                                  static_cast<float>((y - scene.camera.cy) / scene.camera.fy), 1.f)
-                                      .normalized();
-        const solo::SlotHit hit = caster.intersectSlot(Eigen::Vector3f::Zero(), d);
-        ++row_rays;
-        if (!hit.hit) continue;
-        const Eigen::Vector3f p = d * hit.distance * 0.999f;
-        caster.intersectSlot(p, Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized());
-        ++row_rays;
-      }
-      rays += row_rays;
+      rays += rawEmbreeRow(scene, caster, y, rng);
     });
   return static_cast<double>(rays.load()) / clock.seconds();
 }
