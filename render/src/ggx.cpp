@@ -96,13 +96,42 @@ const AlbedoTables& tables() {
   return t;
 }
 
-// The unit half vector of wo and wi; false when they are opposite (no half vector).
-bool halfVector(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi, Eigen::Vector3f* h) {
+// What the specular lobe needs of the half vector h of unit wo and wi, without normalising it:
+// with s = wo + wi, cos_h^2 = s_z^2 / |s|^2 and wo.h = (1 + wo.wi) / |s| = |s| / 2. False when
+// wo and wi are opposite (no half vector) or h is below the surface (D = 0 there).
+struct HalfVector {
+  float cos_h2 = 0.f;  // h_z^2
+  float o_dot_h = 0.f;  // wo.h, in [0, 1]
+};
+bool halfVector(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi, HalfVector* h) {
   const Eigen::Vector3f sum = wo + wi;
-  const float norm = sum.norm();
-  if (!(norm > 0.f)) return false;
-  *h = sum / norm;
+  const float length2 = sum.squaredNorm();
+  if (!(length2 > 0.f) || !(sum.z() > 0.f)) return false;
+  h->cos_h2 = sum.z() * sum.z() / length2;
+  h->o_dot_h = std::min(1.f, 0.5f * std::sqrt(length2));
   return true;
+}
+
+// D(h) from cos_h^2: alpha^2 / (pi (cos_h^2 (alpha^2 - 1) + 1)^2), as ggxD.
+float distribution(float cos_h2, float alpha2) {
+  const float d = cos_h2 * (alpha2 - 1.f) + 1.f;
+  return alpha2 / (kPi * d * d);
+}
+
+// sqrt(cos^2 (1 - alpha^2) + alpha^2) = cos (2 Lambda(cos) + 1): Smith's Lambda in the form
+// that lets the height-correlated G2 / (4 cos_o cos_i) become one quotient,
+// 1 / (2 (cos_i S_o + cos_o S_i)) (Heitz 2014, "Understanding the masking-shadowing function").
+float smithS(float cos_theta, float alpha2) { return std::sqrt(cos_theta * cos_theta * (1.f - alpha2) + alpha2); }
+
+// D G2 F / (4 cos_o cos_i) for cos_o, cos_i > 0.
+float specularValue(const HalfVector& h, float cos_o, float s_o, float cos_i, float alpha2, float f0) {
+  return distribution(h.cos_h2, alpha2) * schlickFresnel(h.o_dot_h, f0) /
+         (2.f * (cos_i * s_o + cos_o * smithS(cos_i, alpha2)));
+}
+
+// G1(wo) D(h) / (4 cos_o) = D(h) / (2 (cos_o + S_o)).
+float reflectionDensity(const HalfVector& h, float cos_o, float s_o, float alpha2) {
+  return distribution(h.cos_h2, alpha2) / (2.f * (cos_o + s_o));
 }
 
 }  // namespace
@@ -136,9 +165,10 @@ float schlickFresnel(float cos_d, float f0) {
 
 float ggxSpecular(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi, float alpha, float f0) {
   if (wo.z() <= 0.f || wi.z() <= 0.f) return 0.f;
-  Eigen::Vector3f h;
+  HalfVector h;
   if (!halfVector(wo, wi, &h)) return 0.f;
-  return ggxD(h.z(), alpha) * ggxG2(wo.z(), wi.z(), alpha) * schlickFresnel(wo.dot(h), f0) / (4.f * wo.z() * wi.z());
+  const float alpha2 = alpha * alpha;
+  return specularValue(h, wo.z(), smithS(wo.z(), alpha2), wi.z(), alpha2, f0);
 }
 
 Eigen::Vector3f ggxSampleVisibleNormal(const Eigen::Vector3f& wo, float alpha, float u1, float u2) {
@@ -159,10 +189,10 @@ Eigen::Vector3f ggxSampleVisibleNormal(const Eigen::Vector3f& wo, float alpha, f
 
 float ggxReflectionPdf(const Eigen::Vector3f& wo, const Eigen::Vector3f& wi, float alpha) {
   if (wo.z() <= 0.f) return 0.f;
-  Eigen::Vector3f h;
+  HalfVector h;
   if (!halfVector(wo, wi, &h)) return 0.f;
-  if (wo.dot(h) <= 0.f) return 0.f;
-  return ggxG1(wo.z(), alpha) * ggxD(h.z(), alpha) / (4.f * wo.z());
+  const float alpha2 = alpha * alpha;
+  return reflectionDensity(h, wo.z(), smithS(wo.z(), alpha2), alpha2);
 }
 
 float ggxDirectionalAlbedo(float cos_o, float alpha) { return lookupDirectional(tables(), cos_o, alpha); }
@@ -176,7 +206,7 @@ float ggxAverageAlbedo(float alpha) {
 }
 
 GgxLobe::GgxLobe(const Eigen::Vector3f& wo, float alpha)
-    : wo_(wo), alpha_(alpha), lambda_o_(ggxLambda(wo.z(), alpha)), g1_o_(1.f / (1.f + lambda_o_)) {
+    : wo_(wo), alpha_(alpha), alpha2_(alpha * alpha), s_o_(smithS(wo.z(), alpha2_)) {
   alphaRow(alpha, &alpha_node_, &alpha_fraction_);
   const AlbedoTables& t = tables();  // as ggxAverageAlbedo, on the row found above
   average_albedo_ = (1 - alpha_fraction_) * t.average[static_cast<std::size_t>(alpha_node_)] +
@@ -185,31 +215,26 @@ GgxLobe::GgxLobe(const Eigen::Vector3f& wo, float alpha)
 
 float GgxLobe::specular(const Eigen::Vector3f& wi) const {
   if (wo_.z() <= 0.f || wi.z() <= 0.f) return 0.f;
-  Eigen::Vector3f h;
+  HalfVector h;
   if (!halfVector(wo_, wi, &h)) return 0.f;
-  const float g2 = 1.f / (1.f + lambda_o_ + ggxLambda(wi.z(), alpha_));  // ggxG2 with Lambda(wo) kept
-  return ggxD(h.z(), alpha_) * g2 * schlickFresnel(wo_.dot(h), kDielectricF0) / (4.f * wo_.z() * wi.z());
+  return specularValue(h, wo_.z(), s_o_, wi.z(), alpha2_, kDielectricF0);
 }
 
 float GgxLobe::reflectionPdf(const Eigen::Vector3f& wi) const {
   if (wo_.z() <= 0.f) return 0.f;
-  Eigen::Vector3f h;
+  HalfVector h;
   if (!halfVector(wo_, wi, &h)) return 0.f;
-  if (wo_.dot(h) <= 0.f) return 0.f;
-  return g1_o_ * ggxD(h.z(), alpha_) / (4.f * wo_.z());
+  return reflectionDensity(h, wo_.z(), s_o_, alpha2_);
 }
 
 float GgxLobe::specularAndPdf(const Eigen::Vector3f& wi, float* pdf) const {
   *pdf = 0.f;
   if (wo_.z() <= 0.f) return 0.f;
-  Eigen::Vector3f h;
+  HalfVector h;
   if (!halfVector(wo_, wi, &h)) return 0.f;
-  const float d = ggxD(h.z(), alpha_);
-  const float o_dot_h = wo_.dot(h);
-  if (o_dot_h > 0.f) *pdf = g1_o_ * d / (4.f * wo_.z());
+  *pdf = reflectionDensity(h, wo_.z(), s_o_, alpha2_);
   if (wi.z() <= 0.f) return 0.f;
-  const float g2 = 1.f / (1.f + lambda_o_ + ggxLambda(wi.z(), alpha_));
-  return d * g2 * schlickFresnel(o_dot_h, kDielectricF0) / (4.f * wo_.z() * wi.z());
+  return specularValue(h, wo_.z(), s_o_, wi.z(), alpha2_, kDielectricF0);
 }
 
 float GgxLobe::directionalAlbedo(float cos_theta) const {

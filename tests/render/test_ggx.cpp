@@ -182,6 +182,39 @@ TEST(Ggx, LobeFromOneDirectionEqualsTheFreeFunctionsBitForBit) {
   }
 }
 
+// ggxSpecular and ggxReflectionPdf evaluate the height-correlated Smith term as one quotient
+// and the half vector without normalising it; in double precision from the textbook factors
+// (D, G2 = 1 / (1 + Lambda_o + Lambda_i), Schlick's F, G1 = 1 / (1 + Lambda_o)) they must agree
+// to float rounding, from normal incidence to grazing and from a mirror-like to a fully rough lobe.
+// Near the lobe's peak D's denominator d = cos_h^2 (alpha^2 - 1) + 1 cancels, so the rounding of
+// cos_h^2 (a few 1e-8) is amplified by 1 / d there: the tolerance allows for that and no more.
+TEST(Ggx, SpecularAndDensityEqualTheTextbookProducts) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  const auto lambda = [](double c, double a) { return 0.5 * (std::sqrt(1 + a * a * (1 - c * c) / (c * c)) - 1); };
+  for (const float roughness : {0.f, 0.05f, 0.3f, 0.5f, 0.77f, 1.f}) {
+    const double a = solo::ggxAlpha(roughness);
+    for (const double cos_o : {1.0, 0.7, 0.2, 0.01}) {
+      const Eigen::Vector3f wo = direction(cos_o, 0.4);
+      for (int k = 0; k < 300; ++k) {
+        const Eigen::Vector3f wi = direction(std::max(1e-3, u(rng)), 2 * kPi * u(rng));
+        const Eigen::Vector3d o = wo.cast<double>(), i = wi.cast<double>(), h = (o + i).normalized();
+        const double peak = h.z() * h.z() * (a * a - 1) + 1;
+        const double d = a * a / (kPi * peak * peak);
+        const double tolerance = 2e-5 + 4e-7 / peak;  // relative
+        const double f = 0.04 + 0.96 * std::pow(1 - o.dot(h), 5);
+        const double g2 = 1 / (1 + lambda(o.z(), a) + lambda(i.z(), a));
+        const double specular = d * g2 * f / (4 * o.z() * i.z());
+        const double pdf = d / (1 + lambda(o.z(), a)) / (4 * o.z());
+        EXPECT_NEAR(solo::ggxSpecular(wo, wi, static_cast<float>(a)), specular, tolerance * specular + 1e-30)
+            << roughness << " " << cos_o << " " << wi.z();
+        EXPECT_NEAR(solo::ggxReflectionPdf(wo, wi, static_cast<float>(a)), pdf, tolerance * pdf + 1e-30)
+            << roughness << " " << cos_o << " " << wi.z();
+      }
+    }
+  }
+}
+
 // The tracer asks for the BRDF and its density together; evalAndPdf must return exactly what
 // eval and pdf return, for either diffuse model, with and without the specular lobe, below
 // the surface as above it.

@@ -48,7 +48,7 @@ float ggxDirectionalAlbedo(float cos_o, float alpha);
 float ggxAverageAlbedo(float alpha);
 
 /// The lobe seen from one direction wo (local frame, unit) at one alpha: what every evaluation
-/// from wo shares (Smith's Lambda(wo), the albedo table's row for alpha), computed once. Each
+/// from wo shares (Smith's term of wo, the albedo table's row for alpha), computed once. Each
 /// method returns bit for bit what the free function of the same name returns.
 class GgxLobe {
  public:
@@ -63,7 +63,8 @@ class GgxLobe {
 
  private:
   Eigen::Vector3f wo_ = Eigen::Vector3f::UnitZ();
-  float alpha_ = 1.f, lambda_o_ = 0.f, g1_o_ = 1.f;
+  float alpha_ = 1.f, alpha2_ = 1.f;
+  float s_o_ = 1.f;            // sqrt(cos_o^2 (1 - alpha^2) + alpha^2), Smith's term of wo
   int alpha_node_ = 0;         // the table's lower alpha node
   float alpha_fraction_ = 0.f;  // and the weight of the upper one
   float average_albedo_ = 0.f;
