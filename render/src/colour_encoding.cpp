@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace solo {
 
@@ -58,22 +59,56 @@ float decodeTransfer(float encoded, TransferCurve curve) {
   return v;
 }
 
-ColourEncodingResult encodeXyzToSrgb(const cv::Mat& xyz_d65, const ColourEncodingOptions& options) {
-  Stopwatch clock;
-  CV_Assert(xyz_d65.type() == CV_32FC3);
-  ColourEncodingResult result;
-  result.report.name = "colour";
-  cv::transform(xyz_d65, result.linear_rgb, cv::Matx33f(xyzToLinearSrgbMatrix()));
+namespace {
 
+void checkKnee(double knee) {
+  if (!(knee >= 0 && knee <= 1))
+    throw std::invalid_argument("highlight knee must be in [0, 1], got " + std::to_string(knee));
+}
+
+/// The shoulder s(u): identity up to the knee, then an exponential approach to 1 whose slope
+/// at the knee is 1 (continuous first derivative). knee = 1: min(u, 1).
+double shoulder(double u, double knee) {
+  if (u <= knee) return u;
+  if (knee >= 1) return 1;
+  const double room = 1 - knee;
+  return knee + room * -std::expm1(-(u - knee) / room);
+}
+
+/// desaturateHighlight without the knee check; `changed` tells whether the colour moved.
+cv::Vec3f desaturate(const cv::Vec3f& c, double knee, const cv::Vec3d& w, bool* changed) {
+  const double luminance = w[0] * c[0] + w[1] * c[1] + w[2] * c[2];
+  *changed = true;
+  if (luminance >= 1) return {1.f, 1.f, 1.f};
+  const double spread = std::max({c[0], c[1], c[2]}) - luminance;
+  const double headroom_share = spread / (1 - luminance);
+  if (!(headroom_share > knee)) {
+    *changed = false;
+    return c;
+  }
+  // Every colour grey + t (c - grey) has luminance Y and c's HSV hue.
+  const double t = shoulder(headroom_share, knee) / headroom_share;
+  cv::Vec3f out;
+  for (int k = 0; k < 3; ++k)
+    out[k] = static_cast<float>(std::clamp(luminance + t * (c[k] - luminance), 0.0, 1.0));
+  return out;
+}
+
+struct GamutCounts {
+  std::int64_t out_of_gamut = 0, negative_luminance = 0, over_range = 0;
+};
+
+/// Handles negative channels in place (NegativeHandling) and counts what it met.
+GamutCounts handleNegatives(cv::Mat& linear_rgb, NegativeHandling handling) {
   const cv::Vec3d w = linearSrgbLuminanceWeights();
   const float wr = static_cast<float>(w[0]), wg = static_cast<float>(w[1]), wb = static_cast<float>(w[2]);
   std::atomic<std::int64_t> out_of_gamut{0}, black_from_negative_luminance{0}, over_range{0};
-  const bool desaturate = options.negatives == NegativeHandling::Desaturate;
-  cv::parallel_for_(cv::Range(0, result.linear_rgb.rows), [&](const cv::Range& rows) {
+  const bool desaturate = handling == NegativeHandling::Desaturate;
+  cv::parallel_for_(cv::Range(0, linear_rgb.rows), [&](const cv::Range& rows) {
     std::int64_t local_gamut = 0, local_black = 0, local_over = 0;
     for (int y = rows.start; y < rows.end; ++y) {
-      cv::Vec3f* p = result.linear_rgb.ptr<cv::Vec3f>(y);
-      for (int x = 0; x < result.linear_rgb.cols; ++x) {
+      cv::Vec3f* p = linear_rgb.ptr<cv::Vec3f>(y);
+      for (int x = 0; x < linear_rgb.cols; ++x) {
         cv::Vec3f& c = p[x];
         const float lowest = std::min({c[0], c[1], c[2]});
         if (lowest < 0) {
@@ -100,27 +135,69 @@ ColourEncodingResult encodeXyzToSrgb(const cv::Mat& xyz_d65, const ColourEncodin
     black_from_negative_luminance += local_black;
     over_range += local_over;
   });
+  return {out_of_gamut.load(), black_from_negative_luminance.load(), over_range.load()};
+}
 
-  result.encoded.create(result.linear_rgb.size(), CV_32FC3);
-  cv::parallel_for_(cv::Range(0, result.linear_rgb.rows), [&](const cv::Range& rows) {
+/// The encoded image: highlight handling, then the transfer curve per channel. Returns the
+/// number of pixels the highlight handling changed.
+std::int64_t encodeLinear(const cv::Mat& linear_rgb, const ColourEncodingOptions& options, cv::Mat& encoded) {
+  encoded.create(linear_rgb.size(), CV_32FC3);
+  const cv::Vec3d w = linearSrgbLuminanceWeights();
+  const bool desaturate_highlights = options.highlights == HighlightHandling::Desaturate;
+  std::atomic<std::int64_t> desaturated{0};
+  cv::parallel_for_(cv::Range(0, linear_rgb.rows), [&](const cv::Range& rows) {
+    std::int64_t local = 0;
     for (int y = rows.start; y < rows.end; ++y) {
-      const float* src = result.linear_rgb.ptr<float>(y);
-      float* dst = result.encoded.ptr<float>(y);
-      for (int i = 0; i < result.linear_rgb.cols * 3; ++i) dst[i] = encodeTransfer(src[i], options.curve);
+      const cv::Vec3f* src = linear_rgb.ptr<cv::Vec3f>(y);
+      cv::Vec3f* dst = encoded.ptr<cv::Vec3f>(y);
+      for (int x = 0; x < linear_rgb.cols; ++x) {
+        cv::Vec3f c = src[x];
+        bool changed = false;
+        if (desaturate_highlights) c = desaturate(c, options.highlight_knee, w, &changed);
+        local += changed;
+        for (int k = 0; k < 3; ++k) dst[x][k] = encodeTransfer(c[k], options.curve);
+      }
     }
+    desaturated += local;
   });
+  return desaturated.load();
+}
+
+}  // namespace
+
+cv::Vec3f desaturateHighlight(const cv::Vec3f& linear_rgb, double knee) {
+  checkKnee(knee);
+  bool changed = false;
+  return desaturate(linear_rgb, knee, linearSrgbLuminanceWeights(), &changed);
+}
+
+ColourEncodingResult encodeXyzToSrgb(const cv::Mat& xyz_d65, const ColourEncodingOptions& options) {
+  Stopwatch clock;
+  CV_Assert(xyz_d65.type() == CV_32FC3);
+  checkKnee(options.highlight_knee);
+  ColourEncodingResult result;
+  result.report.name = "colour";
+  cv::transform(xyz_d65, result.linear_rgb, cv::Matx33f(xyzToLinearSrgbMatrix()));
+  const GamutCounts counts = handleNegatives(result.linear_rgb, options.negatives);
+  const std::int64_t desaturated = encodeLinear(result.linear_rgb, options, result.encoded);
 
   const double pixels = static_cast<double>(result.linear_rgb.total());
   const char* curve_name = options.curve == TransferCurve::Gamma22 ? "gamma 2.2"
                            : options.curve == TransferCurve::Srgb  ? "sRGB piecewise"
                                                                    : "linear";
+  const bool desaturate_highlights = options.highlights == HighlightHandling::Desaturate;
   result.report.add("transfer_curve", std::string(curve_name))
-      .add("negative_handling", std::string(desaturate ? "desaturate" : "clip"))
-      .add("out_of_gamut_pixels", out_of_gamut.load())
-      .add("out_of_gamut_fraction", pixels > 0 ? out_of_gamut.load() / pixels : 0.0)
-      .add("negative_luminance_pixels", black_from_negative_luminance.load())
-      .add("over_range_pixels", over_range.load())
-      .add("over_range_fraction", pixels > 0 ? over_range.load() / pixels : 0.0);
+      .add("negative_handling", std::string(options.negatives == NegativeHandling::Desaturate ? "desaturate" : "clip"))
+      .add("highlight_handling", std::string(desaturate_highlights ? "desaturate" : "clip"))
+      .add("out_of_gamut_pixels", counts.out_of_gamut)
+      .add("out_of_gamut_fraction", pixels > 0 ? counts.out_of_gamut / pixels : 0.0)
+      .add("negative_luminance_pixels", counts.negative_luminance)
+      .add("over_range_pixels", counts.over_range)
+      .add("over_range_fraction", pixels > 0 ? counts.over_range / pixels : 0.0);
+  if (desaturate_highlights)
+    result.report.add("highlight_knee", options.highlight_knee)
+        .add("desaturated_highlight_pixels", desaturated)
+        .add("desaturated_highlight_fraction", pixels > 0 ? desaturated / pixels : 0.0);
   result.report.seconds = clock.seconds();
   return result;
 }

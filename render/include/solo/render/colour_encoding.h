@@ -1,6 +1,7 @@
 #pragma once
 // XYZ (D65-relative) to display sRGB: the 3x3 matrix to linear sRGB, a deliberate
-// treatment of colours outside the sRGB gamut, then the transfer curve and quantisation.
+// treatment of colours outside the sRGB gamut and of highlights above white, then the
+// transfer curve and quantisation.
 
 #include <solo/geometry/report.h>
 
@@ -22,9 +23,24 @@ enum class NegativeHandling {
   Clip,        ///< set negative channels to 0 (raises luminance, shifts hue)
 };
 
+/// What happens to colours with a linear sRGB channel above 1 (highlights: lamps, lit
+/// windows, their glare) when they are encoded.
+enum class HighlightHandling {
+  /// Move toward the grey of equal luminance, as a camera's highlights do: luminance and hue
+  /// line kept, white once the luminance reaches 1; a smooth shoulder (highlight_knee).
+  Desaturate,
+  Clip,  ///< clip each channel at 1 (rotates hues: a saturated red lamp turns magenta or orange)
+};
+
 struct ColourEncodingOptions {
   TransferCurve curve = TransferCurve::Gamma22;
   NegativeHandling negatives = NegativeHandling::Desaturate;
+  HighlightHandling highlights = HighlightHandling::Desaturate;
+  /// Desaturate only: the share of a colour's chroma headroom (from its luminance Y up to 1)
+  /// its largest channel may use before desaturation starts, in [0, 1]. Below it a colour is
+  /// unchanged; above it the desaturation eases in with a continuous slope. 1 = a hard
+  /// shoulder (every colour inside [0, 1]^3 unchanged).
+  double highlight_knee = 0.8;
 };
 
 /// Linear sRGB from XYZ relative to D65 (Y = 1 white), derived from the sRGB primaries
@@ -38,13 +54,23 @@ float encodeTransfer(float linear, TransferCurve curve);
 /// Inverse of encodeTransfer on [0, 1].
 float decodeTransfer(float encoded, TransferCurve curve);
 
+/// The Desaturate highlight treatment of one linear sRGB colour (channels >= 0, any size):
+/// c -> Y + t (c - Y) with Y its luminance, t = s(u) / u, u = (max(c) - Y) / (1 - Y) the share
+/// of the chroma headroom the colour uses and s the shoulder: s(u) = u up to `knee`, then
+/// knee + (1 - knee)(1 - exp(-(u - knee) / (1 - knee))), which tends to 1. The result lies in
+/// [0, 1]^3, has the luminance Y and the HSV hue of c, and is (1, 1, 1) once Y >= 1.
+/// Throws std::invalid_argument for a knee outside [0, 1].
+cv::Vec3f desaturateHighlight(const cv::Vec3f& linear_rgb, double knee);
+
 struct ColourEncodingResult {
   cv::Mat linear_rgb;  ///< CV_32FC3 linear sRGB, no negative channel, not clipped above 1
-  cv::Mat encoded;     ///< CV_32FC3 in [0, 1] after the transfer curve (channels above 1 clipped)
-  StageReport report;  ///< "colour": out-of-gamut and over-range pixel counts
+  /// CV_32FC3 in [0, 1] after the highlight handling and the transfer curve.
+  cv::Mat encoded;
+  StageReport report;  ///< "colour": out-of-gamut, over-range and desaturated-highlight pixel counts
 };
 
-/// xyz_d65: CV_32FC3 XYZ relative to D65 (after adaptation), any finite values.
+/// xyz_d65: CV_32FC3 XYZ relative to D65 (after adaptation), any finite values. Throws
+/// std::invalid_argument for a highlight knee outside [0, 1].
 ColourEncodingResult encodeXyzToSrgb(const cv::Mat& xyz_d65, const ColourEncodingOptions& options);
 
 /// CV_8UC3 or CV_16UC3 codes round(value * max) of an encoded image in [0, 1].
