@@ -126,3 +126,31 @@ TEST(PostProcess, RenderNoiseSigmaScalesWithTheSensorWhite) {
   // More light, more shot noise.
   EXPECT_GT(at_5(5.0), at_5(0.0));
 }
+
+TEST(PostProcess, SaturatedRedLampKeepsItsHueWithSensorNoiseOn) {
+  // A red tail lamp (SAE J578 chromaticity 0.70, 0.29) at 20x the level where its red channel
+  // reaches white, on a dark street, noise on: the noise step keeps the over-range values
+  // (saturated photosites get no noise) and the colour step desaturates them toward white;
+  // clipping red alone would leave G < B, a magenta core. Its rim (2x) stays red: R > G, R > B.
+  const cv::Vec3d red_xyz{0.70 / 0.29, 1.0, 0.01 / 0.29};
+  solo::PostProcessOptions options;
+  options.glare = false;
+  options.exposure = false;
+  options.adaptation = false;  // the lamp is given relative to D65
+  cv::Mat probe(1, 1, CV_32FC3, cv::Scalar(red_xyz[0], red_xyz[1], red_xyz[2]));
+  solo::PostProcessOptions quiet = options;
+  quiet.noise = false;
+  const cv::Vec3f unit_rgb = solo::postProcess(probe, quiet).linear_rgb.at<cv::Vec3f>(0, 0);
+  const double clip_level = 1.0 / std::max({unit_rgb[0], unit_rgb[1], unit_rgb[2]});
+  cv::Mat xyz(64, 64, CV_32FC3, cv::Scalar::all(0.01));
+  const cv::Vec3d core = red_xyz * (20 * clip_level), rim = red_xyz * (2 * clip_level);
+  xyz(cv::Rect(16, 16, 32, 32)).setTo(cv::Scalar(rim[0], rim[1], rim[2]));
+  xyz(cv::Rect(28, 28, 8, 8)).setTo(cv::Scalar(core[0], core[1], core[2]));
+  const solo::PostProcessResult r = solo::postProcess(xyz, options);
+  EXPECT_EQ(r.encoded.at<cv::Vec3f>(31, 31), cv::Vec3f(1, 1, 1));  // luminance 20 x 0.22 > 1: white
+  const cv::Vec3f rim_pixel = r.encoded.at<cv::Vec3f>(20, 20);
+  EXPECT_GT(rim_pixel[0], 0.99f);  // the shoulder approaches 1
+  EXPECT_GT(rim_pixel[0], rim_pixel[1] + 0.2f);
+  EXPECT_GT(rim_pixel[0], rim_pixel[2] + 0.2f);
+  EXPECT_GT(std::get<std::int64_t>(*step(r, "colour").find("desaturated_highlight_pixels")), 32 * 32 - 1);
+}
