@@ -109,6 +109,13 @@ int runPost(const PostOptions& o) {
     throw InputError("--iso", e.what());
   }
   if (!(o.noise_scale >= 0)) throw InputError("--noise-scale", "must be 0 or more");
+  options.noise_options.demosaic = !o.no_demosaic;
+  if (!(o.chroma_denoise_px >= 0 && o.chroma_denoise_px <= 100))
+    throw InputError("--chroma-denoise", "must be a Gaussian sigma of 0 to 100 px");
+  options.noise_options.chroma_denoise_sigma_px = o.chroma_denoise_px;
+  if (!(o.chroma_denoise_strength >= 0 && o.chroma_denoise_strength <= 1))
+    throw InputError("--chroma-denoise-strength", "must be between 0 and 1");
+  options.noise_options.chroma_denoise_strength = o.chroma_denoise_strength;
   options.adaptation = !o.no_adaptation;
   if (o.curve == "gamma2.2") options.encoding_options.curve = TransferCurve::Gamma22;
   else if (o.curve == "srgb") options.encoding_options.curve = TransferCurve::Srgb;
@@ -117,6 +124,11 @@ int runPost(const PostOptions& o) {
   if (o.negatives == "desaturate") options.encoding_options.negatives = NegativeHandling::Desaturate;
   else if (o.negatives == "clip") options.encoding_options.negatives = NegativeHandling::Clip;
   else throw InputError("--negatives", "expected desaturate or clip, got \"" + o.negatives + "\"");
+  if (o.highlights == "desaturate") options.encoding_options.highlights = HighlightHandling::Desaturate;
+  else if (o.highlights == "clip") options.encoding_options.highlights = HighlightHandling::Clip;
+  else throw InputError("--highlights", "expected desaturate or clip, got \"" + o.highlights + "\"");
+  if (!(o.highlight_knee >= 0 && o.highlight_knee <= 1)) throw InputError("--highlight-knee", "must be between 0 and 1");
+  options.encoding_options.highlight_knee = o.highlight_knee;
 
   RunReport report;
   report.command = "post";

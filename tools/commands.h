@@ -235,11 +235,16 @@ struct PostOptions {
   int glare_size = 9;                     ///< kernel 2^size px
   std::string glare_method = "auto";      ///< auto, direct, fft, tiled
   bool no_noise = false;
-  double noise_scale = 3;                 ///< standard deviation multiplier
+  double noise_scale = 0.4;               ///< standard deviation multiplier (SensorNoiseOptions' default)
+  bool no_demosaic = false;               ///< every pixel samples R, G and B instead of an RGGB mosaic
+  double chroma_denoise_px = 2;           ///< Gaussian sigma of the chroma noise reduction, px; 0 = off
+  double chroma_denoise_strength = 1;     ///< share of the chroma noise replaced by its smoothed version
   std::uint64_t seed = 0;
   bool no_adaptation = false;
   std::string curve = "gamma2.2";         ///< gamma2.2, srgb, linear
   std::string negatives = "desaturate";   ///< desaturate, clip
+  std::string highlights = "desaturate";  ///< desaturate, clip
+  double highlight_knee = 0.8;            ///< share of the chroma headroom left untouched (ColourEncodingOptions)
 };
 int runPost(const PostOptions& options);
 /// Writes a post-processed image by extension: .png/.tif 8-bit (16-bit on request) of the

@@ -265,10 +265,22 @@ int main(int argc, char** argv) {
   post_cmd->add_option("--glare-method", post.glare_method, "auto, direct, fft or tiled")->capture_default_str();
   post_cmd->add_flag("--no-noise", post.no_noise, "Skip the sensor noise");
   post_cmd->add_option("--noise-scale", post.noise_scale, "Noise standard deviation multiplier")->capture_default_str();
+  post_cmd->add_flag("--no-demosaic", post.no_demosaic, "Noise without the RGGB mosaic: every pixel samples R, G, B");
+  post_cmd->add_option("--chroma-denoise", post.chroma_denoise_px,
+                       "Chroma noise reduction: Gaussian sigma in px on the noise's colour differences; 0 = off")
+      ->capture_default_str();
+  post_cmd->add_option("--chroma-denoise-strength", post.chroma_denoise_strength,
+                       "Share of the chroma noise replaced by its smoothed version, 0 to 1")
+      ->capture_default_str();
   post_cmd->add_option("--seed", post.seed, "Noise seed")->capture_default_str();
   post_cmd->add_flag("--no-adaptation", post.no_adaptation, "Skip the Bradford E to D65 adaptation");
   post_cmd->add_option("--curve", post.curve, "gamma2.2, srgb or linear")->capture_default_str();
   post_cmd->add_option("--negatives", post.negatives, "Out-of-gamut colours: desaturate or clip")->capture_default_str();
+  post_cmd->add_option("--highlights", post.highlights, "Colours above white: desaturate (toward white, hue kept) or clip")
+      ->capture_default_str();
+  post_cmd->add_option("--highlight-knee", post.highlight_knee,
+                       "Desaturation starts above this share of a colour's headroom, 0 to 1 (1 = hard)")
+      ->capture_default_str();
 
   FdaCommandOptions fda;
   CLI::App* fda_cmd = app.add_subcommand("fda", "Fourier domain adaptation of a day photo toward a night photo (baseline)");
