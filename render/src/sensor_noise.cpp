@@ -225,24 +225,26 @@ struct ClipCounts {
 /// Raw noise per photosite in counts, one sparse CV_32F plane per camera channel (zero where
 /// the mosaic has no photosite of that colour): the noisy, rounded, clipped raw value minus
 /// the clean raw level (clipped the same way). One generator per row seeded by (seed, row).
-ClipCounts sampleRawNoise(const cv::Mat& camera, const SensorNoiseOptions& o, std::vector<cv::Mat>& planes) {
+ClipCounts sampleRawNoise(const cv::Mat& xyz_e, const SensorNoiseOptions& o, std::vector<cv::Mat>& planes) {
   const NoiseCalibration c = noiseCalibrationAtIso(o.iso);
+  const cv::Matx33d to_camera = cameraRgbFromXyzE();
   const double black = o.black_level, white = o.white_level, range = white - black;
   planes.assign(3, cv::Mat());
-  for (cv::Mat& plane : planes) plane = cv::Mat::zeros(camera.size(), CV_32F);
+  for (cv::Mat& plane : planes) plane = cv::Mat::zeros(xyz_e.size(), CV_32F);
   std::atomic<std::int64_t> clipped_low{0}, clipped_high{0};
-  cv::parallel_for_(cv::Range(0, camera.rows), [&](const cv::Range& rows) {
+  cv::parallel_for_(cv::Range(0, xyz_e.rows), [&](const cv::Range& rows) {
     std::int64_t low = 0, high = 0;
     for (int y = rows.start; y < rows.end; ++y) {
       std::seed_seq seq{static_cast<std::uint32_t>(o.seed), static_cast<std::uint32_t>(o.seed >> 32),
                         static_cast<std::uint32_t>(y)};
       std::mt19937_64 engine(seq);
       std::normal_distribution<double> gauss(0.0, 1.0);
-      const cv::Vec3f* p = camera.ptr<cv::Vec3f>(y);
-      for (int x = 0; x < camera.cols; ++x)
+      const cv::Vec3f* p = xyz_e.ptr<cv::Vec3f>(y);
+      for (int x = 0; x < xyz_e.cols; ++x)
         for (int ch = 0; ch < 3; ++ch) {
           if (!samples(y, x, ch, o.demosaic)) continue;
-          const double level = black + p[x][ch] * range;
+          const double camera = to_camera(ch, 0) * p[x][0] + to_camera(ch, 1) * p[x][1] + to_camera(ch, 2) * p[x][2];
+          const double level = black + camera * range;
           double noisy = level + std::sqrt(varianceWithoutRounding(level, c, o)) * gauss(engine);
           double clean = level;
           if (o.quantise) noisy = std::round(noisy);
@@ -260,49 +262,76 @@ ClipCounts sampleRawNoise(const cv::Mat& camera, const SensorNoiseOptions& o, st
   return {clipped_low.load(), clipped_high.load()};
 }
 
-/// Colour differences of the noise: B - Y and R - Y, Y its linear sRGB luminance.
-void colourDifferences(const std::vector<cv::Mat>& rgb, cv::Mat& luma, cv::Mat& cb, cv::Mat& cr) {
-  const cv::Vec3d w = linearSrgbLuminanceWeights();
-  luma = rgb[0] * w[0] + rgb[1] * w[1] + rgb[2] * w[2];
-  cb = rgb[2] - luma;
-  cr = rgb[0] - luma;
+/// Bilinear demosaicking of the three sparse planes, in place (one scratch plane).
+void demosaic(std::vector<cv::Mat>& planes) {
+  cv::Mat scratch;
+  for (int ch = 0; ch < 3; ++ch) {
+    cv::filter2D(planes[ch], scratch, CV_32F, cv::Mat(demosaicKernel(ch)), cv::Point(-1, -1), 0,
+                 cv::BORDER_REFLECT_101);  // the reflection keeps the mosaic's parity at the borders
+    std::swap(planes[ch], scratch);
+  }
+}
+
+/// R, G, B planes to R - Y, Y, B - Y in place, Y the linear sRGB luminance.
+void toColourDifferences(std::vector<cv::Mat>& planes) {
+  const cv::Vec3f w = linearSrgbLuminanceWeights();
+  cv::parallel_for_(cv::Range(0, planes[0].rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      float *r = planes[0].ptr<float>(y), *g = planes[1].ptr<float>(y), *b = planes[2].ptr<float>(y);
+      for (int x = 0; x < planes[0].cols; ++x) {
+        const float luma = w[0] * r[x] + w[1] * g[x] + w[2] * b[x];
+        r[x] -= luma;
+        g[x] = luma;
+        b[x] -= luma;
+      }
+    }
+  });
 }
 
 struct NoiseSigmas {
   double luma = 0, chroma_before = 0, chroma_after = 0;
 };
 
-double meanStandardDeviation(const cv::Mat& a, const cv::Mat& b) {
-  cv::Scalar mean, sa, sb;
-  cv::meanStdDev(a, mean, sa);
-  cv::meanStdDev(b, mean, sb);
-  return 0.5 * (sa[0] + sb[0]);
+double standardDeviation(const cv::Mat& plane) {
+  cv::Scalar mean, sd;
+  cv::meanStdDev(plane, mean, sd);
+  return sd[0];
 }
 
-/// The camera's chroma noise reduction on the noise planes (in place): B - Y and R - Y
-/// replaced by (1 - strength) x themselves + strength x their Gaussian-smoothed version,
-/// Y kept. Returns the luminance and colour-difference sigmas, counts.
-NoiseSigmas reduceChromaNoise(std::vector<cv::Mat>& rgb, const SensorNoiseOptions& o) {
-  cv::Mat luma, cb, cr;
-  colourDifferences(rgb, luma, cb, cr);
+/// The camera's chroma noise reduction on (R - Y, Y, B - Y) planes, in place: the colour
+/// differences replaced by (1 - strength) x themselves + strength x their Gaussian-smoothed
+/// version, Y kept. Returns the luminance and colour-difference sigmas, counts.
+NoiseSigmas reduceChromaNoise(std::vector<cv::Mat>& differences, const SensorNoiseOptions& o) {
   NoiseSigmas sigmas;
-  cv::Scalar mean, luma_sigma;
-  cv::meanStdDev(luma, mean, luma_sigma);
-  sigmas.luma = luma_sigma[0];
-  sigmas.chroma_before = sigmas.chroma_after = meanStandardDeviation(cb, cr);
+  sigmas.luma = standardDeviation(differences[1]);
+  sigmas.chroma_before = sigmas.chroma_after = 0.5 * (standardDeviation(differences[0]) + standardDeviation(differences[2]));
   if (o.chroma_denoise_sigma_px <= 0 || o.chroma_denoise_strength <= 0) return sigmas;
-  for (cv::Mat* difference : {&cb, &cr}) {
-    cv::Mat smooth;
-    cv::GaussianBlur(*difference, smooth, cv::Size(), o.chroma_denoise_sigma_px, o.chroma_denoise_sigma_px,
+  cv::Mat smooth;
+  for (const int k : {0, 2}) {
+    cv::GaussianBlur(differences[k], smooth, cv::Size(), o.chroma_denoise_sigma_px, o.chroma_denoise_sigma_px,
                      cv::BORDER_REFLECT_101);
-    cv::addWeighted(*difference, 1 - o.chroma_denoise_strength, smooth, o.chroma_denoise_strength, 0, *difference);
+    cv::addWeighted(differences[k], 1 - o.chroma_denoise_strength, smooth, o.chroma_denoise_strength, 0, differences[k]);
   }
-  sigmas.chroma_after = meanStandardDeviation(cb, cr);
-  const cv::Vec3d w = linearSrgbLuminanceWeights();
-  rgb[0] = luma + cr;
-  rgb[2] = luma + cb;
-  rgb[1] = (luma - rgb[0] * w[0] - rgb[2] * w[2]) / w[1];
+  sigmas.chroma_after = 0.5 * (standardDeviation(differences[0]) + standardDeviation(differences[2]));
   return sigmas;
+}
+
+/// Adds the noise given as (R - Y, Y, B - Y) planes in raw counts to the XYZ (white E) image.
+void addNoise(cv::Mat& xyz_e, const std::vector<cv::Mat>& differences, double range) {
+  const cv::Vec3f w = linearSrgbLuminanceWeights();
+  const cv::Matx33f to_xyz = cameraRgbFromXyzE().inv() * (1.0 / range);
+  cv::parallel_for_(cv::Range(0, xyz_e.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      const float *cr = differences[0].ptr<float>(y), *luma = differences[1].ptr<float>(y),
+                  *cb = differences[2].ptr<float>(y);
+      cv::Vec3f* p = xyz_e.ptr<cv::Vec3f>(y);
+      for (int x = 0; x < xyz_e.cols; ++x) {
+        const float r = luma[x] + cr[x], b = luma[x] + cb[x];
+        const cv::Vec3f rgb{r, (luma[x] - w[0] * r - w[2] * b) / w[1], b};
+        p[x] += to_xyz * rgb;
+      }
+    }
+  });
 }
 
 }  // namespace
@@ -313,24 +342,13 @@ StageReport applySensorNoise(cv::Mat& exposed_linear, const SensorNoiseOptions& 
   validate(options);
   StageReport report;
   report.name = "noise";
-  const cv::Matx33d to_camera = cameraRgbFromXyzE();
-  cv::Mat camera;
-  cv::transform(exposed_linear, camera, cv::Matx33f(to_camera));
   std::vector<cv::Mat> planes;
-  const ClipCounts clipped = sampleRawNoise(camera, options, planes);
-  if (options.demosaic)
-    for (int ch = 0; ch < 3; ++ch) {
-      cv::Mat dense;
-      cv::filter2D(planes[ch], dense, CV_32F, cv::Mat(demosaicKernel(ch)), cv::Point(-1, -1), 0,
-                   cv::BORDER_REFLECT_101);  // the reflection keeps the mosaic's parity at the borders
-      planes[ch] = dense;
-    }
+  const ClipCounts clipped = sampleRawNoise(exposed_linear, options, planes);
+  if (options.demosaic) demosaic(planes);
+  toColourDifferences(planes);
   const NoiseSigmas sigmas = reduceChromaNoise(planes, options);
-  cv::Mat noise;
-  cv::merge(planes, noise);
   const double range = options.white_level - options.black_level;
-  cv::transform(noise, noise, cv::Matx33f(to_camera.inv() * (1.0 / range)));
-  exposed_linear += noise;
+  addNoise(exposed_linear, planes, range);
 
   const NoiseCalibration c = noiseCalibrationAtIso(options.iso);
   SensorNoiseOptions no_rounding = options;
