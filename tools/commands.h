@@ -76,6 +76,9 @@ struct NightOptions {
   /// A sample's indirect luminance is clamped to this (cd/m2, PathTracerOptions::indirect_clamp);
   /// 0 = off, unbiased.
   double indirect_clamp_cd_m2 = 0;
+  /// Edge-aware, AOV-guided filter of the render's Monte Carlo noise before the post-process
+  /// (render_denoise.h, RenderDenoiseOptions' defaults; docs/rendering.md). Preset.
+  bool denoise = true;
   std::optional<std::filesystem::path> contact_sheet;  ///< PNG grid of the stages' pictures
   std::optional<std::filesystem::path> write_config;   ///< the effective configuration (TOML)
 };

@@ -74,6 +74,8 @@ int main(int argc, char** argv) {
   night_cmd->add_option("--render-downsample", night.render_downsample,
                         "Render at the image size divided by this factor, then upsample (preset)")
       ->capture_default_str()->check(CLI::Range(1, 8));
+  night_cmd->add_flag("--denoise,!--no-denoise", night.denoise,
+                      "Edge-aware filter of the render's Monte Carlo noise, guided by its AOVs (preset)");
   night_cmd->add_flag("--glare,!--no-glare", night.glare, "Fog glare (preset)");
   night_cmd->add_flag("--noise,!--no-noise", night.noise, "Sensor noise (preset)");
   night_cmd->add_option("--sensor-white", night.sensor_white_cd_m2,

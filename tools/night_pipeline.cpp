@@ -9,6 +9,7 @@
 #include <solo/lighting/street_light_instances.h>
 #include <solo/render/exposure.h>
 #include <solo/render/night_scene.h>
+#include <solo/render/render_denoise.h>
 #include <solo/render/sensor_noise.h>
 
 #include <opencv2/imgproc.hpp>
@@ -35,6 +36,7 @@ RenderOutput upsampleRender(RenderOutput r, cv::Size size) {
   resize(r.normal, cv::INTER_LINEAR);
   resize(r.depth_m, cv::INTER_NEAREST);
   resize(r.light_id, cv::INTER_NEAREST);
+  resize(r.emitter_coverage, cv::INTER_NEAREST);
   resize(r.samples, cv::INTER_NEAREST);
   resize(r.std_error, cv::INTER_NEAREST);
   return r;
@@ -231,6 +233,12 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   if (o.noise_target && !o.noise)
     stages.back().notes.push_back(
         "noise-matched target skipped: sensor noise is off (--no-noise), the relative-error target applies");
+
+  // denoise: the render's Monte Carlo noise, edge-aware, at the image size (render_denoise.h)
+  RenderDenoiseOptions denoise;
+  denoise.enabled = o.denoise;
+  stages.push_back(denoiseRender(rendered, image_camera, denoise));
+  if (!o.denoise) stages.back().skip_reason = "render denoising switched off (--no-denoise)";
 
   // post: radiance in cd/m^2 scaled so that the reference exposure (+3.25 stops) puts
   // sensor_white at 1. Only what will clip glows (the reference lets every pixel glow).

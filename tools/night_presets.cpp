@@ -30,13 +30,14 @@ struct PresetValues {
   int max_bounces;
   int mesh_downsample;    // mesh from the depth downsampled by this factor
   int render_downsample;  // render at the image size divided by this factor
+  bool denoise;           // edge-aware filter of the render (render_denoise.h)
 };
 
 //                                spp     rel.err sampler  opt   iter  tol   eval   glare noise  n.target factor
-//                                roulette bounces mesh/ render/
-constexpr PresetValues kDraft = {1, 2, 0.3, "power", true, 3, 1e-6, false, true, true, false, 0.5, 0.3, 12, 2, 2};
-constexpr PresetValues kDefault = {2, 8, 0.1, "power", true, 10, 1e-9, false, true, true, true, 0.5, 0.3, 12, 1, 1};
-constexpr PresetValues kFinal = {8, 64, 0.03, "power", true, 10, 1e-9, true, true, true, true, 0.25, 0.3, 12, 1, 1};
+//                                roulette bounces mesh/ render/ denoise
+constexpr PresetValues kDraft = {1, 2, 0.3, "power", true, 3, 1e-6, false, true, true, false, 0.5, 0.3, 12, 2, 2, true};
+constexpr PresetValues kDefault = {2, 8, 0.1, "power", true, 10, 1e-9, false, true, true, true, 0.5, 0.3, 12, 1, 1, true};
+constexpr PresetValues kFinal = {8, 64, 0.03, "power", true, 10, 1e-9, true, true, true, true, 0.25, 0.3, 12, 1, 1, false};
 
 struct Knob {
   const char* flag;
@@ -44,7 +45,7 @@ struct Knob {
 };
 
 // Every knob names its command-line flag: a knob the user gave keeps the user's value.
-const std::array<Knob, 16> kKnobs = {{
+const std::array<Knob, 17> kKnobs = {{
     {"--min-spp", [](NightOptions& o, const PresetValues& p) { o.min_samples = p.min_spp; }},
     {"--max-spp", [](NightOptions& o, const PresetValues& p) { o.max_samples = p.max_spp; }},
     {"--relative-error", [](NightOptions& o, const PresetValues& p) { o.relative_error = p.relative_error; }},
@@ -63,6 +64,7 @@ const std::array<Knob, 16> kKnobs = {{
     {"--max-bounces", [](NightOptions& o, const PresetValues& p) { o.max_bounces = p.max_bounces; }},
     {"--mesh-downsample", [](NightOptions& o, const PresetValues& p) { o.mesh_downsample = p.mesh_downsample; }},
     {"--render-downsample", [](NightOptions& o, const PresetValues& p) { o.render_downsample = p.render_downsample; }},
+    {"--denoise", [](NightOptions& o, const PresetValues& p) { o.denoise = p.denoise; }},
 }};
 
 const PresetValues& presetValues(const std::string& name) {
@@ -139,6 +141,7 @@ std::string nightConfigText(const NightOptions& o) {
   line("indirect-clamp", number(o.indirect_clamp_cd_m2));
   line("mesh-downsample", std::to_string(o.mesh_downsample));
   line("render-downsample", std::to_string(o.render_downsample));
+  flag("denoise", o.denoise);
   flag("glare", o.glare);
   flag("noise", o.noise);
   line("sensor-white", number(o.sensor_white_cd_m2));

@@ -1,0 +1,57 @@
+#pragma once
+// An edge-aware filter of a path-traced render's Monte Carlo noise, guided by its AOVs
+// (docs/rendering.md, "Render denoising"). The radiance is divided by the first-hit albedo
+// (texture out, irradiance in), the irradiance is smoothed by an edge-avoiding a-trous wavelet
+// filter (5x5 B-spline taps 1, 2, 4, ... px apart) whose weights stop at changes of the surface
+// (normal, distance from the pixel's tangent plane) and at luminance differences large against
+// the render's own standard error, and the result is multiplied by the albedo again. Pixels that
+// see an emitter or no surface (sky) are neither changed nor used.
+
+#include <solo/geometry/camera.h>
+#include <solo/geometry/report.h>
+
+#include "solo/render/path_tracer.h"
+
+namespace solo {
+
+struct RenderDenoiseOptions {
+  /// false: the render is left as it is and the report says so (skipped).
+  bool enabled = true;
+  /// A-trous passes, taps 1, 2, ..., 2^(iterations - 1) px apart: a footprint of
+  /// 2 (2^iterations - 1) px around a pixel (5: 62 px). 1 to 10.
+  int iterations = 5;
+  /// Albedo (per XYZ channel) below this is taken as this when the radiance is divided by it
+  /// and multiplied back, so a black surface keeps its radiance and no division blows up. > 0.
+  float albedo_floor = 0.02f;
+  /// Weight of a neighbour by its normal: max(0, n_p . n_q)^normal_exponent (64: 0.5 at
+  /// 8.4 degrees, 0.03 at 15 degrees). >= 0; 0 ignores normals.
+  float normal_exponent = 64.f;
+  /// Weight by the neighbour's distance d from the pixel's tangent plane (through its
+  /// first-hit point, along its normal): exp(-d / (plane_tolerance x depth)), depth the
+  /// pixel's z-depth, metres. 0.01: a neighbour 1 % of the depth off the plane weighs 1/e.
+  /// A depth discontinuity is far off the plane at any viewing angle, a plane seen at grazing
+  /// is not. > 0.
+  float plane_tolerance = 0.01f;
+  /// Weight by the difference of the irradiance luminances: exp(-|Y_p - Y_q| /
+  /// (luminance_sigma x sqrt(v_p + v_q))), v the variance of the pixel's irradiance estimate
+  /// (the render's std_error over the albedo, squared, smoothed over 3x3 pixels, then carried
+  /// through each pass). Keeps shadow edges the geometry does not show. > 0; ignored when the
+  /// render has no std_error.
+  float luminance_sigma = 4.f;
+};
+
+/// Filters `render.radiance` (CV_32FC3, XYZ) in place with the options above, guided by
+/// render.albedo (CV_32FC3; empty: no demodulation), render.normal (CV_32FC3, unit or 0),
+/// render.depth_m (CV_32F z-depth, m; <= 0 or not finite: no surface), render.std_error
+/// (CV_32F standard error of Y, render units; empty: no luminance weight), render.light_id
+/// (CV_32S) and render.emitter_coverage (CV_32F); empty ones of the last two mark no emitter.
+/// `camera` gives the first-hit points (its width and height must be the render's). Pixels with
+/// light_id != 0, emitter_coverage > 0, no surface, a zero normal or a non-finite radiance keep
+/// their radiance bit for bit and are not used for others. The other AOVs are not changed.
+/// Returns the report "denoise": time (s), pixels filtered and kept, the passes, the footprint
+/// (px) and the filtered pixels' luminance after / before; skipped when options.enabled is
+/// false. Throws std::invalid_argument for an AOV of another size or type, a camera of another
+/// size, or options out of range.
+StageReport denoiseRender(RenderOutput& render, const PinholeCamera& camera, const RenderDenoiseOptions& options = {});
+
+}  // namespace solo

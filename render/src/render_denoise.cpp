@@ -1,0 +1,240 @@
+// Edge-aware, AOV-guided filtering of a path-traced render (render_denoise.h).
+
+#include "solo/render/render_denoise.h"
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace solo {
+
+namespace {
+
+// The 5-tap cubic B-spline of the a-trous transform.
+constexpr std::array<float, 5> kSpline = {1.f / 16, 1.f / 4, 3.f / 8, 1.f / 4, 1.f / 16};
+
+// What the weights read, per pixel.
+struct Guides {
+  cv::Mat filtered;  // CV_8U: 1 = filtered and used as a neighbour
+  cv::Mat point_m;   // CV_32FC3 first-hit point, camera frame, metres
+  cv::Mat normal;    // CV_32FC3 unit normal
+  cv::Mat depth_m;   // CV_32F z-depth, metres
+};
+
+// The irradiance being filtered and the variance of its Y (empty: no luminance weight).
+struct Estimate {
+  cv::Mat irradiance;  // CV_32FC3
+  cv::Mat variance;    // CV_32F
+};
+
+struct PixelCounts {
+  std::int64_t filtered = 0, emitter = 0, no_surface = 0;
+};
+
+void checkAov(const cv::Mat& m, cv::Size size, int type, const char* name) {
+  if (m.empty() || (m.size() == size && m.type() == type)) return;
+  throw std::invalid_argument(std::string("denoiseRender: the render's ") + name + " AOV is " +
+                              std::to_string(m.cols) + "x" + std::to_string(m.rows) + " of type " +
+                              std::to_string(m.type()) + ", the radiance " + std::to_string(size.width) + "x" +
+                              std::to_string(size.height) + " (expected type " + std::to_string(type) + ")");
+}
+
+void validate(const RenderOutput& r, const PinholeCamera& camera, const RenderDenoiseOptions& o) {
+  if (r.radiance.empty() || r.radiance.type() != CV_32FC3)
+    throw std::invalid_argument("denoiseRender: the render's radiance must be a non-empty CV_32FC3 image");
+  if (r.depth_m.empty() || r.normal.empty())
+    throw std::invalid_argument("denoiseRender: the render needs its depth_m and normal AOVs");
+  const cv::Size size = r.radiance.size();
+  checkAov(r.albedo, size, CV_32FC3, "albedo");
+  checkAov(r.normal, size, CV_32FC3, "normal");
+  checkAov(r.depth_m, size, CV_32F, "depth_m");
+  checkAov(r.std_error, size, CV_32F, "std_error");
+  checkAov(r.light_id, size, CV_32S, "light_id");
+  checkAov(r.emitter_coverage, size, CV_32F, "emitter_coverage");
+  if (camera.width != size.width || camera.height != size.height)
+    throw std::invalid_argument("denoiseRender: the camera is " + std::to_string(camera.width) + "x" +
+                                std::to_string(camera.height) + ", the render " + std::to_string(size.width) + "x" +
+                                std::to_string(size.height));
+  if (o.iterations < 1 || o.iterations > 10)
+    throw std::invalid_argument("denoiseRender: iterations must be 1 to 10, got " + std::to_string(o.iterations));
+  if (!(o.albedo_floor > 0) || !(o.normal_exponent >= 0) || !(o.plane_tolerance > 0) || !(o.luminance_sigma > 0))
+    throw std::invalid_argument(
+        "denoiseRender: albedo_floor, plane_tolerance and luminance_sigma must be > 0 and normal_exponent >= 0");
+}
+
+bool isEmitter(const RenderOutput& r, int y, int x) {
+  return (!r.light_id.empty() && r.light_id.at<int>(y, x) != 0) ||
+         (!r.emitter_coverage.empty() && r.emitter_coverage.at<float>(y, x) > 0.f);
+}
+
+// The pixels to filter and the geometry of their first hits.
+Guides makeGuides(const RenderOutput& r, const PinholeCamera& camera, PixelCounts& counts) {
+  Guides g;
+  g.filtered = cv::Mat::zeros(r.radiance.size(), CV_8U);
+  g.point_m = cv::Mat::zeros(r.radiance.size(), CV_32FC3);
+  g.normal = cv::Mat::zeros(r.radiance.size(), CV_32FC3);
+  g.depth_m = cv::Mat::zeros(r.radiance.size(), CV_32F);
+  for (int y = 0; y < r.radiance.rows; ++y)
+    for (int x = 0; x < r.radiance.cols; ++x) {
+      const float z = r.depth_m.at<float>(y, x);
+      const cv::Vec3f n = r.normal.at<cv::Vec3f>(y, x);
+      const cv::Vec3f radiance = r.radiance.at<cv::Vec3f>(y, x);
+      const float n_length = static_cast<float>(cv::norm(n));
+      if (isEmitter(r, y, x)) {
+        ++counts.emitter;
+        continue;
+      }
+      if (!(std::isfinite(z) && z > 0.f && std::isfinite(n_length) && n_length > 1e-3f && cv::checkRange(radiance))) {
+        ++counts.no_surface;
+        continue;
+      }
+      ++counts.filtered;
+      g.filtered.at<std::uint8_t>(y, x) = 1;
+      const Eigen::Vector3d p = camera.backproject(x, y, z);
+      g.point_m.at<cv::Vec3f>(y, x) = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())};
+      g.normal.at<cv::Vec3f>(y, x) = n / n_length;
+      g.depth_m.at<float>(y, x) = z;
+    }
+  return g;
+}
+
+// max(albedo, floor) per channel where filtered, 1 elsewhere (and everywhere without albedo).
+cv::Mat demodulationAlbedo(const RenderOutput& r, const Guides& g, float albedo_floor) {
+  cv::Mat a(r.radiance.size(), CV_32FC3, cv::Scalar::all(1));
+  if (r.albedo.empty()) return a;
+  for (int y = 0; y < a.rows; ++y)
+    for (int x = 0; x < a.cols; ++x) {
+      if (!g.filtered.at<std::uint8_t>(y, x)) continue;
+      const cv::Vec3f albedo = r.albedo.at<cv::Vec3f>(y, x);
+      for (int c = 0; c < 3; ++c)
+        a.at<cv::Vec3f>(y, x)[c] = std::isfinite(albedo[c]) ? std::max(albedo[c], albedo_floor) : albedo_floor;
+    }
+  return a;
+}
+
+// Variance of the irradiance's Y: (std_error / albedo Y)^2, averaged over the filtered pixels
+// of a 3x3 Gaussian window (one pixel's estimate has few degrees of freedom). Empty without
+// std_error.
+cv::Mat initialVariance(const RenderOutput& r, const Guides& g, const cv::Mat& albedo) {
+  if (r.std_error.empty()) return {};
+  cv::Mat variance = cv::Mat::zeros(r.radiance.size(), CV_32F);
+  for (int y = 0; y < variance.rows; ++y)
+    for (int x = 0; x < variance.cols; ++x) {
+      const float e = r.std_error.at<float>(y, x) / albedo.at<cv::Vec3f>(y, x)[1];
+      if (g.filtered.at<std::uint8_t>(y, x) && std::isfinite(e)) variance.at<float>(y, x) = e * e;
+    }
+  cv::Mat weight, blurred, blurred_weight;
+  g.filtered.convertTo(weight, CV_32F);
+  cv::GaussianBlur(variance, blurred, cv::Size(3, 3), 0);
+  cv::GaussianBlur(weight, blurred_weight, cv::Size(3, 3), 0);
+  cv::Mat out = cv::Mat::zeros(variance.size(), CV_32F);
+  cv::divide(blurred, blurred_weight, out);
+  out.setTo(0, g.filtered == 0);
+  return out;
+}
+
+// One a-trous pass with taps `step` px apart over rows [row_begin, row_end).
+void atrousRows(const Guides& g, const Estimate& in, int step, const RenderDenoiseOptions& o, Estimate& out,
+                int row_begin, int row_end) {
+  const bool luminance = !in.variance.empty();
+  const int rows = g.filtered.rows, cols = g.filtered.cols;
+  for (int y = row_begin; y < row_end; ++y)
+    for (int x = 0; x < cols; ++x) {
+      if (!g.filtered.at<std::uint8_t>(y, x)) {
+        out.irradiance.at<cv::Vec3f>(y, x) = in.irradiance.at<cv::Vec3f>(y, x);
+        continue;
+      }
+      const cv::Vec3f point_p = g.point_m.at<cv::Vec3f>(y, x), normal_p = g.normal.at<cv::Vec3f>(y, x);
+      const float inverse_tolerance = 1.f / (o.plane_tolerance * g.depth_m.at<float>(y, x));
+      const float y_p = in.irradiance.at<cv::Vec3f>(y, x)[1];
+      const float variance_p = luminance ? in.variance.at<float>(y, x) : 0.f;
+      float sum_w = 0, sum_w2v = 0;
+      cv::Vec3f sum{0, 0, 0};
+      for (int j = 0; j < 5; ++j) {
+        const int yq = y + (j - 2) * step;
+        if (yq < 0 || yq >= rows) continue;
+        for (int i = 0; i < 5; ++i) {
+          const int xq = x + (i - 2) * step;
+          if (xq < 0 || xq >= cols || !g.filtered.at<std::uint8_t>(yq, xq)) continue;
+          const float cos_n = normal_p.dot(g.normal.at<cv::Vec3f>(yq, xq));
+          if (o.normal_exponent > 0 && cos_n <= 0.f) continue;
+          float exponent = -std::abs(normal_p.dot(g.point_m.at<cv::Vec3f>(yq, xq) - point_p)) * inverse_tolerance;
+          if (o.normal_exponent > 0) exponent += o.normal_exponent * std::log(std::min(cos_n, 1.f));
+          const cv::Vec3f& irradiance_q = in.irradiance.at<cv::Vec3f>(yq, xq);
+          float variance_q = 0;
+          if (luminance) {
+            variance_q = in.variance.at<float>(yq, xq);
+            exponent -= std::abs(y_p - irradiance_q[1]) / (o.luminance_sigma * std::sqrt(variance_p + variance_q) + 1e-30f);
+          }
+          const float w = kSpline[static_cast<std::size_t>(i)] * kSpline[static_cast<std::size_t>(j)] * std::exp(exponent);
+          sum_w += w;
+          sum += w * irradiance_q;
+          sum_w2v += w * w * variance_q;
+        }
+      }
+      // sum_w > 0: the pixel itself weighs (3/8)^2.
+      out.irradiance.at<cv::Vec3f>(y, x) = sum / sum_w;
+      if (luminance) out.variance.at<float>(y, x) = sum_w2v / (sum_w * sum_w);
+    }
+}
+
+Estimate atrousPass(const Guides& g, const Estimate& in, int step, const RenderDenoiseOptions& o) {
+  Estimate out;
+  out.irradiance.create(in.irradiance.size(), CV_32FC3);
+  if (!in.variance.empty()) out.variance = in.variance.clone();
+  cv::parallel_for_(cv::Range(0, g.filtered.rows),
+                    [&](const cv::Range& rows) { atrousRows(g, in, step, o, out, rows.start, rows.end); });
+  return out;
+}
+
+StageReport skippedReport() {
+  StageReport report;
+  report.name = "denoise";
+  report.skipped = true;
+  report.skip_reason = "render denoising switched off";
+  return report;
+}
+
+}  // namespace
+
+StageReport denoiseRender(RenderOutput& render, const PinholeCamera& camera, const RenderDenoiseOptions& options) {
+  if (!options.enabled) return skippedReport();
+  const Stopwatch clock;
+  validate(render, camera, options);
+  PixelCounts counts;
+  const Guides guides = makeGuides(render, camera, counts);
+  const cv::Mat albedo = demodulationAlbedo(render, guides, options.albedo_floor);
+
+  Estimate estimate;
+  cv::divide(render.radiance, albedo, estimate.irradiance);
+  estimate.variance = initialVariance(render, guides, albedo);
+  for (int pass = 0; pass < options.iterations; ++pass) estimate = atrousPass(guides, estimate, 1 << pass, options);
+
+  cv::Mat filtered;
+  cv::multiply(estimate.irradiance, albedo, filtered);
+  const double y_before = cv::mean(render.radiance, guides.filtered)[1];
+  filtered.copyTo(render.radiance, guides.filtered);  // emitters and sky keep their values bit for bit
+  const double y_after = cv::mean(render.radiance, guides.filtered)[1];
+
+  StageReport report;
+  report.name = "denoise";
+  report.add("pixels_filtered", counts.filtered)
+      .add("pixels_kept_emitter", counts.emitter)
+      .add("pixels_kept_no_surface", counts.no_surface)
+      .add("iterations", static_cast<std::int64_t>(options.iterations))
+      .add("footprint_radius", static_cast<std::int64_t>(2 * ((1 << options.iterations) - 1)), "px")
+      .add("luminance_weight", !render.std_error.empty())
+      .add("luminance_ratio", y_before > 0 ? y_after / y_before : 1.0);
+  report.notes.push_back("a-trous filter of the albedo-demodulated radiance, guided by normal, tangent plane and "
+                         "luminance against the standard error; emitter and sky pixels kept exact");
+  report.seconds = clock.seconds();
+  return report;
+}
+
+}  // namespace solo

@@ -1,0 +1,217 @@
+#include <solo/render/render_denoise.h>
+
+#include "test_support.h"
+
+#include <cmath>
+#include <functional>
+
+namespace {
+
+constexpr int kWidth = 160, kHeight = 120;
+
+// What a synthetic render's pixel shows: the truth the filter should recover.
+struct SurfaceTruth {
+  float depth_m = 10.f;
+  cv::Vec3f normal{0, 0, -1};  // facing the camera (which looks along +z)
+  float albedo = 0.5f;
+  float irradiance = 2.f;  // radiance = albedo x irradiance, every XYZ channel
+};
+
+solo::PinholeCamera camera() {
+  solo::PinholeCamera c;
+  c.fx = c.fy = 120;
+  c.cx = (kWidth - 1) / 2.0;
+  c.cy = (kHeight - 1) / 2.0;
+  c.width = kWidth;
+  c.height = kHeight;
+  return c;
+}
+
+// A render of `truth` with independent Gaussian noise of `sigma` on every channel of the
+// radiance and the matching std_error AOV (the standard error of Y is sigma).
+solo::RenderOutput noisyRender(const std::function<SurfaceTruth(int x, int y)>& truth, float sigma,
+                               std::uint64_t seed) {
+  solo::RenderOutput r;
+  r.radiance.create(kHeight, kWidth, CV_32FC3);
+  r.albedo.create(kHeight, kWidth, CV_32FC3);
+  r.normal.create(kHeight, kWidth, CV_32FC3);
+  r.depth_m.create(kHeight, kWidth, CV_32F);
+  r.light_id = cv::Mat::zeros(kHeight, kWidth, CV_32S);
+  r.emitter_coverage = cv::Mat::zeros(kHeight, kWidth, CV_32F);
+  r.samples = cv::Mat(kHeight, kWidth, CV_32S, cv::Scalar(4));
+  r.std_error = cv::Mat(kHeight, kWidth, CV_32F, cv::Scalar(sigma));
+  cv::Mat noise(kHeight, kWidth, CV_32FC3);
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, sigma);
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const SurfaceTruth t = truth(x, y);
+      r.albedo.at<cv::Vec3f>(y, x) = cv::Vec3f::all(t.albedo);
+      r.normal.at<cv::Vec3f>(y, x) = t.normal;
+      r.depth_m.at<float>(y, x) = t.depth_m;
+      r.radiance.at<cv::Vec3f>(y, x) = cv::Vec3f::all(t.albedo * t.irradiance) + noise.at<cv::Vec3f>(y, x);
+    }
+  return r;
+}
+
+// Mean and standard deviation of the Y error against `truth_y` over a region.
+struct ErrorStats {
+  double mean = 0, sigma = 0;
+};
+ErrorStats yError(const cv::Mat& radiance, const cv::Rect& region, double truth_y) {
+  cv::Mat channels[3];
+  cv::split(radiance(region), channels);
+  cv::Scalar mean, sigma;
+  cv::meanStdDev(channels[1], mean, sigma);
+  return {mean[0] - truth_y, sigma[0]};
+}
+
+double columnMeanY(const cv::Mat& radiance, int x, int y0, int y1) {
+  return yError(radiance, cv::Rect(x, y0, 1, y1 - y0), 0).mean;
+}
+
+bool bitIdentical(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
+}
+
+double metric(const solo::StageReport& r, const std::string& name) {
+  const solo::MetricValue* v = r.find(name);
+  if (!v) return NAN;
+  if (const auto* d = std::get_if<double>(v)) return *d;
+  if (const auto* i = std::get_if<std::int64_t>(v)) return static_cast<double>(*i);
+  return NAN;
+}
+
+}  // namespace
+
+TEST(RenderDenoise, FlatPlaneNoiseDropsTenfoldAndItsMeanStaysUnbiased) {
+  const float sigma = 0.2f;  // 20 % of the radiance 0.5 x 2 = 1
+  solo::RenderOutput r = noisyRender([](int, int) { return SurfaceTruth{}; }, sigma, 11);
+  const cv::Rect all(0, 0, kWidth, kHeight);
+  const ErrorStats before = yError(r.radiance, all, 1.0);
+  ASSERT_NEAR(before.sigma, sigma, 0.01);
+
+  const solo::StageReport report = solo::denoiseRender(r, camera());
+  const ErrorStats after = yError(r.radiance, all, 1.0);
+  EXPECT_LT(after.sigma, before.sigma / 10) << "noise " << before.sigma << " -> " << after.sigma;
+  // Unfiltered, the mean's own noise is 0.2 / sqrt(19200) = 0.0014; symmetric noise must not
+  // shift it.
+  EXPECT_NEAR(after.mean, 0.0, 0.005);
+  EXPECT_NEAR(metric(report, "luminance_ratio"), 1.0, 0.005);
+  EXPECT_EQ(metric(report, "pixels_filtered"), kWidth * kHeight);
+  EXPECT_EQ(metric(report, "footprint_radius"), 62);
+  EXPECT_FALSE(report.skipped);
+}
+
+TEST(RenderDenoise, EdgesInDepthNormalAndAlbedoStaySharp) {
+  const int edge = kWidth / 2;  // the first column of the right side
+  const float sigma = 0.05f;
+  struct Case {
+    const char* name;
+    SurfaceTruth left, right;
+  };
+  SurfaceTruth near_bright, far_dark, tilted, dark_paint;
+  near_bright.depth_m = 5.f;
+  near_bright.irradiance = 1.6f;  // radiance 0.8
+  far_dark.depth_m = 10.f;
+  far_dark.irradiance = 0.4f;  // radiance 0.2
+  tilted.normal = {std::sin(1.0f), 0.f, -std::cos(1.0f)};  // 57 degrees from the left side's
+  tilted.irradiance = 0.4f;
+  dark_paint.albedo = 0.1f;  // radiance 0.2, same irradiance 2 as the left side
+  const Case cases[] = {{"depth", near_bright, far_dark},
+                        {"normal", SurfaceTruth{}, tilted},
+                        {"albedo", SurfaceTruth{}, dark_paint}};
+  for (const Case& c : cases) {
+    solo::RenderOutput r = noisyRender([&](int x, int) { return x < edge ? c.left : c.right; }, sigma, 23);
+    solo::denoiseRender(r, camera());
+    const double left_truth = c.left.albedo * c.left.irradiance, right_truth = c.right.albedo * c.right.irradiance;
+    const double step = std::abs(left_truth - right_truth);
+    // The columns on either side of the edge: a filter blind to it would put them half way.
+    for (const int x : {edge - 2, edge - 1}) {
+      EXPECT_NEAR(columnMeanY(r.radiance, x, 0, kHeight), left_truth, 0.03 * step) << c.name << " column " << x;
+    }
+    for (const int x : {edge, edge + 1}) {
+      EXPECT_NEAR(columnMeanY(r.radiance, x, 0, kHeight), right_truth, 0.03 * step) << c.name << " column " << x;
+    }
+    EXPECT_LT(yError(r.radiance, cv::Rect(edge - 1, 0, 1, kHeight), left_truth).sigma, sigma / 3) << c.name;
+    EXPECT_LT(yError(r.radiance, cv::Rect(edge, 0, 1, kHeight), right_truth).sigma, sigma / 3) << c.name;
+  }
+}
+
+TEST(RenderDenoise, EmitterPixelsStayBitIdenticalAndLightNoNeighbour) {
+  solo::RenderOutput r = noisyRender([](int, int) { return SurfaceTruth{}; }, 0.1f, 5);
+  const cv::Rect lamp(40, 40, 12, 12), sliver(100, 60, 6, 6);
+  r.radiance(lamp).setTo(cv::Scalar(2000, 3000, 1000));
+  r.light_id(lamp).setTo(7);
+  r.albedo(lamp).setTo(cv::Scalar::all(0));  // an emitting face reflects nothing
+  r.radiance(sliver).setTo(cv::Scalar(400, 500, 300));
+  r.emitter_coverage(sliver).setTo(0.25f);  // light_id 0: the first sample missed the emitter
+  r.std_error(lamp).setTo(50.f);
+  const cv::Mat before = r.radiance.clone();
+
+  const solo::StageReport report = solo::denoiseRender(r, camera());
+  EXPECT_TRUE(bitIdentical(r.radiance(lamp), before(lamp)));
+  EXPECT_TRUE(bitIdentical(r.radiance(sliver), before(sliver)));
+  EXPECT_EQ(metric(report, "pixels_kept_emitter"), lamp.area() + sliver.area());
+  // The pixels around them still show the plane's radiance 1: none of the lamps' light leaked.
+  for (const cv::Rect& emitter : {lamp, sliver}) {
+    const cv::Rect ring(emitter.x - 2, emitter.y - 2, emitter.width + 4, 2);
+    EXPECT_NEAR(yError(r.radiance, ring, 1.0).mean, 0.0, 0.02);
+  }
+}
+
+TEST(RenderDenoise, SkyAndBlackSurfacesGiveFiniteOutputAndSkyStaysExact) {
+  solo::RenderOutput r = noisyRender(
+      [](int x, int y) {
+        SurfaceTruth t;
+        if (y < kHeight / 3) {  // sky
+          t.depth_m = 0;
+          t.normal = {0, 0, 0};
+          t.albedo = 0;
+        } else if (x < kWidth / 4) {  // black paint
+          t.albedo = 0;
+        }
+        return t;
+      },
+      0.05f, 9);
+  r.std_error(cv::Rect(0, kHeight - 10, kWidth, 10)).setTo(0.f);  // a band whose samples all agreed
+  const cv::Rect sky(0, 0, kWidth, kHeight / 3);
+  const cv::Mat before = r.radiance.clone();
+
+  const solo::StageReport report = solo::denoiseRender(r, camera());
+  EXPECT_TRUE(cv::checkRange(r.radiance));
+  EXPECT_TRUE(bitIdentical(r.radiance(sky), before(sky)));
+  EXPECT_EQ(metric(report, "pixels_kept_no_surface"), sky.area());
+  // Black paint: radiance only noise around 0, and it stays around 0 (albedo floor 0.02).
+  EXPECT_NEAR(yError(r.radiance, cv::Rect(0, kHeight / 2, kWidth / 4 - 4, 20), 0.0).mean, 0.0, 0.01);
+}
+
+TEST(RenderDenoise, SwitchedOffChangesNothingAndSaysSkipped) {
+  solo::RenderOutput r = noisyRender([](int, int) { return SurfaceTruth{}; }, 0.1f, 3);
+  const cv::Mat before = r.radiance.clone();
+  solo::RenderDenoiseOptions options;
+  options.enabled = false;
+  const solo::StageReport report = solo::denoiseRender(r, camera(), options);
+  EXPECT_TRUE(report.skipped);
+  EXPECT_EQ(report.name, "denoise");
+  EXPECT_FALSE(report.skip_reason.empty());
+  EXPECT_TRUE(bitIdentical(r.radiance, before));
+}
+
+TEST(RenderDenoise, RefusesMismatchedAovsCameraAndOptions) {
+  solo::RenderOutput r = noisyRender([](int, int) { return SurfaceTruth{}; }, 0.1f, 3);
+  solo::PinholeCamera small = camera().scaledTo(kWidth / 2, kHeight / 2);
+  EXPECT_THROW(solo::denoiseRender(r, small), std::invalid_argument);
+  solo::RenderDenoiseOptions bad;
+  bad.iterations = 0;
+  EXPECT_THROW(solo::denoiseRender(r, camera(), bad), std::invalid_argument);
+  bad = {};
+  bad.plane_tolerance = 0;
+  EXPECT_THROW(solo::denoiseRender(r, camera(), bad), std::invalid_argument);
+  solo::RenderOutput wrong = r;
+  wrong.emitter_coverage = cv::Mat::zeros(kHeight / 2, kWidth / 2, CV_32F);
+  EXPECT_THROW(solo::denoiseRender(wrong, camera()), std::invalid_argument);
+  wrong = r;
+  wrong.depth_m = cv::Mat();
+  EXPECT_THROW(solo::denoiseRender(wrong, camera()), std::invalid_argument);
+}
