@@ -2,12 +2,14 @@
 
 #include <solo/geometry/error.h>
 #include <solo/geometry/image_io.h>
+#include <solo/geometry/output_path.h>
 
 #include <iostream>
 
 namespace solo::tools {
 
 int runConvert(const ConvertOptions& o) {
+  refuseOutputThatIsAnInput(o.output, {o.input}, "output");
   if (o.kind == "depth") {
     DepthReadStats stats;
     const cv::Mat depth = readDepth(o.input, o.input_scale_m_per_unit, &stats);

@@ -9,6 +9,7 @@
 #include <solo/geometry/depth_refinement.h>
 #include <solo/geometry/error.h>
 #include <solo/geometry/image_io.h>
+#include <solo/geometry/output_path.h>
 #include <solo/geometry/report.h>
 #include <solo/geometry/scene.h>
 #include <solo/lighting/light_overlay.h>
@@ -66,6 +67,23 @@ cv::Mat contactSheet(const Scene& scene, const DepthRefinementResult& refined, c
   });
 }
 
+// Refuses, before any work, an output that is an input of this run: the manifest, a map it
+// names, or the light record (`-o S/day.png` would overwrite the day image).
+void refuseOutputsThatAreInputs(const NightOptions& o, const fs::path& scene_file, const fs::path& report_file) {
+  std::vector<fs::path> inputs = manifestFiles(readSceneManifest(scene_file));
+  if (o.lights_record) inputs.push_back(*o.lights_record);
+  refuseOutputThatIsAnInput(o.output, inputs, "-o");
+  refuseOutputThatIsAnInput(report_file, inputs, "--report");
+  if (o.render_exr) {
+    const std::string stem = fs::path(*o.render_exr).replace_extension().string();
+    for (const std::string& aov : {std::string(), std::string(".albedo.exr"), std::string(".normal.exr"),
+                                   std::string(".depth.exr"), std::string(".lightid.npy")})
+      refuseOutputThatIsAnInput(aov.empty() ? *o.render_exr : fs::path(stem + aov), inputs, "--render-exr");
+  }
+  if (o.contact_sheet) refuseOutputThatIsAnInput(*o.contact_sheet, inputs, "--contact-sheet");
+  if (o.write_config) refuseOutputThatIsAnInput(*o.write_config, inputs, "--write-config");
+}
+
 }  // namespace
 
 int runNight(const NightOptions& o) {
@@ -82,6 +100,7 @@ int runNight(const NightOptions& o) {
   }
   lightSamplerOption(o);  // unknown names fail before any work
   samplerOption(o);
+  refuseOutputsThatAreInputs(o, scene_file, report_file);
 
   RunReport report;
   report.command = "night";

@@ -5,6 +5,7 @@
 
 #include <solo/geometry/error.h>
 #include <solo/geometry/image_io.h>
+#include <solo/geometry/output_path.h>
 #include <solo/geometry/report.h>
 #include <solo/render/colour_encoding.h>
 #include <solo/render/fda.h>
@@ -129,6 +130,8 @@ int runPost(const PostOptions& o) {
   else throw InputError("--highlights", "expected desaturate or clip, got \"" + o.highlights + "\"");
   if (!(o.highlight_knee >= 0 && o.highlight_knee <= 1)) throw InputError("--highlight-knee", "must be between 0 and 1");
   options.encoding_options.highlight_knee = o.highlight_knee;
+  refuseOutputThatIsAnInput(o.output, {o.input}, "-o");
+  if (o.report) refuseOutputThatIsAnInput(*o.report, {o.input}, "--report");
 
   RunReport report;
   report.command = "post";
@@ -166,6 +169,8 @@ int runPost(const PostOptions& o) {
 int runFda(const FdaCommandOptions& o) {
   Stopwatch total;
   if (!(o.beta >= 0 && o.beta <= 1)) throw InputError("--beta", "must be in [0, 1]");
+  refuseOutputThatIsAnInput(o.output, {o.source, o.target}, "-o");
+  if (o.report) refuseOutputThatIsAnInput(*o.report, {o.source, o.target}, "--report");
   RunReport report;
   report.command = "fda";
   report.scene = o.source.string();

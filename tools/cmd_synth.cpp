@@ -3,6 +3,7 @@
 #include <solo/geometry/atomic_file.h>
 #include <solo/geometry/error.h>
 #include <solo/geometry/image_io.h>
+#include <solo/geometry/output_path.h>
 #include <solo/geometry/prediction_noise.h>
 #include <solo/geometry/report.h>
 #include <solo/geometry/triangle_mesh.h>
@@ -13,7 +14,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <fstream>
 #include <iostream>
+#include <set>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -43,6 +46,62 @@ ordered_json cameraJson(const PinholeCamera& c) {
 
 void writeJson(const fs::path& file, const ordered_json& j) { writeTextAtomically(file, j.dump(2) + "\n"); }
 
+// Every file and folder a `solo synth` folder holds, relative to it.
+const std::set<std::string> kSynthEntries = {
+    "day.png",          "lightIds.png",      "groups.png",         "scene.json",        "synth.json",
+    "gt",               "gt/depth.exr",      "gt/normals.png",     "gt/albedo.png",     "gt/roughness.png",
+    "gt/labelIds.png",  "gt/instanceIds.png", "gt/mesh.ply",       "gt/scene.json",     "est",
+    "est/depth.exr",    "est/normals.png",   "est/albedo.png",     "est/labelIds.png",  "est/instanceIds.png"};
+
+// True when `folder`/synth.json is the record `solo synth` writes ("generator": "solo synth ...").
+bool holdsSynthRecord(const fs::path& folder) {
+  const fs::path record = folder / "synth.json";
+  std::error_code ec;
+  if (!fs::is_regular_file(record, ec) || fs::file_size(record, ec) > (1u << 20)) return false;
+  std::ifstream in(record);
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  return j.is_object() && j.contains("generator") && j["generator"].is_string() &&
+         j["generator"].get<std::string>().rfind("solo synth", 0) == 0;
+}
+
+// --force replaces only a folder `solo synth` made and that holds nothing else: throws otherwise.
+void requireReplaceableSynthFolder(const fs::path& folder) {
+  refuseWorkingFolderOrParent(folder, "-o");
+  const std::string keep = ": not replaced, even with --force (remove it yourself or choose another folder)";
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status(folder, ec);
+  if (status.type() != fs::file_type::directory) throw InputError(folder, "exists and is not a folder" + keep);
+  if (fs::is_empty(folder, ec)) return;
+  if (!holdsSynthRecord(folder))
+    throw InputError(folder, "is not a folder solo synth wrote (it lacks synth.json from solo synth)" + keep);
+  for (auto it = fs::recursive_directory_iterator(folder); it != fs::recursive_directory_iterator(); ++it) {
+    const std::string relative = it->path().lexically_relative(folder).generic_string();
+    const bool expected_type = relative == "gt" || relative == "est" ? it->is_directory() && !it->is_symlink()
+                                                                    : it->is_regular_file() && !it->is_symlink();
+    if (!kSynthEntries.count(relative) || !expected_type)
+      throw InputError(folder, "holds \"" + relative + "\", which solo synth does not write" + keep);
+  }
+}
+
+// Moves the finished `staging` folder onto `target`, replacing a previous one only once the new
+// one is in place: a failure leaves the previous folder as it was.
+void moveFolderIntoPlace(const fs::path& staging, const fs::path& target) {
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(target, ec))) {
+    fs::rename(staging, target);
+    return;
+  }
+  const fs::path previous = fs::path(staging).concat(".previous");
+  fs::rename(target, previous);
+  fs::rename(staging, target, ec);
+  if (ec) {
+    std::error_code ignore;
+    fs::rename(previous, target, ignore);
+    throw InputError(target, "cannot move the finished folder into place: " + ec.message());
+  }
+  fs::remove_all(previous, ec);
+}
+
 }  // namespace
 
 int runSynth(const SynthOptions& o) {
@@ -60,13 +119,18 @@ int runSynth(const SynthOptions& o) {
     throw InputError("--size", "image size must be between 16 and 8192 pixels per side");
   if (o.day_render != "raster" && o.day_render != "path")
     throw InputError("--day-render", "expected raster or path, got \"" + o.day_render + "\"");
-  if (fs::exists(o.output) && !o.force)
-    throw InputError(o.output, "already exists (pass --force to replace it)");
+  const fs::path output = withoutTrailingSeparators(o.output);
+  if (output.empty()) throw InputError("-o", "the output folder is an empty path");
+  std::error_code exists_ec;
+  if (fs::exists(fs::symlink_status(output, exists_ec))) {
+    if (!o.force) throw InputError(output, "already exists (pass --force to replace a folder solo synth wrote)");
+    requireReplaceableSynthFolder(output);
+  }
 
   RunReport report;
   report.command = "synth";
   report.seed = o.seed;
-  report.scene = o.output.string();
+  report.scene = output.string();
   report.versions = dependencyVersions();
   auto stage = [&](const std::string& name, double seconds) -> StageReport& {
     report.stages.push_back({});
@@ -112,8 +176,8 @@ int runSynth(const SynthOptions& o) {
 
   // Everything goes to a hidden sibling folder first, renamed into place at the end.
   clock = Stopwatch();
-  const fs::path parent = o.output.parent_path().empty() ? fs::path(".") : o.output.parent_path();
-  const fs::path staging = parent / ("." + o.output.filename().string() + ".tmp" + std::to_string(::getpid()));
+  const fs::path parent = output.parent_path().empty() ? fs::path(".") : output.parent_path();
+  const fs::path staging = parent / ("." + output.filename().string() + ".tmp" + std::to_string(::getpid()));
   fs::remove_all(staging);
   fs::create_directories(staging / "gt");
   fs::create_directories(staging / "est");
@@ -189,8 +253,8 @@ int runSynth(const SynthOptions& o) {
           {"label_jitter_px", noise.label_jitter_px},
           {"label_jitter_scale_px", noise.label_jitter_scale_px}}}};
     writeJson(staging / "synth.json", record);
-    if (fs::exists(o.output)) fs::remove_all(o.output);
-    fs::rename(staging, o.output);
+    if (fs::exists(fs::symlink_status(output, exists_ec))) requireReplaceableSynthFolder(output);  // still so
+    moveFolderIntoPlace(staging, output);
   } catch (...) {
     std::error_code ignore;
     fs::remove_all(staging, ignore);
@@ -198,7 +262,7 @@ int runSynth(const SynthOptions& o) {
   }
   stage("write", clock.seconds());
   report.total_seconds = total.seconds();
-  std::cout << reportSummary(report) << "scene: " << (o.output / "scene.json").string() << "\n";
+  std::cout << reportSummary(report) << "scene: " << (output / "scene.json").string() << "\n";
   return 0;
 }
 

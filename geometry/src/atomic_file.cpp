@@ -21,6 +21,11 @@ void writeAtomically(const fs::path& target, const std::function<void(const fs::
                                        std::to_string(counter++) + target.extension().string());
   try {
     write(temporary);
+  } catch (const InputError& e) {
+    fs::remove(temporary, ec);
+    // The user knows the target, not the hidden temporary: name the target.
+    if (e.file() == temporary) throw InputError(target, e.problem());
+    throw;
   } catch (...) {
     fs::remove(temporary, ec);
     throw;

@@ -1,6 +1,7 @@
 #include "solo/geometry/camera.h"
 
 #include "solo/geometry/error.h"
+#include "solo/geometry/input_file.h"
 
 #include <nlohmann/json.hpp>
 
@@ -32,8 +33,9 @@ void validateCamera(const PinholeCamera& c, const std::filesystem::path& source)
 }
 
 PinholeCamera readCityscapesCamera(const std::filesystem::path& file) {
+  requireRegularFile(file, "camera");
   std::ifstream in(file);
-  if (!in) throw InputError(file, std::filesystem::exists(file) ? "cannot open for reading" : "file not found");
+  if (!in) throw InputError(file, "cannot open for reading");
   nlohmann::json j;
   try {
     in >> j;

@@ -2,13 +2,19 @@
 
 #include "solo/geometry/atomic_file.h"
 #include "solo/geometry/error.h"
+#include "solo/geometry/image_limits.h"
+#include "solo/geometry/input_file.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -24,12 +30,7 @@ std::string lowerExtension(const fs::path& file) {
 
 bool isNpy(const fs::path& file) { return lowerExtension(file) == ".npy"; }
 
-void requireReadableFile(const fs::path& file) {
-  std::error_code ec;
-  if (!fs::exists(file, ec)) throw InputError(file, "file not found");
-  if (fs::is_directory(file, ec)) throw InputError(file, "is a folder, expected a file");
-  if (fs::file_size(file, ec) == 0) throw InputError(file, "file is empty");
-}
+std::uintmax_t requireReadableFile(const fs::path& file) { return requireNonEmptyRegularFile(file, "map or image"); }
 
 std::string pixelTypeName(int cv_depth) {
   switch (cv_depth) {
@@ -52,9 +53,34 @@ bool isIntegerType(const std::string& pixel_type) {
 struct NpyHeader {
   std::string descr;
   bool fortran_order = false;
-  std::vector<long long> shape;
+  std::vector<std::uint64_t> shape;
   std::size_t data_offset = 0;
 };
+
+// The entries of a shape tuple's text ("480, 640, 3" or "480, 640,"): decimal integers only,
+// at most 19 digits each so that none overflows 64 bits.
+std::vector<std::uint64_t> parseNpyShape(const fs::path& file, const std::string& text) {
+  std::vector<std::uint64_t> shape;
+  std::stringstream dims(text);
+  std::string item;
+  while (std::getline(dims, item, ',')) {
+    item.erase(std::remove(item.begin(), item.end(), ' '), item.end());
+    if (item.empty()) continue;
+    const bool digits = std::all_of(item.begin(), item.end(), [](unsigned char c) { return std::isdigit(c); });
+    if (!digits) throw InputError(file, "malformed .npy shape: \"" + item + "\" is not a whole number");
+    if (item.size() > 19) throw InputError(file, ".npy shape entry " + item + " is implausibly large");
+    shape.push_back(std::stoull(item));
+  }
+  return shape;
+}
+
+// Bytes of `shape` x `bytes_per_value`, or nothing when the product overflows 64 bits.
+std::optional<std::uint64_t> npyDataBytes(const std::vector<std::uint64_t>& shape, std::uint64_t bytes_per_value) {
+  std::uint64_t total = bytes_per_value;
+  for (std::uint64_t extent : shape)
+    if (__builtin_mul_overflow(total, extent, &total)) return std::nullopt;
+  return total;
+}
 
 NpyHeader parseNpyHeader(const fs::path& file, std::istream& in) {
   char magic[6];
@@ -99,14 +125,9 @@ NpyHeader parseNpyHeader(const fs::path& file, std::istream& in) {
   h.fortran_order = header.compare(f, 4, "True") == 0;
   std::size_t s = valueAfter("shape");
   if (s == std::string::npos || header[s] != '(') throw InputError(file, "malformed .npy shape");
-  std::size_t s_end = header.find(')', s);
-  std::stringstream dims(header.substr(s + 1, s_end - s - 1));
-  std::string item;
-  while (std::getline(dims, item, ',')) {
-    item.erase(std::remove(item.begin(), item.end(), ' '), item.end());
-    if (item.empty()) continue;
-    h.shape.push_back(std::stoll(item));
-  }
+  const std::size_t s_end = header.find(')', s);
+  if (s_end == std::string::npos) throw InputError(file, "malformed .npy shape: no closing parenthesis");
+  h.shape = parseNpyShape(file, header.substr(s + 1, s_end - s - 1));
   return h;
 }
 
@@ -140,10 +161,11 @@ ImageFileInfo probeNpy(const fs::path& file) {
   if (h.shape.size() < 2 || h.shape.size() > 3)
     throw InputError(file, ".npy array must have shape (H, W) or (H, W, C), found " +
                                std::to_string(h.shape.size()) + " dimensions");
+  requireImageSizeWithinLimit(file, h.shape[1], h.shape[0]);
   ImageFileInfo info;
   info.height = static_cast<int>(h.shape[0]);
   info.width = static_cast<int>(h.shape[1]);
-  info.channels = h.shape.size() == 3 ? static_cast<int>(h.shape[2]) : 1;
+  info.channels = h.shape.size() == 3 ? static_cast<int>(std::min<std::uint64_t>(h.shape[2], 1u << 30)) : 1;
   info.pixel_type = t.int64 ? "int64" : pixelTypeName(t.cv_depth);
   info.format = "npy";
   return info;
@@ -162,13 +184,49 @@ OIIO::TypeDesc oiioType(int cv_depth) {
   }
 }
 
+// The bytes before a PFM's pixel data (three lines: "PF" or "Pf", width and height, scale),
+// or nothing when the file does not start like a PFM.
+std::optional<std::uintmax_t> pfmHeaderBytes(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::string line;
+  std::uintmax_t bytes = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (!std::getline(in, line) || line.size() > 256) return std::nullopt;
+    if (k == 0 && line != "PF" && line != "Pf") return std::nullopt;
+    bytes += line.size() + 1;
+  }
+  return bytes;
+}
+
+// The header's size, from OpenImageIO's spec, checked before any pixel memory is taken: the
+// pixel limit, a bounded channel count, and for PFM (uncompressed) the bytes the file must hold.
+void requireDecodableSize(const fs::path& file, const OIIO::ImageSpec& spec, std::uintmax_t file_bytes) {
+  constexpr int kMaxChannels = 16;
+  if (spec.width <= 0 || spec.height <= 0 || spec.depth <= 0) throw InputError(file, "image has no pixels");
+  if (spec.depth > 1) throw InputError(file, "volume images are not supported");
+  if (spec.nchannels <= 0 || spec.nchannels > kMaxChannels)
+    throw InputError(file, "image has " + std::to_string(spec.nchannels) + " channels, at most " +
+                               std::to_string(kMaxChannels) + " are read");
+  requireImageSizeWithinLimit(file, static_cast<std::uint64_t>(spec.width), static_cast<std::uint64_t>(spec.height));
+  const std::optional<std::uintmax_t> header_bytes = pfmHeaderBytes(file);
+  if (!header_bytes) return;
+  const std::uintmax_t data_bytes = file_bytes > *header_bytes ? file_bytes - *header_bytes : 0;
+  const std::uint64_t need_bytes = static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height) *
+                                   static_cast<std::uint64_t>(spec.nchannels) * sizeof(float);
+  if (need_bytes > data_bytes)
+    throw InputError(file, "PFM header declares " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                               " pixels, " + std::to_string(need_bytes) + " bytes of data, but the file holds " +
+                               std::to_string(data_bytes) + " after its header (truncated or corrupt)");
+}
+
 std::unique_ptr<OIIO::ImageInput> openOiio(const fs::path& file) {
-  requireReadableFile(file);
+  const std::uintmax_t file_bytes = requireReadableFile(file);
   auto in = OIIO::ImageInput::open(file.string());
   if (!in) {
     std::string why = OIIO::geterror();
     throw InputError(file, "cannot read as an image" + (why.empty() ? std::string() : " (" + why + ")"));
   }
+  requireDecodableSize(file, in->spec(), file_bytes);
   return in;
 }
 
@@ -186,8 +244,6 @@ ImageFileInfo infoFromSpec(const OIIO::ImageInput& in) {
 // Reads channels [ch_begin, ch_end) in a cv type that keeps the stored values exactly.
 cv::Mat readOiioChannels(const fs::path& file, OIIO::ImageInput& in, int ch_begin, int ch_end) {
   const OIIO::ImageSpec& spec = in.spec();
-  if (spec.width <= 0 || spec.height <= 0) throw InputError(file, "image has no pixels");
-  if (spec.depth > 1) throw InputError(file, "volume images are not supported");
   const int channels = ch_end - ch_begin;
   int cv_depth = CV_32F;
   OIIO::TypeDesc want = OIIO::TypeDesc::FLOAT;
@@ -223,6 +279,75 @@ cv::Mat readNative(const fs::path& file, ImageFileInfo& info) {
 
 double maxCode(int cv_depth) { return cv_depth == CV_8U ? 255.0 : cv_depth == CV_16U ? 65535.0 : 1.0; }
 
+// An OpenImageIO output proxy over a FILE* that remembers the first failed write: OpenImageIO's
+// PNG writer ignores short writes (a full disk left a 0-byte PNG behind an exit code of 0), and
+// libjpeg ends the process on one. So every write reports its bytes as taken, the first failure
+// is kept, later writes are skipped, and finish() reports it. Not an IOFile: writers hand an
+// IOFile's FILE* straight to their library, past these checks.
+class CheckedOiioOutput : public OIIO::Filesystem::IOProxy {
+ public:
+  explicit CheckedOiioOutput(std::FILE* handle) : OIIO::Filesystem::IOProxy("", Write), handle_(handle) {}
+  const char* proxytype() const override { return "solo-checked-file"; }
+  size_t write(const void* buf, size_t size) override {
+    const size_t written = pwrite(buf, size, m_pos);
+    m_pos += static_cast<int64_t>(written);
+    return written;
+  }
+  size_t pwrite(const void* buf, size_t size, int64_t offset) override {
+    if (failure_ == 0) {
+      errno = 0;
+      if (::fseeko(handle_, offset, SEEK_SET) != 0 || std::fwrite(buf, 1, size, handle_) != size)
+        failure_ = errno != 0 ? errno : EIO;
+    }
+    end_ = std::max(end_, static_cast<size_t>(offset) + size);
+    return size;
+  }
+  size_t size() const override { return end_; }
+  void flush() const override { std::fflush(handle_); }
+  /// Flushes the buffered bytes; throws naming `target` when this or any earlier write failed.
+  void finish(const fs::path& target) {
+    if (failure_ == 0 && std::fflush(handle_) != 0) failure_ = errno;
+    if (failure_ == 0 && std::ferror(handle_)) failure_ = EIO;
+    if (failure_ != 0) throw InputError(target, std::string("write failed: ") + std::strerror(failure_));
+  }
+
+ private:
+  std::FILE* handle_;
+  size_t end_ = 0;
+  int failure_ = 0;
+};
+
+// A FILE* open for writing, closed on every path; close() reports the error of the final close.
+class OutputFileHandle {
+ public:
+  explicit OutputFileHandle(const fs::path& file) : handle_(std::fopen(file.c_str(), "wb")) {
+    if (!handle_) throw InputError(file, std::string("cannot open for writing: ") + std::strerror(errno));
+  }
+  ~OutputFileHandle() {
+    if (handle_) std::fclose(handle_);
+  }
+  OutputFileHandle(const OutputFileHandle&) = delete;
+  OutputFileHandle& operator=(const OutputFileHandle&) = delete;
+  std::FILE* get() const { return handle_; }
+  /// Closes the file; throws naming `target` when the close fails.
+  void close(const fs::path& target) {
+    const int result = std::fclose(handle_);
+    handle_ = nullptr;
+    if (result != 0) throw InputError(target, std::string("write failed on close: ") + std::strerror(errno));
+  }
+
+ private:
+  std::FILE* handle_;
+};
+
+std::string oiioError(const OIIO::ImageOutput& out) {
+  std::string why = out.geterror();
+  return why.empty() ? std::string("unknown error") : why;
+}
+
+// Writes `image` to `file` through OpenImageIO, checking every write and the final flush and
+// close: PNG and JPEG through a checked proxy (their writers do not check), the other formats
+// by OpenImageIO's own checks (its TIFF and OpenEXR writers report failed writes).
 void writeOiio(const fs::path& file, const cv::Mat& image) {
   cv::Mat contiguous = image.isContinuous() ? image : image.clone();
   OIIO::TypeDesc type = oiioType(image.depth());
@@ -234,9 +359,24 @@ void writeOiio(const fs::path& file, const cv::Mat& image) {
   // OpenImageIO stamps the write time unless DateTime is set: an empty one keeps outputs
   // byte-identical across runs, which seeded generation promises.
   spec.attribute("DateTime", "");
-  if (!out->open(file.string(), spec)) throw InputError(file, "cannot open for writing: " + out->geterror());
-  if (!out->write_image(type, contiguous.data)) throw InputError(file, "write failed: " + out->geterror());
-  if (!out->close()) throw InputError(file, "write failed on close: " + out->geterror());
+  std::optional<OutputFileHandle> handle;
+  std::unique_ptr<CheckedOiioOutput> proxy;
+  const std::string format = out->format_name();
+  if ((format == "png" || format == "jpeg") && out->supports("ioproxy")) {
+    handle.emplace(file);
+    proxy = std::make_unique<CheckedOiioOutput>(handle->get());
+    if (!out->set_ioproxy(proxy.get())) throw InputError(file, "cannot open for writing: " + oiioError(*out));
+  }
+  if (!out->open(file.string(), spec)) throw InputError(file, "cannot open for writing: " + oiioError(*out));
+  if (!out->write_image(type, contiguous.data)) throw InputError(file, "write failed: " + oiioError(*out));
+  if (!out->close()) throw InputError(file, "write failed on close: " + oiioError(*out));
+  if (proxy) {
+    proxy->finish(file);
+    handle->close(file);
+  }
+  // A writer that reported success but left nothing behind failed all the same.
+  std::error_code ec;
+  if (fs::file_size(file, ec) == 0 || ec) throw InputError(file, "write failed: nothing was written");
 }
 
 // PFM (Portable Float Map): OpenImageIO reads it but has no writer. Little endian,
@@ -251,6 +391,7 @@ void writePfmTo(const fs::path& file, const cv::Mat& image) {
   const std::size_t row_bytes = static_cast<std::size_t>(image.cols) * image.elemSize();
   for (int y = image.rows - 1; y >= 0; --y)
     out.write(reinterpret_cast<const char*>(image.ptr(y)), static_cast<std::streamsize>(row_bytes));
+  out.close();  // the last buffered bytes are written here: checked too
   if (!out) throw InputError(file, "write failed");
 }
 
@@ -276,15 +417,19 @@ cv::Mat readNpy(const fs::path& file) {
   if (h.fortran_order) throw InputError(file, "Fortran-ordered .npy arrays are not supported (save with C order)");
   if (h.shape.size() < 2 || h.shape.size() > 3)
     throw InputError(file, ".npy array must have shape (H, W) or (H, W, C)");
-  const long long rows = h.shape[0], cols = h.shape[1], channels = h.shape.size() == 3 ? h.shape[2] : 1;
-  if (rows <= 0 || cols <= 0 || channels <= 0 || channels > 4)
+  const std::uint64_t rows = h.shape[0], cols = h.shape[1], channels = h.shape.size() == 3 ? h.shape[2] : 1;
+  if (rows == 0 || cols == 0 || channels == 0 || channels > 4)
     throw InputError(file, ".npy shape is empty or has more than 4 channels");
+  requireImageSizeWithinLimit(file, cols, rows);
+  const std::optional<std::uint64_t> need_bytes = npyDataBytes(h.shape, t.bytes);
+  const std::uintmax_t file_bytes = fs::file_size(file);
+  const std::uintmax_t have = file_bytes > h.data_offset ? file_bytes - h.data_offset : 0;
+  if (!need_bytes || have < *need_bytes)
+    throw InputError(file, "truncated .npy data: the shape needs " +
+                               (need_bytes ? std::to_string(*need_bytes) : std::string("more than 2^64")) +
+                               " bytes, the file holds " + std::to_string(have));
   const std::size_t count = static_cast<std::size_t>(rows * cols * channels);
-  const std::size_t need = count * t.bytes;
-  const auto have = static_cast<std::size_t>(fs::file_size(file)) - h.data_offset;
-  if (have < need)
-    throw InputError(file, "truncated .npy data: expected " + std::to_string(need) + " bytes, found " +
-                               std::to_string(have));
+  const std::size_t need = static_cast<std::size_t>(*need_bytes);
   cv::Mat out(static_cast<int>(rows), static_cast<int>(cols), CV_MAKETYPE(t.cv_depth, static_cast<int>(channels)));
   if (!t.int64) {
     in.read(reinterpret_cast<char*>(out.data), static_cast<std::streamsize>(need));
@@ -329,6 +474,7 @@ void writeNpyTo(const fs::path& file, const cv::Mat& array) {
   cv::Mat contiguous = array.isContinuous() ? array : array.clone();
   out.write(reinterpret_cast<const char*>(contiguous.data),
             static_cast<std::streamsize>(contiguous.total() * contiguous.elemSize()));
+  out.close();  // the last buffered bytes are written here: checked too
   if (!out) throw InputError(file, "write failed");
 }
 

@@ -1,11 +1,15 @@
 #include "solo/geometry/atomic_file.h"
 #include "solo/geometry/error.h"
+#include "solo/geometry/input_file.h"
 #include "solo/geometry/triangle_mesh.h"
+
+#include "mesh_header_bounds.h"
 
 #include <CGAL/IO/polygon_soup_io.h>
 #include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
+#include <fstream>
 
 namespace fs = std::filesystem;
 
@@ -25,13 +29,22 @@ void requireMeshExtension(const fs::path& file) {
   if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
     throw InputError(file, "unknown mesh format \"" + ext + "\" (OFF, OBJ, PLY or STL)");
 }
+// Binary PLY and STL, ASCII OFF and OBJ, 17 significant digits in text.
+bool writeSoup(std::ofstream& out, const std::string& ext, const std::vector<Point>& points,
+               const std::vector<std::vector<std::size_t>>& polygons) {
+  const auto np = CGAL::parameters::stream_precision(17);
+  if (ext == ".ply" || ext == ".stl") {
+    CGAL::IO::set_mode(out, CGAL::IO::BINARY);
+    return ext == ".ply" ? CGAL::IO::write_PLY(out, points, polygons, np) : CGAL::IO::write_STL(out, points, polygons, np);
+  }
+  CGAL::IO::set_mode(out, CGAL::IO::ASCII);
+  return ext == ".obj" ? CGAL::IO::write_OBJ(out, points, polygons, np) : CGAL::IO::write_OFF(out, points, polygons, np);
+}
 }  // namespace
 
 TriangleMesh readMesh(const fs::path& file, MeshReadStats* stats) {
   requireMeshExtension(file);
-  std::error_code ec;
-  if (!fs::exists(file, ec)) throw InputError(file, "file not found");
-  if (fs::file_size(file, ec) == 0) throw InputError(file, "file is empty");
+  requireMeshHeaderFitsFile(file, requireNonEmptyRegularFile(file, "mesh"));
   std::vector<Point> points;
   std::vector<std::vector<std::size_t>> polygons;
   if (!CGAL::IO::read_polygon_soup(file.string(), points, polygons))
@@ -71,9 +84,11 @@ void writeMesh(const fs::path& file, const TriangleMesh& mesh) {
   polygons.reserve(mesh.faces.size());
   for (const auto& f : mesh.faces) polygons.push_back({f[0], f[1], f[2]});
   writeAtomically(file, [&](const fs::path& temporary) {
-    const bool ok = CGAL::IO::write_polygon_soup(temporary.string(), points, polygons,
-                                                 CGAL::parameters::use_binary_mode(true).stream_precision(17));
-    if (!ok) throw InputError(file, "mesh write failed");
+    std::ofstream out(temporary, std::ios::binary);
+    if (!out) throw InputError(file, "cannot open for writing");
+    const bool ok = writeSoup(out, extensionOf(file), points, polygons);
+    out.close();  // the last buffered bytes are written here: checked too
+    if (!ok || !out) throw InputError(file, "write failed");
   });
 }
 

@@ -1,6 +1,7 @@
 #include "solo/geometry/scene.h"
 
 #include "solo/geometry/error.h"
+#include "solo/geometry/input_file.h"
 
 #include <nlohmann/json.hpp>
 
@@ -68,8 +69,9 @@ std::string sizeText(int w, int h) { return std::to_string(w) + "x" + std::to_st
 SceneManifest readSceneManifest(const fs::path& manifest_file) {
   SceneManifest m;
   m.file = manifest_file;
+  requireRegularFile(manifest_file, "scene manifest");
   std::ifstream in(manifest_file);
-  if (!in) throw InputError(manifest_file, fs::exists(manifest_file) ? "cannot open for reading" : "file not found");
+  if (!in) throw InputError(manifest_file, "cannot open for reading");
   json j;
   try {
     in >> j;
@@ -285,6 +287,14 @@ StageReport describeScene(const Scene& s) {
   }
   for (const std::string& w : s.warnings) r.notes.push_back(w);
   return r;
+}
+
+std::vector<fs::path> manifestFiles(const SceneManifest& m) {
+  std::vector<fs::path> files = {m.file, m.image, m.depth};
+  for (const auto* optional : {&m.normals, &m.albedo, &m.roughness, &m.instances, &m.labels, &m.lights,
+                               &m.light_groups, &m.ground_truth, &m.camera_file})
+    if (*optional) files.push_back(**optional);
+  return files;
 }
 
 fs::path groundTruthManifest(const fs::path& manifest_file) {

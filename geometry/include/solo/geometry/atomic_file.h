@@ -9,7 +9,9 @@ namespace solo {
 /// Calls write(temporary_path) with a temporary path in the folder of `target` that
 /// keeps the target's extension (so format-by-extension writers still work), then
 /// renames it onto `target`. If write throws, the temporary file is removed and the
-/// exception propagates; `target` is then untouched. Creates missing parent folders.
+/// exception propagates (an InputError naming the temporary is renamed to name `target`);
+/// `target` is then untouched. Creates missing parent folders. `write` must check its writes
+/// and its final close: what it returns from is moved into place.
 void writeAtomically(const std::filesystem::path& target,
                      const std::function<void(const std::filesystem::path& temporary)>& write);
 

@@ -44,6 +44,10 @@ struct SceneManifest {
 /// unknown keys are kept as warnings.
 SceneManifest readSceneManifest(const std::filesystem::path& manifest_file);
 
+/// The manifest file itself and every file it names (maps, camera file, ground-truth manifest),
+/// resolved against the manifest's folder: the inputs an output must never overwrite.
+std::vector<std::filesystem::path> manifestFiles(const SceneManifest& manifest);
+
 /// The "ground_truth" manifest a synthetic scene names, resolved against its folder. Throws
 /// InputError naming the manifest when it cannot be read or names none (not a synthetic scene).
 std::filesystem::path groundTruthManifest(const std::filesystem::path& manifest_file);

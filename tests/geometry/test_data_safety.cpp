@@ -1,0 +1,369 @@
+// Readers that take only regular files and check sizes before memory, writers that check every
+// write, and output paths that can never be an input or the working folder.
+
+#include <solo/geometry/atomic_file.h>
+#include <solo/geometry/camera.h>
+#include <solo/geometry/error.h>
+#include <solo/geometry/image_io.h>
+#include <solo/geometry/image_limits.h>
+#include <solo/geometry/input_file.h>
+#include <solo/geometry/output_path.h>
+#include <solo/geometry/scene.h>
+#include <solo/geometry/triangle_mesh.h>
+
+#include "test_support.h"
+
+#include <chrono>
+#include <csignal>
+#include <functional>
+#include <sys/resource.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using solo::test::TempDir;
+using solo::test::writeText;
+
+namespace {
+
+std::string messageOf(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const solo::InputError& e) {
+    return e.what();
+  }
+  return "(no InputError)";
+}
+
+/// A .npy file of float32 with the given shape text and `data_bytes` zero bytes of data.
+std::string npyFile(const std::string& shape, std::size_t data_bytes) {
+  const std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': " + shape + ", }\n";
+  return std::string("\x93NUMPY\x01\x00", 8) + static_cast<char>(header.size() & 0xff) +
+         static_cast<char>(header.size() >> 8) + header + std::string(data_bytes, '\0');
+}
+
+/// While alive, files this process writes may not grow past `bytes`: a larger write fails
+/// with EFBIG as a write to a full disk fails with ENOSPC (SIGXFSZ ignored meanwhile).
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(rlim_t bytes) {
+    ::getrlimit(RLIMIT_FSIZE, &saved_);
+    previous_handler_ = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit limited = saved_;
+    limited.rlim_cur = bytes;
+    ::setrlimit(RLIMIT_FSIZE, &limited);
+  }
+  ~FileSizeLimit() {
+    ::setrlimit(RLIMIT_FSIZE, &saved_);
+    std::signal(SIGXFSZ, previous_handler_);
+  }
+
+ private:
+  rlimit saved_{};
+  void (*previous_handler_)(int) = nullptr;
+};
+
+// A 32-bit CRC (the one PNG chunks carry), bit by bit: polynomial 0xEDB88320, reflected.
+std::uint32_t crc32(const std::string& bytes) {
+  std::uint32_t crc = 0xFFFFFFFFu;
+  for (unsigned char byte : bytes) {
+    crc ^= byte;
+    for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  return ~crc;
+}
+
+std::string bigEndian32(std::uint32_t value) {
+  return {static_cast<char>(value >> 24), static_cast<char>(value >> 16), static_cast<char>(value >> 8),
+          static_cast<char>(value)};
+}
+
+std::string pngChunk(const std::string& type, const std::string& data) {
+  return bigEndian32(static_cast<std::uint32_t>(data.size())) + type + data + bigEndian32(crc32(type + data));
+}
+
+/// A PNG whose header declares width x height 8-bit grey pixels, with an empty zlib stream as
+/// its only pixel data.
+std::string pngHeaderOnly(std::uint32_t width, std::uint32_t height) {
+  const std::string ihdr = bigEndian32(width) + bigEndian32(height) + std::string("\x08\x00\x00\x00\x00", 5);
+  const std::string empty_zlib("\x78\x9c\x03\x00\x00\x00\x00\x01", 8);
+  return std::string("\x89PNG\r\n\x1a\n", 8) + pngChunk("IHDR", ihdr) + pngChunk("IDAT", empty_zlib) +
+         pngChunk("IEND", "");
+}
+
+double secondsOf(const std::function<void()>& action) {
+  const auto start = std::chrono::steady_clock::now();
+  action();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------ regular files only
+
+TEST(RegularFile, ReturnsTheSizeOfARegularFileAndOfALinkToIt) {
+  TempDir dir;
+  writeText(dir / "a.json", "{}\n");
+  fs::create_symlink(dir / "a.json", dir / "link.json");
+  EXPECT_EQ(solo::requireRegularFile(dir / "a.json", "scene manifest"), 3u);
+  EXPECT_EQ(solo::requireRegularFile(dir / "link.json", "scene manifest"), 3u);
+  writeText(dir / "empty.png", "");
+  EXPECT_EQ(solo::requireRegularFile(dir / "empty.png", "map"), 0u);
+  EXPECT_EQ(messageOf([&] { solo::requireNonEmptyRegularFile(dir / "empty.png", "map"); }),
+            (dir / "empty.png").string() + ": file is empty");
+}
+
+TEST(RegularFile, RefusesEveryOtherKindByName) {
+  TempDir dir;
+  ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
+  fs::create_directories(dir / "folder");
+  fs::create_symlink(dir / "b", dir / "a");
+  fs::create_symlink(dir / "a", dir / "b");
+  fs::create_symlink(dir / "nowhere", dir / "dangling");
+  const int socket_fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  const std::string socket_path = (dir / "sock").string();
+  ASSERT_LT(socket_path.size(), sizeof(address.sun_path));
+  std::copy(socket_path.begin(), socket_path.end(), address.sun_path);
+  ASSERT_EQ(::bind(socket_fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)), 0);
+
+  const auto expect = [&](const fs::path& file, const std::string& problem) {
+    EXPECT_EQ(messageOf([&] { solo::requireRegularFile(file, "depth map"); }), file.string() + ": " + problem);
+  };
+  expect("/dev/zero", "is a character device, expected a depth map file");
+  expect("/dev/urandom", "is a character device, expected a depth map file");
+  expect(dir / "fifo", "is a FIFO (named pipe), expected a depth map file");
+  expect(dir / "sock", "is a socket, expected a depth map file");
+  expect(dir / "folder", "is a folder, expected a depth map file");
+  expect(dir / "a", "symbolic link loop (too many levels of links), expected a depth map file");
+  expect(dir / "dangling", "file not found (broken symbolic link to " + (dir / "nowhere").string() + ")");
+  expect(dir / "missing", "file not found");
+  ::close(socket_fd);
+}
+
+TEST(RegularFile, EveryReaderUsesIt) {
+  TempDir dir;
+  ASSERT_EQ(::mkfifo((dir / "fifo.png").c_str(), 0600), 0);
+  ASSERT_EQ(::mkfifo((dir / "fifo.npy").c_str(), 0600), 0);
+  ASSERT_EQ(::mkfifo((dir / "fifo.off").c_str(), 0600), 0);
+  ASSERT_EQ(::mkfifo((dir / "fifo.json").c_str(), 0600), 0);
+  const std::string fifo = ": is a FIFO (named pipe), expected a ";
+  EXPECT_EQ(messageOf([&] { solo::readColorImage(dir / "fifo.png"); }), (dir / "fifo.png").string() + fifo + "map or image file");
+  EXPECT_EQ(messageOf([&] { solo::readNpy(dir / "fifo.npy"); }), (dir / "fifo.npy").string() + fifo + "map or image file");
+  EXPECT_EQ(messageOf([&] { solo::probeImage(dir / "fifo.png"); }), (dir / "fifo.png").string() + fifo + "map or image file");
+  EXPECT_EQ(messageOf([&] { solo::readMesh(dir / "fifo.off"); }), (dir / "fifo.off").string() + fifo + "mesh file");
+  EXPECT_EQ(messageOf([&] { solo::loadScene(dir / "fifo.json"); }),
+            (dir / "fifo.json").string() + fifo + "scene manifest file");
+  EXPECT_EQ(messageOf([&] { solo::readCityscapesCamera(dir / "fifo.json"); }),
+            (dir / "fifo.json").string() + fifo + "camera file");
+  fs::create_directories(dir / "folder.json");
+  EXPECT_EQ(messageOf([&] { solo::loadScene(dir / "folder.json"); }),
+            (dir / "folder.json").string() + ": is a folder, expected a scene manifest file");
+}
+
+// ------------------------------------------------------------------ output paths
+
+TEST(OutputPath, TrailingSeparatorsAndDotsAreDropped) {
+  EXPECT_EQ(solo::withoutTrailingSeparators("out/"), fs::path("out"));
+  EXPECT_EQ(solo::withoutTrailingSeparators("out//"), fs::path("out"));
+  EXPECT_EQ(solo::withoutTrailingSeparators("a/b/../c/./"), fs::path("a/c"));
+  EXPECT_EQ(solo::withoutTrailingSeparators("./"), fs::path("."));
+  EXPECT_EQ(solo::withoutTrailingSeparators("/"), fs::path("/"));
+}
+
+TEST(OutputPath, TheWorkingFolderItsParentsAndTheRootAreRefused) {
+  TempDir dir;
+  fs::create_directories(dir / "work/sub");
+  const fs::path saved = fs::current_path();
+  fs::current_path(dir / "work");
+  for (const fs::path& folder : {fs::path("."), fs::path("./"), fs::path(".."), fs::path("sub/.."),
+                                 dir / "work", dir.path(), fs::path("/")})
+    EXPECT_NE(messageOf([&] { solo::refuseWorkingFolderOrParent(folder, "-o"); })
+                  .find("-o: \"" + folder.string() + "\" is the working folder or one of its parents"),
+              std::string::npos)
+        << folder;
+  EXPECT_EQ(messageOf([&] { solo::refuseWorkingFolderOrParent("sub", "-o"); }), "(no InputError)");
+  EXPECT_EQ(messageOf([&] { solo::refuseWorkingFolderOrParent("new_folder", "-o"); }), "(no InputError)");
+  EXPECT_EQ(messageOf([&] { solo::refuseWorkingFolderOrParent(dir / "work2", "-o"); }), "(no InputError)")
+      << "a sibling whose name starts like the working folder's is not a parent";
+  fs::current_path(saved);
+}
+
+TEST(OutputPath, AnOutputIsAnInputUnderAnySpelling) {
+  TempDir dir;
+  fs::create_directories(dir / "s/est");
+  writeText(dir / "s/day.png", "day");
+  fs::create_symlink(dir / "s", dir / "alias");
+  const std::vector<fs::path> inputs = {dir / "s/scene.json", dir / "s/day.png"};
+  EXPECT_TRUE(solo::samePath(dir / "s/est/../day.png", dir / "s/day.png"));
+  EXPECT_TRUE(solo::samePath(dir / "alias/day.png", dir / "s/day.png"));
+  EXPECT_TRUE(solo::samePath(dir / "s/./scene.json", dir / "s/scene.json")) << "neither exists: compared as paths";
+  EXPECT_FALSE(solo::samePath(dir / "s/night.png", dir / "s/day.png"));
+  EXPECT_EQ(messageOf([&] { solo::refuseOutputThatIsAnInput(dir / "alias/day.png", inputs, "-o"); }),
+            "-o: \"" + (dir / "alias/day.png").string() + "\" is an input of this run (" +
+                (dir / "s/day.png").string() + "); writing it would overwrite that input");
+  EXPECT_EQ(messageOf([&] { solo::refuseOutputThatIsAnInput(dir / "s/night.png", inputs, "-o"); }), "(no InputError)");
+}
+
+// ------------------------------------------------------------------ sizes before memory
+
+TEST(ImageLimit, DefaultIsTwoToThe28PixelsAndTheVariableOverridesIt) {
+  ::unsetenv("SOLO_MAX_IMAGE_PIXELS");
+  EXPECT_EQ(solo::maxImagePixels(), 268435456u);
+  EXPECT_EQ(messageOf([] { solo::requireImageSizeWithinLimit("a.png", 16384, 16384); }), "(no InputError)");
+  EXPECT_EQ(messageOf([] { solo::requireImageSizeWithinLimit("a.png", 16384, 16385); }),
+            "a.png: image is 16384x16385 pixels, more than the limit of 268435456 pixels (raise it with the "
+            "environment variable SOLO_MAX_IMAGE_PIXELS)");
+  EXPECT_NE(messageOf([] { solo::requireImageSizeWithinLimit("a.png", 1ull << 40, 1ull << 40); }).find("more than"),
+            std::string::npos)
+      << "the product overflows 64 bits";
+  ::setenv("SOLO_MAX_IMAGE_PIXELS", "100", 1);
+  EXPECT_EQ(solo::maxImagePixels(), 100u);
+  EXPECT_EQ(messageOf([] { solo::requireImageSizeWithinLimit("a.png", 10, 10); }), "(no InputError)");
+  EXPECT_NE(messageOf([] { solo::requireImageSizeWithinLimit("a.png", 10, 11); }).find("limit of 100 pixels"),
+            std::string::npos);
+  for (const char* bad : {"0", "-5", "1e9", "12abc", ""}) {
+    ::setenv("SOLO_MAX_IMAGE_PIXELS", bad, 1);
+    EXPECT_EQ(messageOf([] { solo::maxImagePixels(); }),
+              std::string("SOLO_MAX_IMAGE_PIXELS: expected a positive whole number of pixels, got \"") + bad + "\"");
+  }
+  ::unsetenv("SOLO_MAX_IMAGE_PIXELS");
+}
+
+TEST(ImageLimit, NpyShapesAreParsedStrictlyAndCheckedAgainstTheFileSize) {
+  TempDir dir;
+  struct Case {
+    std::string shape;
+    std::size_t data_bytes;
+    std::string problem;
+  };
+  const std::vector<Case> cases = {
+      {"('a', 3)", 0, "malformed .npy shape: \"'a'\" is not a whole number"},
+      {"(12345678901234567890, 3)", 0, ".npy shape entry 12345678901234567890 is implausibly large"},
+      {"(3037000500, 3037000500)", 0, "image is 3037000500x3037000500 pixels, more than the limit of 268435456 "
+                                      "pixels (raise it with the environment variable SOLO_MAX_IMAGE_PIXELS)"},
+      {"(4611686018427387905, 1)", 4, "image is 1x4611686018427387905 pixels, more than the limit of 268435456 "
+                                      "pixels (raise it with the environment variable SOLO_MAX_IMAGE_PIXELS)"},
+      {"(-2, 3)", 0, "malformed .npy shape: \"-2\" is not a whole number"},
+      {"(2, 3)", 23, "truncated .npy data: the shape needs 24 bytes, the file holds 23"},
+  };
+  for (const Case& c : cases) {
+    writeText(dir / "a.npy", npyFile(c.shape, c.data_bytes));
+    EXPECT_EQ(messageOf([&] { solo::readNpy(dir / "a.npy"); }), (dir / "a.npy").string() + ": " + c.problem)
+        << c.shape;
+  }
+  // The same shape with its 24 bytes is read.
+  writeText(dir / "a.npy", npyFile("(2, 3)", 24));
+  EXPECT_EQ(solo::readNpy(dir / "a.npy").size(), cv::Size(3, 2));
+  // With the pixel limit raised out of the way, a side must still fit an OpenCV image and the
+  // byte count 64 bits: (2^31 - 1)^2 pixels x 4 channels x 4 bytes is about 2^66.
+  ::setenv("SOLO_MAX_IMAGE_PIXELS", "9223372036854775807", 1);
+  writeText(dir / "a.npy", npyFile("(1, 4611686018427387904, 2)", 4));
+  EXPECT_NE(messageOf([&] { solo::readNpy(dir / "a.npy"); }).find("image is 4611686018427387904x1 pixels"),
+            std::string::npos);
+  writeText(dir / "a.npy", npyFile("(2147483647, 2147483647, 4)", 4));
+  EXPECT_EQ(messageOf([&] { solo::readNpy(dir / "a.npy"); }),
+            (dir / "a.npy").string() + ": truncated .npy data: the shape needs more than 2^64 bytes, the file holds 4");
+  ::unsetenv("SOLO_MAX_IMAGE_PIXELS");
+}
+
+TEST(ImageLimit, PfmAndPngHeadersAreCheckedBeforeDecoding) {
+  TempDir dir;
+  writeText(dir / "huge.pfm", "Pf\n100000 100000\n-1.0\n" + std::string(64, '\0'));
+  writeText(dir / "short.pfm", "Pf\n4 4\n-1.0\n" + std::string(63, '\0'));
+  writeText(dir / "bomb.png", pngHeaderOnly(20000, 20000));
+  const double seconds = secondsOf([&] {
+    EXPECT_EQ(messageOf([&] { solo::readDepth(dir / "huge.pfm", 0); }),
+              (dir / "huge.pfm").string() + ": image is 100000x100000 pixels, more than the limit of 268435456 "
+                                           "pixels (raise it with the environment variable SOLO_MAX_IMAGE_PIXELS)");
+    EXPECT_EQ(messageOf([&] { solo::readDepth(dir / "short.pfm", 0); }),
+              (dir / "short.pfm").string() +
+                  ": PFM header declares 4x4 pixels, 64 bytes of data, but the file holds 63 after its header "
+                  "(truncated or corrupt)");
+    EXPECT_NE(messageOf([&] { solo::readColorImage(dir / "bomb.png"); }).find("bomb.png: image is 20000x20000 pixels"),
+              std::string::npos);
+  });
+  EXPECT_LT(seconds, 2.0);
+}
+
+TEST(MeshHeader, CountsBeyondTheFileSizeAreRefusedBeforeReading) {
+  TempDir dir;
+  writeText(dir / "faces.off", "OFF\n3 1000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  writeText(dir / "vertices.off", "# comment\nOFF # keyword\n# counts next\n20 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  writeText(dir / "vertices.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 100000000\nproperty float x\n"
+                                  "property float y\nproperty float z\nelement face 1\nproperty list uchar int "
+                                  "vertex_indices\nend_header\n" + std::string(64, '\0'));
+  writeText(dir / "ascii.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                               "property float z\nelement face 4000000000000000000\nproperty list uchar int "
+                               "vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  const auto expect = [&](const std::string& name, const std::string& problem) {
+    EXPECT_EQ(messageOf([&] { solo::readMesh(dir / name); }),
+              (dir / name).string() + ": cannot read as a mesh: " + problem);
+  };
+  const double seconds = secondsOf([&] {
+    expect("faces.off", "header declares 1000000000 faces, more than the file's 45 bytes can hold (truncated or "
+                        "corrupt header)");
+    // 20 ASCII vertices need at least 20 x 6 bytes ("0 0 0\n"), more than the file's.
+    expect("vertices.off", "header declares 20 vertices, more than the file's " +
+                               std::to_string(fs::file_size(dir / "vertices.off")) +
+                               " bytes can hold (truncated or corrupt header)");
+    expect("vertices.ply", "header declares 100000000 vertex, more than the file's " +
+                               std::to_string(fs::file_size(dir / "vertices.ply")) +
+                               " bytes can hold (truncated or corrupt header)");
+    expect("ascii.ply", "header declares 4000000000000000000 face, more than the file's " +
+                            std::to_string(fs::file_size(dir / "ascii.ply")) +
+                            " bytes can hold (truncated or corrupt header)");
+  });
+  EXPECT_LT(seconds, 2.0);
+  // Headers that fit are read as before.
+  writeText(dir / "ok.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(solo::readMesh(dir / "ok.off").faces.size(), 1u);
+}
+
+// ------------------------------------------------------------------ writers on a full disk
+
+TEST(CheckedWrites, EveryWriterFailsOnAFullDiskNamingTheTargetAndLeavesNothing) {
+  TempDir dir;
+  cv::Mat noise(64, 64, CV_16UC3);
+  cv::randu(noise, 0, 65535);
+  cv::Mat noise8;
+  noise.convertTo(noise8, CV_8UC3, 1.0 / 257.0);
+  cv::Mat depth(64, 64, CV_32F);
+  cv::randu(depth, 1.0f, 50.0f);
+  cv::Mat normals(64, 64, CV_32FC3);
+  cv::randu(normals, -1.0f, 1.0f);
+  solo::TriangleMesh mesh;
+  for (int i = 0; i < 300; ++i) {
+    mesh.vertices.emplace_back(i, i * 0.5, i * 0.25);
+    if (i >= 2) mesh.faces.push_back({static_cast<std::uint32_t>(i - 2), static_cast<std::uint32_t>(i - 1),
+                                      static_cast<std::uint32_t>(i)});
+  }
+  const std::vector<std::pair<std::string, std::function<void(const fs::path&)>>> writers = {
+      {"a.png", [&](const fs::path& f) { solo::writeImage(f, noise); }},
+      {"a.jpg", [&](const fs::path& f) { solo::writeImage(f, noise8); }},
+      {"a.tif", [&](const fs::path& f) { solo::writeImage(f, noise); }},
+      {"a.exr", [&](const fs::path& f) { solo::writeImage(f, depth); }},
+      {"a.pfm", [&](const fs::path& f) { solo::writeImage(f, depth); }},
+      {"a.npy", [&](const fs::path& f) { solo::writeImage(f, depth); }},
+      {"d.png", [&](const fs::path& f) { solo::writeDepth(f, depth); }},
+      {"n.png", [&](const fs::path& f) { solo::writeNormals(f, normals); }},
+      {"m.ply", [&](const fs::path& f) { solo::writeMesh(f, mesh); }},
+      {"m.off", [&](const fs::path& f) { solo::writeMesh(f, mesh); }},
+      {"t.json", [&](const fs::path& f) { solo::writeTextAtomically(f, std::string(5000, 'x')); }},
+  };
+  for (const auto& [name, write] : writers) {
+    std::string message;
+    {
+      const FileSizeLimit full_disk(1024);
+      message = messageOf([&] { write(dir / name); });
+    }
+    EXPECT_EQ(message.rfind((dir / name).string() + ": write failed", 0), 0u) << name << ": " << message;
+    EXPECT_TRUE(solo::test::listFolder(dir.path()).empty()) << name << ": no file and no temporary left";
+    write(dir / name);  // with room the same write succeeds
+    EXPECT_GT(fs::file_size(dir / name), 1024u) << name;
+    fs::remove(dir / name);
+  }
+}
