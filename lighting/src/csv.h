@@ -4,6 +4,7 @@
 // are empty or start with '#' are comments.
 
 #include <solo/geometry/error.h>
+#include <solo/geometry/input_file.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -56,7 +57,7 @@ inline std::string quote(const std::string& field) {
 
 /// Every non-comment line of a file. Throws InputError when the file cannot be opened.
 inline std::vector<Line> readLines(const std::filesystem::path& file) {
-  if (!std::filesystem::exists(file)) throw InputError(file, "file not found");
+  requireRegularFile(file, "table");
   std::ifstream in(file);
   if (!in) throw InputError(file, "cannot be opened");
   std::vector<Line> lines;

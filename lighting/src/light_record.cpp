@@ -2,6 +2,7 @@
 
 #include <solo/geometry/atomic_file.h>
 #include <solo/geometry/error.h>
+#include <solo/geometry/input_file.h>
 
 #include <nlohmann/json.hpp>
 
@@ -278,7 +279,7 @@ LightRecord recordFromJson(const json& j, const std::filesystem::path& file) {
 }  // namespace
 
 LightRecord readLightRecord(const std::filesystem::path& file) {
-  if (!std::filesystem::exists(file)) throw InputError(file, "file not found");
+  requireRegularFile(file, "light record");
   std::ifstream in(file);
   json j;
   try {

@@ -3,6 +3,7 @@
 #include "solo/lighting/colorimetry.h"
 
 #include <solo/geometry/error.h>
+#include <solo/geometry/input_file.h>
 
 #include <OpenImageIO/imageio.h>
 
@@ -72,7 +73,7 @@ std::vector<float> readRows(OIIO::ImageInput& input, const std::filesystem::path
 }  // namespace
 
 GrayCardMeasurement measureGrayCard(const std::filesystem::path& raw_file, const cv::Rect& region) {
-  if (!std::filesystem::exists(raw_file)) throw InputError(raw_file, "file not found");
+  requireRegularFile(raw_file, "raw image");
   const QuietOpenImageIo quiet;
   auto xyz_input = openRaw(raw_file, false);
   const OIIO::ImageSpec& spec = xyz_input->spec();

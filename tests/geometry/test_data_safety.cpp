@@ -10,6 +10,8 @@
 #include <solo/geometry/output_path.h>
 #include <solo/geometry/scene.h>
 #include <solo/geometry/triangle_mesh.h>
+#include <solo/lighting/illuminant_table.h>
+#include <solo/lighting/light_record.h>
 
 #include "test_support.h"
 
@@ -159,9 +161,13 @@ TEST(RegularFile, EveryReaderUsesIt) {
             (dir / "fifo.json").string() + fifo + "scene manifest file");
   EXPECT_EQ(messageOf([&] { solo::readCityscapesCamera(dir / "fifo.json"); }),
             (dir / "fifo.json").string() + fifo + "camera file");
+  EXPECT_EQ(messageOf([&] { solo::readLightRecord(dir / "fifo.json"); }),
+            (dir / "fifo.json").string() + fifo + "light record file");
   fs::create_directories(dir / "folder.json");
   EXPECT_EQ(messageOf([&] { solo::loadScene(dir / "folder.json"); }),
             (dir / "folder.json").string() + ": is a folder, expected a scene manifest file");
+  EXPECT_EQ(messageOf([&] { solo::readIlluminantTable("/dev/zero"); }),
+            "/dev/zero: is a character device, expected a table file");
 }
 
 // ------------------------------------------------------------------ output paths
