@@ -106,8 +106,8 @@ std::pair<double, int> timed(Run&& run, int repeats, double cheap_s) {
 
 /// Error of a render's luminance Y against a reference over the pixels that show no emitter in
 /// either image (lamps are exact in both and would flatter the figure). The main figure clips
-/// both at the reference's sensor white (what `solo night`'s auto exposure maps to white), as
-/// the final image does: without clipping, one firefly (a rare path to a lamp of 10^3 cd/m^2)
+/// both at a white metered on the reference (its street's 95th percentile at 80 %,
+/// meteredSensorWhite), as a final image clips: without clipping, one firefly (a rare path to a lamp of 10^3 cd/m^2)
 /// in either image outweighs every other pixel and the error stays near 1 whatever the samples.
 struct RadianceError {
   double white = 0;                    ///< the clipping level, render units (cd/m^2)

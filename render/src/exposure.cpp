@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -74,6 +76,75 @@ double meteredSensorWhite(const cv::Mat& radiance_xyz, const cv::Mat& emitter_co
   const auto k = static_cast<std::ptrdiff_t>(percentile * static_cast<double>(y.size() - 1));
   std::nth_element(y.begin(), y.begin() + k, y.end());
   return std::max(1e-6, static_cast<double>(y[static_cast<std::size_t>(k)]) / level);
+}
+
+namespace {
+
+void checkNightCamera(const NightCameraOptions& o) {
+  const auto positive = [](double v) { return v > 0 && std::isfinite(v); };
+  if (!(positive(o.f_number) && positive(o.min_shutter_s) && positive(o.max_shutter_s) && positive(o.min_iso) &&
+        positive(o.max_iso) && positive(o.meter_constant) && positive(o.saturation_exposure) &&
+        positive(o.lens_factor)))
+    throw std::invalid_argument("night camera: every setting must be positive and finite");
+  if (o.min_shutter_s > o.max_shutter_s) throw std::invalid_argument("night camera: min shutter above max shutter");
+  if (o.min_iso > o.max_iso) throw std::invalid_argument("night camera: min ISO above max ISO");
+}
+
+}  // namespace
+
+NightCameraExposure nightCameraExposure(double metered_cd_m2, const NightCameraOptions& o) {
+  checkNightCamera(o);
+  if (!(metered_cd_m2 >= 0 && std::isfinite(metered_cd_m2)))
+    throw std::invalid_argument("night camera: the metered luminance must be finite and >= 0");
+  const double n2 = o.f_number * o.f_number;
+  // Exposure product S t the meter asks for; infinite when nothing is lit.
+  const double wanted_st = metered_cd_m2 > 0 ? o.meter_constant * n2 / metered_cd_m2
+                                             : std::numeric_limits<double>::infinity();
+  NightCameraExposure e;
+  e.metered_cd_m2 = metered_cd_m2;
+  e.camera.f_number = o.f_number;
+  e.camera.iso = o.min_iso;
+  e.camera.shutter_s = std::clamp(wanted_st / o.min_iso, o.min_shutter_s, o.max_shutter_s);
+  if (wanted_st / o.min_iso > o.max_shutter_s)
+    e.camera.iso = std::min(o.max_iso, wanted_st / o.max_shutter_s);
+  const double st = e.camera.iso * e.camera.shutter_s;
+  e.at_exposure_limit = st < wanted_st * (1 - 1e-12);
+  e.at_bright_limit = st > wanted_st * (1 + 1e-12);
+  e.white_cd_m2 = o.saturation_exposure * n2 / (o.lens_factor * st);
+  return e;
+}
+
+NightCameraExposure nightCameraForWhite(double white_cd_m2, const NightCameraOptions& o) {
+  checkNightCamera(o);
+  if (!(white_cd_m2 > 0 && std::isfinite(white_cd_m2)))
+    throw std::invalid_argument("night camera: the white luminance must be positive and finite");
+  const double n2 = o.f_number * o.f_number;
+  const double iso = o.saturation_exposure * n2 / (o.lens_factor * white_cd_m2 * o.max_shutter_s);
+  NightCameraExposure e;
+  e.camera = {std::clamp(iso, o.min_iso, o.max_iso), o.max_shutter_s, o.f_number};
+  e.white_cd_m2 = white_cd_m2;
+  e.at_exposure_limit = iso > o.max_iso;
+  e.at_bright_limit = iso < o.min_iso;
+  return e;
+}
+
+double meteredMeanLuminance(const cv::Mat& radiance_xyz, const cv::Mat& emitter_coverage) {
+  if (radiance_xyz.type() != CV_32FC3 || emitter_coverage.type() != CV_32F ||
+      radiance_xyz.size() != emitter_coverage.size())
+    throw std::invalid_argument("meteredMeanLuminance: expects a CV_32FC3 radiance and a CV_32F emitter coverage of "
+                                "the same size");
+  double sum = 0;
+  std::int64_t count = 0;
+  for (int r = 0; r < radiance_xyz.rows; ++r) {
+    const cv::Vec3f* radiance = radiance_xyz.ptr<cv::Vec3f>(r);
+    const float* coverage = emitter_coverage.ptr<float>(r);
+    for (int c = 0; c < radiance_xyz.cols; ++c)
+      if (coverage[c] == 0.f && std::isfinite(radiance[c][1])) {
+        sum += std::max(0.f, radiance[c][1]);
+        ++count;
+      }
+  }
+  return count > 0 ? sum / static_cast<double>(count) : 0.0;
 }
 
 }  // namespace solo

@@ -177,10 +177,14 @@ StageReport applyFogGlare(cv::Mat& linear_xyz, const FogGlareOptions& options) {
   CV_Assert(linear_xyz.type() == CV_32FC3);
   if (!(options.threshold >= 0 && std::isfinite(options.threshold)))
     throw std::invalid_argument("glare threshold must be a finite luminance >= 0");
+  if (!(options.scatter_fraction > 0 && options.scatter_fraction <= 1))
+    throw std::invalid_argument("glare scatter fraction must be in (0, 1]");
   const cv::Mat kernel = fogGlowKernel(options.size);
   const int n = kernel.rows, r = n / 2 - 1;
   const float threshold = static_cast<float>(options.threshold);
-  report.add("kernel_size", static_cast<std::int64_t>(n), "px").add("threshold", options.threshold);
+  report.add("kernel_size", static_cast<std::int64_t>(n), "px")
+      .add("threshold", options.threshold)
+      .add("scatter_fraction", options.scatter_fraction);
 
   // First pass, parallel over rows: per row the bright pixel count, its luminance above
   // the threshold, and per tile column (tile side = kernel size) the x extent.
@@ -190,7 +194,8 @@ StageReport applyFogGlare(cv::Mat& linear_xyz, const FogGlareOptions& options) {
   std::vector<double> row_energy(linear_xyz.rows, 0.0);
   std::vector<int> row_tile_x0(static_cast<std::size_t>(linear_xyz.rows) * tiles_x, 1 << 30);
   std::vector<int> row_tile_x1(static_cast<std::size_t>(linear_xyz.rows) * tiles_x, -1);
-  auto contribution = [threshold](const cv::Vec3f& p) { return p * ((p[1] - threshold) / p[1]); };
+  const float scatter = static_cast<float>(options.scatter_fraction);
+  auto contribution = [threshold, scatter](const cv::Vec3f& p) { return p * (scatter * (p[1] - threshold) / p[1]); };
   cv::parallel_for_(cv::Range(0, linear_xyz.rows), [&](const cv::Range& rows) {
     for (int y = rows.start; y < rows.end; ++y) {
       const cv::Vec3f* src = linear_xyz.ptr<cv::Vec3f>(y);
@@ -292,7 +297,7 @@ StageReport applyFogGlare(cv::Mat& linear_xyz, const FogGlareOptions& options) {
   report.add("estimated_direct_ms", direct_ns * 1e-6, "ms");
   report.add("estimated_fft_ms", fft_ns * 1e-6, "ms");
   report.add("estimated_tiled_fft_ms", tiled_ns * 1e-6, "ms");
-  report.add("glow_in_frame_fraction", bright_energy > 0 ? glow_energy / bright_energy : 0.0);
+  report.add("glow_in_frame_fraction", bright_energy > 0 ? glow_energy / (options.scatter_fraction * bright_energy) : 0.0);
   report.seconds = clock.seconds();
   return report;
 }

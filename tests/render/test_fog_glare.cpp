@@ -72,6 +72,32 @@ TEST(FogGlare, SinglePixelGlowIsTheKernelAndPreservesEnergyByEveryMethod) {
   }
 }
 
+TEST(FogGlare, ScatterFractionScalesTheGlowOfTheExcessOnly) {
+  // A pixel of Y = 101 over a threshold of 1 with a 2 % scatter: the glow carries 0.02 x 100 = 2
+  // in luminance, spread as the kernel; the pixel's own value stays (it clips anyway).
+  const cv::Mat k = solo::fogGlowKernel(7);
+  for (const solo::GlareMethod m : {solo::GlareMethod::Direct, solo::GlareMethod::Fft}) {
+    cv::Mat image = cv::Mat::zeros(200, 220, CV_32FC3);
+    image.at<cv::Vec3f>(100, 110) = {101.f, 101.f, 101.f};
+    solo::FogGlareOptions options;
+    options.size = 7;
+    options.threshold = 1.0;
+    options.scatter_fraction = 0.02;
+    options.method = m;
+    const solo::StageReport report = solo::applyFogGlare(image, options);
+    EXPECT_NEAR(cv::sum(image)[1], 101.0 + 2.0, 1e-3);
+    EXPECT_NEAR(image.at<cv::Vec3f>(100 + 9, 110 - 4)[1], 2.0 * k.at<float>(64 + 9, 64 - 4), 1e-6);
+    EXPECT_NEAR(metric(report, "glow_in_frame_fraction"), 1.0, 1e-4);
+    EXPECT_DOUBLE_EQ(metric(report, "scatter_fraction"), 0.02);
+  }
+  cv::Mat image = cv::Mat::zeros(8, 8, CV_32FC3);
+  solo::FogGlareOptions options;
+  options.scatter_fraction = 0;
+  EXPECT_THROW(solo::applyFogGlare(image, options), std::invalid_argument);
+  options.scatter_fraction = 1.5;
+  EXPECT_THROW(solo::applyFogGlare(image, options), std::invalid_argument);
+}
+
 TEST(FogGlare, MethodsAgreeOnScatteredSpotsNearTheBorders) {
   std::mt19937_64 rng(7);
   std::uniform_int_distribution<int> ys(0, 399), xs(0, 899);

@@ -55,6 +55,53 @@ inline constexpr int kMeteringSamplesPerPixel = 32;
 double meteredSensorWhite(const cv::Mat& radiance_xyz, const cv::Mat& emitter_coverage, double percentile = 0.95,
                           double level = 0.8);
 
+/// The camera whose auto exposure `solo night` imitates: a fixed-aperture video camera (a
+/// dashcam or action camera of the kind night driving datasets are recorded with) that meters
+/// the frame's mean luminance to the reflected-light meter's grey and, at night, runs out of
+/// exposure: the shutter cannot stay open longer than one video frame and the gain stops at the
+/// highest ISO. From then on a darker street gives a darker image, and lamps clip. Sources of
+/// each constant: docs/post-processing.md, "Night camera".
+struct NightCameraOptions {
+  double f_number = 2.8;               ///< fixed aperture (action cameras: f/2.8)
+  double min_shutter_s = 1.0 / 8000.0;  ///< shortest exposure time, seconds
+  double max_shutter_s = 1.0 / 30.0;    ///< longest: one frame of 30 fps video, seconds
+  double min_iso = 100;
+  double max_iso = 3200;                ///< highest gain (the top of the noise calibration)
+  double meter_constant = 12.5;         ///< reflected-light meter calibration K (ISO 2720), cd s / m^2
+  double saturation_exposure = 78;      ///< H_sat * S in lux s: ISO 12232 saturation-based speed
+  double lens_factor = 0.65;            ///< q of ISO 12232: image-plane illuminance = q L / N^2
+};
+
+/// What the camera chose for one frame.
+struct NightCameraExposure {
+  CameraExposure camera;        ///< ISO, shutter time and f-number
+  double metered_cd_m2 = 0;     ///< the mean luminance the meter read
+  double white_cd_m2 = 0;       ///< scene luminance that reaches sensor white at these settings
+  bool at_exposure_limit = false;  ///< longest shutter and highest ISO: the frame is under-exposed
+  bool at_bright_limit = false;    ///< shortest shutter and lowest ISO: the frame is over-exposed
+};
+
+/// The auto exposure of the camera above for a frame whose metered mean luminance is
+/// `metered_cd_m2`: the exposure that puts it at the meter's grey, N^2 / t = L S / K, reached
+/// by lengthening the shutter at the lowest ISO first and then raising the ISO, each within its
+/// limits. White is the saturation luminance of ISO 12232, L_white = H_sat N^2 / (q S t); at the
+/// meter's grey a frame's mean sits at K q / H_sat = 10.4 % of white. A metered luminance of 0
+/// (nothing lit) takes the exposure limit. Throws std::invalid_argument for a negative or
+/// non-finite luminance and for options that are not positive, finite and ordered.
+NightCameraExposure nightCameraExposure(double metered_cd_m2, const NightCameraOptions& options = {});
+
+/// The settings of the same camera that expose `white_cd_m2` (> 0) to sensor white: the longest
+/// shutter and the ISO that L_white = H_sat N^2 / (q S t) asks for, clamped to the ISO range
+/// (white_cd_m2 is kept even where the ISO clamps: the flags are set instead). For a fixed
+/// exposure (`solo night --sensor-white`): the sensor noise follows this ISO.
+NightCameraExposure nightCameraForWhite(double white_cd_m2, const NightCameraOptions& options = {});
+
+/// The meter of that camera: the mean luminance (cd/m^2, the Y of a CV_32FC3 XYZ render) of the
+/// pixels where no sample saw an emitter (`emitter_coverage` 0; CV_32F, the same size), as a
+/// camera's matrix metering discounts the light sources in the frame. 0 when there is no such
+/// pixel. Throws std::invalid_argument on other types or sizes.
+double meteredMeanLuminance(const cv::Mat& radiance_xyz, const cv::Mat& emitter_coverage);
+
 /// Multiplies every channel of a linear CV_32FC3 image by exposureScale(options) in place.
 /// Report "exposure": stops, scale; skipped (image untouched) when the stops are 0.
 StageReport applyExposure(cv::Mat& linear_image, const ExposureOptions& options);

@@ -25,6 +25,10 @@ struct FogGlareOptions {
   /// Luminance (Y, linear render units, before exposure) a pixel must exceed to glow; it
   /// contributes its colour scaled by (Y - threshold) / Y. The reference uses 0.
   double threshold = 0;
+  /// Share of each bright pixel's luminance above the threshold that the glow carries (the rest
+  /// stays in the pixel, which clips anyway). 1 is the reference (the glow adds the full excess
+  /// again); a lens scatters a few per cent into its veiling glare (docs/post-processing.md).
+  double scatter_fraction = 1;
   GlareMethod method = GlareMethod::Automatic;
 };
 
@@ -38,7 +42,8 @@ cv::Mat fogGlowKernel(int size);
 /// Adds the glow in place to a CV_32FC3 linear XYZ image (luminance = channel 1) whose
 /// values are finite and non-negative. Report "glare": bright pixel count, method, FFT
 /// sizes, the share of the bright energy that lands inside the frame; skipped when no
-/// pixel exceeds the threshold. Throws std::invalid_argument for a negative threshold.
+/// pixel exceeds the threshold. Throws std::invalid_argument for a negative threshold or a
+/// scatter fraction outside (0, 1].
 StageReport applyFogGlare(cv::Mat& linear_xyz, const FogGlareOptions& options);
 
 }  // namespace solo
