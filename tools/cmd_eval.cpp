@@ -1,7 +1,9 @@
 // `solo eval depth|normals|mesh|scene`: reads the inputs, computes the metrics (solo_geometry) and
 // writes one record three ways: a table on the terminal, JSON on stdout (--json), and a row
 // appended to a CSV file (--csv). Every record of a command has the same fields in the same
-// order, so rows of a sweep line up under one header.
+// order, so rows of a sweep line up under one header. `solo eval night` measures several
+// images at once (solo_render's night statistics): a table row, a JSON object and a CSV row
+// per image.
 
 #include "commands.h"
 
@@ -11,12 +13,14 @@
 #include <solo/geometry/image_io.h>
 #include <solo/geometry/mesh_metrics.h>
 #include <solo/geometry/normal_metrics.h>
+#include <solo/geometry/quantile.h>
 #include <solo/geometry/report.h>
 #include <solo/geometry/scene.h>
 #include <solo/geometry/spurious_faces.h>
 #include <solo/geometry/triangle_mesh.h>
 #include <solo/geometry/upsample_maps.h>
 #include <solo/geometry/view_mesh_distances.h>
+#include <solo/render/night_statistics.h>
 
 #include <opencv2/imgproc.hpp>
 
@@ -25,6 +29,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cstdio>
@@ -642,6 +647,229 @@ int runEvalScene(const EvalSceneOptions& o) {
   append(r.metrics, viewMeshFields(view));
   r.seconds = clock.seconds();
   return emit(r, o.output);
+}
+
+}  // namespace solo::tools
+
+// ---- eval night -----------------------------------------------------------------------
+
+namespace solo::tools {
+namespace {
+
+/// The images a --reference names: a folder's image files (sorted), or a list file's lines
+/// (paths relative to the list's folder; empty lines and # comments skipped).
+std::vector<fs::path> referenceImages(const fs::path& reference) {
+  std::error_code ec;
+  std::vector<fs::path> images;
+  if (fs::is_directory(reference, ec)) {
+    for (const fs::directory_entry& entry : fs::directory_iterator(reference)) {
+      std::string ext = entry.path().extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+      if (entry.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff"))
+        images.push_back(entry.path());
+    }
+    std::sort(images.begin(), images.end());
+    if (images.empty()) throw InputError(reference, "no image (.png, .jpg, .jpeg, .tif, .tiff) in the folder");
+    return images;
+  }
+  std::ifstream in(reference);
+  if (!in) throw InputError(reference, "reference not found (a folder of images or a list file)");
+  std::string line;
+  while (std::getline(in, line)) {
+    const std::size_t begin = line.find_first_not_of(" \t\r");
+    if (begin == std::string::npos || line[begin] == '#') continue;
+    const std::size_t end = line.find_last_not_of(" \t\r");
+    const fs::path path = line.substr(begin, end - begin + 1);
+    images.push_back(path.is_absolute() ? path : reference.parent_path() / path);
+  }
+  if (images.empty()) throw InputError(reference, "the list names no image");
+  return images;
+}
+
+NightStatistics nightStatisticsOf(const fs::path& image) {
+  return computeNightStatistics(readColorImage(image), ChannelOrder::Rgb);
+}
+
+/// Median (NumPy's rule), minimum and maximum of one statistic over the reference images
+/// that have it; none when none has it.
+struct ReferenceRange {
+  std::optional<double> median, min, max;
+};
+
+std::vector<ReferenceRange> referenceRanges(const std::vector<NightStatistics>& reference) {
+  std::vector<ReferenceRange> ranges(namedNightStatistics(NightStatistics{}).size());
+  for (std::size_t k = 0; k < ranges.size(); ++k) {
+    std::vector<double> values;
+    for (const NightStatistics& s : reference)
+      if (const std::optional<double> v = namedNightStatistics(s)[k].value) values.push_back(*v);
+    if (values.empty()) continue;
+    ranges[k].min = *std::min_element(values.begin(), values.end());
+    ranges[k].max = *std::max_element(values.begin(), values.end());
+    ranges[k].median = sampleQuantile(values, 0.5);
+  }
+  return ranges;
+}
+
+/// The keys of the statistics of `s` outside the reference's [min, max].
+std::vector<std::string> outsideRange(const NightStatistics& s, const std::vector<ReferenceRange>& ranges) {
+  std::vector<std::string> outside;
+  const std::vector<NamedNightStatistic> named = namedNightStatistics(s);
+  for (std::size_t k = 0; k < named.size(); ++k)
+    if (named[k].value && ranges[k].min && (*named[k].value < *ranges[k].min || *named[k].value > *ranges[k].max))
+      outside.push_back(named[k].key);
+  return outside;
+}
+
+std::string joined(const std::vector<std::string>& words, const std::string& separator) {
+  std::string out;
+  for (const std::string& w : words) out += (out.empty() ? "" : separator) + w;
+  return out;
+}
+
+/// One table cell of a statistic: luma to 0.1, shares to 1e-4, sigmas to 0.01, "-" for none.
+std::string nightCell(const std::string& key, const std::optional<double>& value) {
+  if (!value) return "-";
+  const char* format = "%.1f";
+  if (key == "clipped" || key == "bright") format = "%.4f";
+  else if (key == "noise" || key == "chroma_noise") format = "%.2f";
+  else if (key == "cast_cb" || key == "cast_cr") format = "%+.1f";
+  else if (key == "halo_blobs") format = "%.0f";
+  char text[32];
+  std::snprintf(text, sizeof text, format, *value);
+  return text;
+}
+
+struct NightRun {
+  std::vector<fs::path> files;
+  std::vector<NightStatistics> statistics;
+  std::optional<fs::path> reference;
+  std::vector<fs::path> reference_files;
+  std::vector<ReferenceRange> ranges;  ///< empty without a reference
+  double seconds = 0;
+};
+
+std::string nightTable(const NightRun& run) {
+  const std::vector<NamedNightStatistic> keys = namedNightStatistics(NightStatistics{});
+  const auto row = [&keys](std::string label, const std::vector<std::optional<double>>& values, const std::string& tail) {
+    if (label.size() > 28) label = "..." + label.substr(label.size() - 25);
+    char cell[48];
+    std::snprintf(cell, sizeof cell, "  %-28s", label.c_str());
+    std::string line = cell;
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+      std::snprintf(cell, sizeof cell, " %*s", k + 1 == keys.size() ? 5 : 8, nightCell(keys[k].key, values[k]).c_str());
+      line += cell;
+    }
+    return line + (tail.empty() ? "" : "  " + tail) + "\n";
+  };
+  std::string out = "solo eval night\n";
+  char cell[48];
+  std::snprintf(cell, sizeof cell, "  %-28s", "image");
+  out += cell;
+  const char* const headers[] = {"mean", "p50", "p90", "p99", "clipped", "bright", "noise", "chroma", "cast_cb", "cast_cr", "halo_px", "blobs"};
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    std::snprintf(cell, sizeof cell, " %*s", k + 1 == keys.size() ? 5 : 8, headers[k]);
+    out += cell;
+  }
+  out += run.ranges.empty() ? "\n" : "  outside reference range\n";
+  for (std::size_t i = 0; i < run.files.size(); ++i) {
+    std::vector<std::optional<double>> values;
+    for (const NamedNightStatistic& n : namedNightStatistics(run.statistics[i])) values.push_back(n.value);
+    const std::string outside = run.ranges.empty() ? "" : joined(outsideRange(run.statistics[i], run.ranges), ", ");
+    out += row(run.files[i].filename().string(), values, run.ranges.empty() ? "" : (outside.empty() ? "none" : outside));
+  }
+  if (!run.ranges.empty()) {
+    out += "  reference: " + run.reference->string() + " (" + std::to_string(run.reference_files.size()) + " images)\n";
+    for (const auto& [label, field] : {std::pair{"  median", &ReferenceRange::median},
+                                       std::pair{"  min", &ReferenceRange::min}, std::pair{"  max", &ReferenceRange::max}}) {
+      std::vector<std::optional<double>> values;
+      for (const ReferenceRange& r : run.ranges) values.push_back(r.*field);
+      out += row(label, values, "");
+    }
+  }
+  char time[64];
+  std::snprintf(time, sizeof time, "  time %.3f s\n", run.seconds);
+  return out + time;
+}
+
+nlohmann::ordered_json optionalJson(const std::optional<double>& v) { return v ? nlohmann::ordered_json(*v) : nullptr; }
+
+/// A statistic in JSON: the blob count as an integer, the others as numbers, none as null.
+nlohmann::ordered_json statisticJson(const std::string& key, const std::optional<double>& v) {
+  if (key == "halo_blobs" && v) return static_cast<std::int64_t>(*v);
+  return optionalJson(v);
+}
+
+std::string nightJson(const NightRun& run) {
+  nlohmann::ordered_json j;
+  j["command"] = "eval night";
+  j["reference"] = nullptr;
+  if (!run.ranges.empty()) {
+    auto& ref = j["reference"] = nlohmann::ordered_json::object();
+    ref["source"] = run.reference->string();
+    ref["images"] = nlohmann::ordered_json::array();
+    for (const fs::path& f : run.reference_files) ref["images"].push_back(f.string());
+    const std::vector<NamedNightStatistic> keys = namedNightStatistics(NightStatistics{});
+    for (const auto& [name, field] : {std::pair{"median", &ReferenceRange::median},
+                                      std::pair{"min", &ReferenceRange::min}, std::pair{"max", &ReferenceRange::max}}) {
+      auto& object = ref[name] = nlohmann::ordered_json::object();
+      for (std::size_t k = 0; k < keys.size(); ++k) object[keys[k].key] = statisticJson(keys[k].key, run.ranges[k].*field);
+    }
+  }
+  j["images"] = nlohmann::ordered_json::array();
+  for (std::size_t i = 0; i < run.files.size(); ++i) {
+    const NightStatistics& s = run.statistics[i];
+    nlohmann::ordered_json image;
+    image["file"] = run.files[i].string();
+    image["width_px"] = s.source_width_px;
+    image["height_px"] = s.source_height_px;
+    auto& statistics = image["statistics"] = nlohmann::ordered_json::object();
+    for (const NamedNightStatistic& n : namedNightStatistics(s)) statistics[n.key] = statisticJson(n.key, n.value);
+    image["outside_reference"] = run.ranges.empty() ? nlohmann::ordered_json(nullptr)
+                                                    : nlohmann::ordered_json(outsideRange(s, run.ranges));
+    j["images"].push_back(image);
+  }
+  j["seconds"] = run.seconds;
+  return j.dump(2) + "\n";
+}
+
+/// One CSV row per image: file, size, the statistics, the reference and what is outside it.
+EvalRecord nightCsvRecord(const NightRun& run, std::size_t i) {
+  const NightStatistics& s = run.statistics[i];
+  EvalRecord r;
+  r.command = "eval night";
+  r.inputs = {{"file", "image", run.files[i].string(), ""},
+              {"width_px", "width", std::int64_t{s.source_width_px}, "px"},
+              {"height_px", "height", std::int64_t{s.source_height_px}, "px"}};
+  r.options = {{"reference", "reference", optionalPath(run.reference), ""}};
+  for (const NamedNightStatistic& n : namedNightStatistics(s))
+    r.metrics.push_back({n.key, n.key, optionalNumber(n.value), n.unit});
+  r.metrics.push_back({"outside_reference", "outside reference",
+                       run.ranges.empty() ? FieldValue(std::monostate{})
+                                          : FieldValue(joined(outsideRange(s, run.ranges), ";")),
+                       ""});
+  return r;
+}
+
+}  // namespace
+
+int runEvalNight(const EvalNightOptions& o) {
+  Stopwatch clock;
+  if (o.images.empty()) throw InputError("IMAGE", "no image to evaluate");
+  NightRun run;
+  run.files = o.images;
+  for (const fs::path& file : run.files) run.statistics.push_back(nightStatisticsOf(file));
+  if (o.reference) {
+    run.reference = o.reference;
+    run.reference_files = referenceImages(*o.reference);
+    std::vector<NightStatistics> reference;
+    for (const fs::path& file : run.reference_files) reference.push_back(nightStatisticsOf(file));
+    run.ranges = referenceRanges(reference);
+  }
+  run.seconds = clock.seconds();
+  if (o.output.csv)
+    for (std::size_t i = 0; i < run.files.size(); ++i) appendCsvRow(*o.output.csv, nightCsvRecord(run, i));
+  std::cout << (o.output.json ? nightJson(run) : nightTable(run));
+  return 0;
 }
 
 }  // namespace solo::tools

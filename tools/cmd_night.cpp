@@ -15,6 +15,7 @@
 #include <solo/lighting/light_overlay.h>
 #include <solo/render/colour_encoding.h>
 #include <solo/render/contact_sheet.h>
+#include <solo/render/night_statistics.h>
 
 #include <opencv2/imgproc.hpp>
 
@@ -127,6 +128,10 @@ int runNight(const NightOptions& o) {
   const PostProcessResult& developed = result.developed;
 
   writePostOutput(o.output, developed.encoded, developed.linear_rgb, o.sixteen_bit);
+  // realism: the statistics of the written image (docs/evaluation.md, `solo eval night`).
+  Stopwatch realism_clock;
+  const NightStatistics realism = computeNightStatistics(developed.encoded, ChannelOrder::Rgb);
+  report.stages.push_back(nightStatisticsReport(realism, realism_clock.seconds()));
   if (o.render_exr) {
     writeImage(*o.render_exr, rendered.radiance);
     const fs::path stem = fs::path(*o.render_exr).replace_extension();

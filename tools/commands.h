@@ -149,6 +149,15 @@ struct EvalSceneOptions {
 };
 int runEvalScene(const EvalSceneOptions& options);
 
+/// `solo eval night`: the realism statistics of night images (docs/evaluation.md), and with a
+/// reference set its median and range per statistic and what falls outside it.
+struct EvalNightOptions {
+  std::vector<std::filesystem::path> images;       ///< 8/16-bit sRGB PNG, JPEG or TIFF
+  std::optional<std::filesystem::path> reference;  ///< a folder of images, or a list file (one path a line)
+  EvalOutputOptions output;
+};
+int runEvalNight(const EvalNightOptions& options);
+
 struct SynthOptions {
   std::filesystem::path output;  ///< folder to create
   std::uint64_t seed = 1;

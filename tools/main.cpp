@@ -123,7 +123,8 @@ int main(int argc, char** argv) {
   convert_cmd->add_option("--output-scale", convert.output_scale_m_per_unit, "Metres per unit of a 16-bit PNG depth output")
       ->capture_default_str();
 
-  CLI::App* eval_cmd = app.add_subcommand("eval", "Evaluate depth, normals, a mesh or a synthetic scene (docs/evaluation.md)");
+  CLI::App* eval_cmd = app.add_subcommand(
+      "eval", "Evaluate depth, normals, a mesh, a synthetic scene or night images (docs/evaluation.md)");
   eval_cmd->require_subcommand(1);
   const auto add_eval_output = [](CLI::App* cmd, EvalOutputOptions& output) {
     cmd->add_flag("--json", output.json, "Print the results as JSON on stdout instead of a table");
@@ -178,6 +179,15 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{100000000}));
   eval_scene_cmd->add_option("--seed", eval_scene.seed, "Seed of the surface sampling")->capture_default_str();
   add_eval_output(eval_scene_cmd, eval_scene.output);
+
+  EvalNightOptions eval_night;
+  CLI::App* eval_night_cmd = eval_cmd->add_subcommand(
+      "night", "Realism statistics of night images: luma, clipping, noise, colour cast, halo radius");
+  eval_night_cmd->add_option("images", eval_night.images, "Images (8/16-bit sRGB PNG, JPEG, TIFF)")->required();
+  eval_night_cmd->add_option("--reference", eval_night.reference,
+                             "Reference set (a folder of images or a list file): its median and range, and what "
+                             "falls outside it");
+  add_eval_output(eval_night_cmd, eval_night.output);
 
   SynthOptions synth;
   std::string synth_size = "960x540";
@@ -379,6 +389,7 @@ int main(int argc, char** argv) {
     if (eval_normals_cmd->parsed()) return runEvalNormals(eval_normals);
     if (eval_mesh_cmd->parsed()) return runEvalMesh(eval_mesh);
     if (eval_scene_cmd->parsed()) return runEvalScene(eval_scene);
+    if (eval_night_cmd->parsed()) return runEvalNight(eval_night);
     if (synth_cmd->parsed()) return runSynth(synth);
     if (depth_cmd->parsed()) return runDepth(depth);
     if (mesh_from_depth_cmd->parsed()) return runMeshFromDepth(mesh_from_depth);

@@ -174,42 +174,43 @@ std::optional<double> meanWhere(const cv::Mat& values, const cv::Mat& mask) {
   return cv::mean(values, mask)[0];
 }
 
-/// Sum and pixel count of the luma in each ring k = 0..reach around `centre`.
-void ringProfile(const cv::Mat& luma, cv::Point2d centre, int reach, std::vector<double>& sum,
-                 std::vector<std::int64_t>& count) {
-  sum.assign(static_cast<std::size_t>(reach) + 1, 0.0);
-  count.assign(static_cast<std::size_t>(reach) + 1, 0);
-  const int x0 = std::max(0, static_cast<int>(std::floor(centre.x - reach - 1)));
-  const int x1 = std::min(luma.cols - 1, static_cast<int>(std::ceil(centre.x + reach + 1)));
-  const int y0 = std::max(0, static_cast<int>(std::floor(centre.y - reach - 1)));
-  const int y1 = std::min(luma.rows - 1, static_cast<int>(std::ceil(centre.y + reach + 1)));
-  for (int y = y0; y <= y1; ++y) {
-    const double* row = luma.ptr<double>(y);
-    for (int x = x0; x <= x1; ++x) {
-      const auto ring = static_cast<std::size_t>(std::floor(std::hypot(x - centre.x, y - centre.y) + 0.5));
-      if (ring > static_cast<std::size_t>(reach)) continue;
-      sum[ring] += row[x];
-      ++count[ring];
-    }
-  }
+/// Adds the luma of row y's pixels x0..x1 (clipped to the image) to sum and count.
+void addRowSpan(const cv::Mat& luma, int y, int x0, int x1, double& sum, std::int64_t& count) {
+  x0 = std::max(x0, 0);
+  x1 = std::min(x1, luma.cols - 1);
+  const double* row = luma.ptr<double>(y);
+  for (int x = x0; x <= x1; ++x) sum += row[x];
+  count += std::max(0, x1 - x0 + 1);
 }
 
-/// The crossing radius of a ring profile, or none when it stays above `edge_luma`.
-std::optional<double> profileCrossing(const std::vector<double>& sum, const std::vector<std::int64_t>& count,
-                                      double edge_luma) {
-  std::optional<std::pair<double, double>> previous;  // (ring, mean) of the last non-empty ring
-  for (std::size_t k = 0; k < sum.size(); ++k) {
-    if (count[k] == 0) continue;
-    const double mean = sum[k] / static_cast<double>(count[k]);
-    const double ring = static_cast<double>(k);
-    if (mean <= edge_luma) {
-      if (!previous) return ring;
-      const auto [previous_ring, previous_mean] = *previous;
-      return previous_ring + (previous_mean - edge_luma) / (previous_mean - mean) * (ring - previous_ring);
+/// Mean luma of ring k around `centre`: the pixels at distance d with k - 0.5 <= d < k + 0.5
+/// (d < 0.5 for k = 0), walked row by row as the spans between the two circles; none when
+/// the ring has no pixel inside the image.
+std::optional<double> ringMean(const cv::Mat& luma, cv::Point2d centre, int k) {
+  const double outer = k + 0.5, inner = k - 0.5;
+  double sum = 0;
+  std::int64_t count = 0;
+  const int y0 = std::max(0, static_cast<int>(std::floor(centre.y - outer)));
+  const int y1 = std::min(luma.rows - 1, static_cast<int>(std::ceil(centre.y + outer)));
+  for (int y = y0; y <= y1; ++y) {
+    const double dy2 = (y - centre.y) * (y - centre.y);
+    if (dy2 >= outer * outer) continue;
+    // Pixels x with (x - cx)^2 + dy^2 < outer^2, minus those with (x - cx)^2 + dy^2 < inner^2.
+    const double half_outer = std::sqrt(outer * outer - dy2);
+    const int left = static_cast<int>(std::floor(centre.x - half_outer)) + 1;
+    const int right = static_cast<int>(std::ceil(centre.x + half_outer)) - 1;
+    if (k == 0 || dy2 >= inner * inner) {
+      addRowSpan(luma, y, left, right, sum, count);
+      continue;
     }
-    previous = {ring, mean};
+    const double half_inner = std::sqrt(inner * inner - dy2);
+    const int hole_left = static_cast<int>(std::floor(centre.x - half_inner)) + 1;
+    const int hole_right = static_cast<int>(std::ceil(centre.x + half_inner)) - 1;
+    addRowSpan(luma, y, left, std::min(right, hole_left - 1), sum, count);
+    addRowSpan(luma, y, std::max(left, hole_right + 1), right, sum, count);
   }
-  return std::nullopt;
+  if (count == 0) return std::nullopt;
+  return sum / static_cast<double>(count);
 }
 
 /// The halo radii of the clipped blobs of at least options.halo_min_blob_px pixels.
@@ -242,13 +243,18 @@ cv::Mat resizeBilinearLikePil(const cv::Mat& rgb8, cv::Size size) {
 
 double haloRadiusPx(const cv::Mat& luma, cv::Point2d centre, double edge_luma, int max_radius_px) {
   if (luma.type() != CV_64F) throw std::invalid_argument("halo radius: luma must be CV_64F");
-  std::vector<double> sum;
-  std::vector<std::int64_t> count;
-  for (int reach = std::min(16, max_radius_px);; reach = std::min(2 * reach, max_radius_px)) {
-    ringProfile(luma, centre, reach, sum, count);
-    if (const std::optional<double> radius = profileCrossing(sum, count, edge_luma)) return *radius;
-    if (reach >= max_radius_px) return max_radius_px;
+  std::optional<std::pair<double, double>> previous;  // (ring, mean) of the last non-empty ring
+  for (int k = 0; k <= max_radius_px; ++k) {
+    const std::optional<double> mean = ringMean(luma, centre, k);
+    if (!mean) continue;
+    if (*mean <= edge_luma) {
+      if (!previous) return k;
+      const auto [previous_ring, previous_mean] = *previous;
+      return previous_ring + (previous_mean - edge_luma) / (previous_mean - *mean) * (k - previous_ring);
+    }
+    previous = {k, *mean};
   }
+  return max_radius_px;
 }
 
 NightStatistics computeNightStatistics(const cv::Mat& image, ChannelOrder order, const NightStatisticsOptions& options) {

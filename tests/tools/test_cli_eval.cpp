@@ -432,3 +432,92 @@ TEST(CliEvalScene, ErrorsNameTheFile) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("none.exr"), std::string::npos) << r.output;
 }
+
+namespace {
+
+/// A flat 960x540 8-bit RGB image of one grey level: luma = level, noise 0, no clipping.
+void writeGrey(const std::filesystem::path& file, int level) {
+  solo::writeImage(file, cv::Mat(540, 960, CV_8UC3, cv::Scalar::all(level)));
+}
+
+std::vector<std::string> strings(const nlohmann::json& array) { return array.get<std::vector<std::string>>(); }
+
+}  // namespace
+
+TEST(CliEvalNight, ReferenceRangeFlagsTheOutlierOnly) {
+  TempDir dir;
+  std::filesystem::create_directories(dir / "ref");
+  for (const int level : {30, 40, 50}) writeGrey(dir / "ref" / ("grey" + std::to_string(level) + ".png"), level);
+  writeGrey(dir / "bright.png", 120);
+  writeGrey(dir / "typical.png", 40);
+  const auto r = runSolo("eval night " + quoted(dir / "bright.png") + " " + quoted(dir / "typical.png") +
+                         " --reference " + quoted(dir / "ref") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["command"], "eval night");
+  EXPECT_EQ(j["reference"]["images"].size(), 3u);
+  EXPECT_NEAR(j["reference"]["median"]["mean"].get<double>(), 40.0, 1e-9);
+  EXPECT_NEAR(j["reference"]["min"]["mean"].get<double>(), 30.0, 1e-9);
+  EXPECT_NEAR(j["reference"]["max"]["p99"].get<double>(), 50.0, 1e-9);
+  EXPECT_TRUE(j["reference"]["median"]["halo_radius_px"].is_null()) << "no clipped blob in the reference";
+  const auto& bright = j["images"][0];
+  EXPECT_NEAR(bright["statistics"]["mean"].get<double>(), 120.0, 1e-9);
+  EXPECT_EQ(bright["statistics"]["noise"].get<double>(), 0.0);
+  EXPECT_TRUE(bright["statistics"]["cast_cb"].is_null()) << "no pixel with 20 < Y < 80";
+  EXPECT_EQ(strings(bright["outside_reference"]), (std::vector<std::string>{"mean", "p50", "p90", "p99"}));
+  EXPECT_TRUE(j["images"][1]["outside_reference"].empty());
+
+  // The same reference as a list file (paths relative to it), the table and a CSV row per image.
+  solo::test::writeText(dir / "ref.txt", "# reference\nref/grey30.png\n\nref/grey40.png\nref/grey50.png\n");
+  const auto table = runSolo("eval night " + quoted(dir / "bright.png") + " " + quoted(dir / "typical.png") +
+                             " --reference " + quoted(dir / "ref.txt") + " --csv " + quoted(dir / "night.csv"));
+  ASSERT_EQ(table.exit_code, 0) << table.output;
+  EXPECT_NE(table.output.find("outside reference range"), std::string::npos) << table.output;
+  EXPECT_NE(table.output.find("mean, p50, p90, p99"), std::string::npos) << table.output;
+  EXPECT_NE(table.output.find("(3 images)"), std::string::npos) << table.output;
+  const auto rows = readCsv(dir / "night.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].at("outside_reference"), "mean;p50;p90;p99");
+  EXPECT_EQ(rows[1].at("outside_reference"), "");
+  EXPECT_EQ(rows[0].at("width_px"), "960");
+  EXPECT_DOUBLE_EQ(std::stod(rows[1].at("mean")), j["images"][1]["statistics"]["mean"].get<double>());
+  EXPECT_EQ(rows[0].at("cast_cb"), "");
+}
+
+TEST(CliEvalNight, BadImagesAndReferencesAreNamed) {
+  TempDir dir;
+  writeGrey(dir / "good.png", 40);
+  solo::test::writeText(dir / "bad.png", "not a picture");
+  auto r = runSolo("eval night " + quoted(dir / "good.png") + " " + quoted(dir / "bad.png"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find((dir / "bad.png").string()), std::string::npos) << r.output;
+
+  std::filesystem::create_directories(dir / "empty");
+  r = runSolo("eval night " + quoted(dir / "good.png") + " --reference " + quoted(dir / "empty"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find((dir / "empty").string() + ": no image"), std::string::npos) << r.output;
+
+  r = runSolo("eval night " + quoted(dir / "good.png") + " --reference " + quoted(dir / "missing.txt"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("missing.txt: reference not found"), std::string::npos) << r.output;
+}
+
+TEST(CliEvalNight, NightReportsTheStatisticsOfTheImageItWrote) {
+  TempDir dir;
+  const std::filesystem::path scene = synthScene(dir);
+  const auto night = runSolo("night " + quoted(scene / "scene.json") + " -o " + quoted(dir / "n.png") +
+                             " --preset draft");
+  ASSERT_EQ(night.exit_code, 0) << night.output;
+  EXPECT_NE(night.output.find("realism"), std::string::npos) << "a summary line on the terminal";
+  const auto report = nlohmann::json::parse(readText(dir / "n.report.json"));
+  nlohmann::json realism;
+  for (const auto& s : report["stages"])
+    if (s["name"] == "realism") realism = s;
+  ASSERT_FALSE(realism.is_null()) << report.dump(2);
+  const auto r = runSolo("eval night " + quoted(dir / "n.png") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto statistics = nlohmann::json::parse(r.output)["images"][0]["statistics"];
+  for (const char* key : {"mean", "p50", "p99", "clipped", "bright"})
+    EXPECT_DOUBLE_EQ(realism["metrics"][key].get<double>(), statistics[key].get<double>()) << key;
+  EXPECT_EQ(realism["metrics"]["halo_blobs"].get<double>(), statistics["halo_blobs"].get<double>());
+}
