@@ -748,42 +748,52 @@ struct NightRun {
   double seconds = 0;
 };
 
-std::string nightTable(const NightRun& run) {
-  const std::vector<NamedNightStatistic> keys = namedNightStatistics(NightStatistics{});
-  const auto row = [&keys](std::string label, const std::vector<std::optional<double>>& values, const std::string& tail) {
-    if (label.size() > 28) label = "..." + label.substr(label.size() - 25);
-    char cell[48];
-    std::snprintf(cell, sizeof cell, "  %-28s", label.c_str());
-    std::string line = cell;
-    for (std::size_t k = 0; k < keys.size(); ++k) {
-      std::snprintf(cell, sizeof cell, " %*s", k + 1 == keys.size() ? 5 : 8, nightCell(keys[k].key, values[k]).c_str());
-      line += cell;
-    }
-    return line + (tail.empty() ? "" : "  " + tail) + "\n";
-  };
-  std::string out = "solo eval night\n";
-  char cell[48];
-  std::snprintf(cell, sizeof cell, "  %-28s", "image");
-  out += cell;
-  const char* const headers[] = {"mean", "p50", "p90", "p99", "clipped", "bright", "noise", "chroma", "cast_cb", "cast_cr", "halo_px", "blobs"};
-  for (std::size_t k = 0; k < keys.size(); ++k) {
-    std::snprintf(cell, sizeof cell, " %*s", k + 1 == keys.size() ? 5 : 8, headers[k]);
-    out += cell;
+/// One line of the night table: the label padded to `width` (longer labels keep their end),
+/// then the cells, right-aligned (the blob count narrower), then `tail`.
+std::string nightTableLine(std::string label, int width, const std::vector<std::string>& cells,
+                           const std::string& tail) {
+  if (static_cast<int>(label.size()) > width) label = "..." + label.substr(label.size() - (width - 3));
+  std::string line = "  " + label + std::string(width - label.size(), ' ');
+  for (std::size_t k = 0; k < cells.size(); ++k) {
+    const std::size_t cell_width = k + 1 == cells.size() ? 5 : 8;
+    line += " " + std::string(cell_width - std::min(cell_width, cells[k].size()), ' ') + cells[k];
   }
-  out += run.ranges.empty() ? "\n" : "  outside reference range\n";
+  return line + (tail.empty() ? "" : "  " + tail) + "\n";
+}
+
+/// The cells of one row of statistics, in namedNightStatistics' order.
+std::vector<std::string> nightCells(const std::vector<std::optional<double>>& values) {
+  const std::vector<NamedNightStatistic> keys = namedNightStatistics(NightStatistics{});
+  std::vector<std::string> cells;
+  for (std::size_t k = 0; k < keys.size(); ++k) cells.push_back(nightCell(keys[k].key, values[k]));
+  return cells;
+}
+
+/// The terminal table: a row per image (its path as given), then the reference's rows.
+std::string nightTable(const NightRun& run) {
+  int width = 12;
+  for (const fs::path& f : run.files) width = std::max(width, static_cast<int>(f.string().size()));
+  width = std::min(width, 48);
+  const bool has_reference = !run.ranges.empty();
+  std::string out = "solo eval night\n" +
+                    nightTableLine("image", width,
+                                   {"mean", "p50", "p90", "p99", "clipped", "bright", "noise", "chroma", "cast_cb",
+                                    "cast_cr", "halo_px", "blobs"},
+                                   has_reference ? "outside reference range" : "");
   for (std::size_t i = 0; i < run.files.size(); ++i) {
     std::vector<std::optional<double>> values;
     for (const NamedNightStatistic& n : namedNightStatistics(run.statistics[i])) values.push_back(n.value);
-    const std::string outside = run.ranges.empty() ? "" : joined(outsideRange(run.statistics[i], run.ranges), ", ");
-    out += row(run.files[i].filename().string(), values, run.ranges.empty() ? "" : (outside.empty() ? "none" : outside));
+    const std::string outside = has_reference ? joined(outsideRange(run.statistics[i], run.ranges), ", ") : "";
+    out += nightTableLine(run.files[i].string(), width, nightCells(values),
+                          has_reference ? (outside.empty() ? "none" : outside) : "");
   }
-  if (!run.ranges.empty()) {
+  if (has_reference) {
     out += "  reference: " + run.reference->string() + " (" + std::to_string(run.reference_files.size()) + " images)\n";
     for (const auto& [label, field] : {std::pair{"  median", &ReferenceRange::median},
                                        std::pair{"  min", &ReferenceRange::min}, std::pair{"  max", &ReferenceRange::max}}) {
       std::vector<std::optional<double>> values;
       for (const ReferenceRange& r : run.ranges) values.push_back(r.*field);
-      out += row(label, values, "");
+      out += nightTableLine(label, width, nightCells(values), "");
     }
   }
   char time[64];
