@@ -57,6 +57,10 @@ MeasuredRun runMeasured(const fs::path& folder, const std::string& arguments, co
   return run;
 }
 
+/// Seconds `solo --version` takes: the start-up every run pays (libraries, bundled tables), which
+/// grows with the machine's load. A refusal must come within 2 s of it.
+double startupSeconds(const fs::path& folder) { return runMeasured(folder, "--version").seconds; }
+
 /// The shell prefix of a full disk: files may grow to 1024 bytes, a larger write fails with
 /// EFBIG (SIGXFSZ ignored), as a write to a full file system fails with ENOSPC.
 const std::string kFullDisk = "trap '' XFSZ; ulimit -f 2";
@@ -198,12 +202,13 @@ TEST(CliDataSafety, NightRefusesAnOutputThatIsOneOfItsInputsBeforeAnyWork) {
       {"-o night.png --contact-sheet s/est/normals.png", "--contact-sheet:"},
       {"-o night.png --render-exr s/est/depth.exr", "--render-exr:"},
   };
+  const double startup_s = startupSeconds(dir.path());
   for (const Case& c : cases) {
     const MeasuredRun r = runMeasured(dir.path(), "night s/scene.json --preset draft " + c.arguments);
     EXPECT_EQ(r.exit_code, 2) << c.arguments << "\n" << r.output;
     EXPECT_NE(r.output.find(c.message), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("input ..."), std::string::npos) << "refused before the input stage";
-    EXPECT_LT(r.seconds, 2.0);
+    EXPECT_LT(r.seconds, startup_s + 2.0);
   }
   EXPECT_EQ(readText(dir / "s/day.png"), day);
   EXPECT_EQ(readText(dir / "s/scene.json"), manifest);
@@ -241,6 +246,7 @@ TEST(CliDataSafety, DevicesFifosFoldersAndLinkLoopsAreRefusedByName) {
                                   {(dir / "s").string(), "is a folder"},
                                   {(dir / "loop_a").string(), "symbolic link loop"}};
   const std::string manifest = readText(dir / "s/scene.json");
+  const double startup_s = startupSeconds(dir.path());
   for (const Case& c : maps) {
     // The depth map of the scene replaced by the special file.
     auto j = nlohmann::json::parse(manifest);
@@ -249,7 +255,7 @@ TEST(CliDataSafety, DevicesFifosFoldersAndLinkLoopsAreRefusedByName) {
     const MeasuredRun r = runMeasured(dir.path(), "info s/scene.json");
     EXPECT_EQ(r.exit_code, 2) << c.file << "\n" << r.output;
     EXPECT_NE(r.output.find(c.file + ": " + c.problem), std::string::npos) << r.output;
-    EXPECT_LT(r.seconds, 2.0) << c.file;
+    EXPECT_LT(r.seconds, startup_s + 2.0) << c.file;
   }
   const std::vector<Case> manifests = {{(dir / "folder.json").string(), "is a folder, expected a scene manifest file"},
                                        {"/dev/zero", "is a character device, expected a scene manifest file"},
@@ -260,14 +266,14 @@ TEST(CliDataSafety, DevicesFifosFoldersAndLinkLoopsAreRefusedByName) {
     EXPECT_EQ(r.exit_code, 2) << c.file << "\n" << r.output;
     EXPECT_NE(r.output.find(c.file + ": " + c.problem), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("underflow"), std::string::npos) << r.output;
-    EXPECT_LT(r.seconds, 2.0) << c.file;
+    EXPECT_LT(r.seconds, startup_s + 2.0) << c.file;
   }
   ::symlink((dir / "fifo").c_str(), (dir / "pipe.off").c_str());
   const MeasuredRun piped = runMeasured(dir.path(), "mesh clean pipe.off -o out.ply");
   EXPECT_EQ(piped.exit_code, 2) << piped.output;
   EXPECT_NE(piped.output.find("pipe.off: is a FIFO (named pipe), expected a mesh file"), std::string::npos)
       << piped.output;
-  EXPECT_LT(piped.seconds, 2.0);
+  EXPECT_LT(piped.seconds, startup_s + 2.0);
 }
 
 // ------------------------------------------------------------------ sizes before memory
@@ -285,11 +291,12 @@ TEST(CliDataSafety, HeadersClaimingHugeImagesOrMeshesAreRefusedQuicklyAndSmall) 
       {"convert depth huge.npy out.exr", "huge.npy: image is 1x4611686018427387905 pixels"},
       {"mesh clean huge.off -o out.ply", "huge.off: cannot read as a mesh: header declares 1000000000 faces, more than the file's"},
   };
+  const double startup_s = startupSeconds(dir.path());
   for (const Case& c : cases) {
     const MeasuredRun r = runMeasured(dir.path(), c.arguments);
     EXPECT_EQ(r.exit_code, 2) << c.arguments << "\n" << r.output;
     EXPECT_NE(r.output.find(c.message), std::string::npos) << r.output;
-    EXPECT_LT(r.seconds, 2.0) << c.arguments;
+    EXPECT_LT(r.seconds, startup_s + 2.0) << c.arguments;
     EXPECT_LT(r.peak_resident_mb, 200.0) << c.arguments;
   }
   // The limit is the documented environment variable's to raise: past the pixel limit the
