@@ -47,11 +47,13 @@ ordered_json cameraJson(const PinholeCamera& c) {
 void writeJson(const fs::path& file, const ordered_json& j) { writeTextAtomically(file, j.dump(2) + "\n"); }
 
 // Every file and folder a `solo synth` folder holds, relative to it.
-const std::set<std::string> kSynthEntries = {
-    "day.png",          "lightIds.png",      "groups.png",         "scene.json",        "synth.json",
-    "gt",               "gt/depth.exr",      "gt/normals.png",     "gt/albedo.png",     "gt/roughness.png",
-    "gt/labelIds.png",  "gt/instanceIds.png", "gt/mesh.ply",       "gt/scene.json",     "est",
-    "est/depth.exr",    "est/normals.png",   "est/albedo.png",     "est/labelIds.png",  "est/instanceIds.png"};
+const std::set<std::string> kSynthEntries = {"day.png",          "lightIds.png",       "groups.png",
+                                             "scene.json",       "synth.json",         "gt",
+                                             "gt/depth.exr",     "gt/normals.png",     "gt/albedo.png",
+                                             "gt/roughness.png", "gt/labelIds.png",    "gt/instanceIds.png",
+                                             "gt/mesh.ply",      "gt/scene.json",      "est",
+                                             "est/depth.exr",    "est/normals.png",    "est/albedo.png",
+                                             "est/labelIds.png", "est/instanceIds.png"};
 
 // True when `folder`/synth.json is the record `solo synth` writes ("generator": "solo synth ...").
 bool holdsSynthRecord(const fs::path& folder) {
@@ -77,7 +79,7 @@ void requireReplaceableSynthFolder(const fs::path& folder) {
   for (auto it = fs::recursive_directory_iterator(folder); it != fs::recursive_directory_iterator(); ++it) {
     const std::string relative = it->path().lexically_relative(folder).generic_string();
     const bool expected_type = relative == "gt" || relative == "est" ? it->is_directory() && !it->is_symlink()
-                                                                    : it->is_regular_file() && !it->is_symlink();
+                                                                     : it->is_regular_file() && !it->is_symlink();
     if (!kSynthEntries.count(relative) || !expected_type)
       throw InputError(folder, "holds \"" + relative + "\", which solo synth does not write" + keep);
   }

@@ -11,12 +11,18 @@ namespace {
 
 std::string kindOf(fs::file_type type) {
   switch (type) {
-    case fs::file_type::directory: return "a folder";
-    case fs::file_type::character: return "a character device";
-    case fs::file_type::block: return "a block device";
-    case fs::file_type::fifo: return "a FIFO (named pipe)";
-    case fs::file_type::socket: return "a socket";
-    default: return "not a regular file";
+    case fs::file_type::directory:
+      return "a folder";
+    case fs::file_type::character:
+      return "a character device";
+    case fs::file_type::block:
+      return "a block device";
+    case fs::file_type::fifo:
+      return "a FIFO (named pipe)";
+    case fs::file_type::socket:
+      return "a socket";
+    default:
+      return "not a regular file";
   }
 }
 
@@ -26,7 +32,8 @@ std::string kindOf(fs::file_type type) {
   if (ec == std::errc::no_such_file_or_directory || ec == std::errc::not_a_directory) {
     std::error_code link_ec;
     if (fs::is_symlink(fs::symlink_status(file, link_ec)))
-      throw InputError(file, "file not found (broken symbolic link to " + fs::read_symlink(file, link_ec).string() + ")");
+      throw InputError(file,
+                       "file not found (broken symbolic link to " + fs::read_symlink(file, link_ec).string() + ")");
     throw InputError(file, "file not found");
   }
   throw InputError(file, "cannot access: " + ec.message());

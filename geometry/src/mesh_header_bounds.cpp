@@ -69,9 +69,9 @@ std::vector<ElementBound> offBounds(const std::string& header) {
 
 std::uint64_t plyScalarBytes(const std::string& type) {
   static const std::map<std::string, std::uint64_t> sizes = {
-      {"char", 1},  {"int8", 1},   {"uchar", 1}, {"uint8", 1},   {"short", 2},   {"int16", 2},
-      {"ushort", 2}, {"uint16", 2}, {"int", 4},  {"int32", 4},   {"uint", 4},    {"uint32", 4},
-      {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+      {"char", 1},   {"int8", 1},    {"uchar", 1},  {"uint8", 1},  {"short", 2}, {"int16", 2},
+      {"ushort", 2}, {"uint16", 2},  {"int", 4},    {"int32", 4},  {"uint", 4},  {"uint32", 4},
+      {"float", 4},  {"float32", 4}, {"double", 8}, {"float64", 8}};
   const auto it = sizes.find(type);
   return it == sizes.end() ? 0 : it->second;
 }
@@ -125,8 +125,8 @@ void requireMeshHeaderFitsFile(const fs::path& file, std::uintmax_t file_size_by
     std::uint64_t element_bytes = 0;
     if (__builtin_mul_overflow(element.count, element.min_bytes, &element_bytes) ||
         __builtin_add_overflow(need_bytes, element_bytes, &need_bytes) || need_bytes > file_size_bytes)
-      throw InputError(file, "cannot read as a mesh: header declares " + std::to_string(element.count) + " " + element.name +
-                                 ", more than the file's " + std::to_string(file_size_bytes) +
+      throw InputError(file, "cannot read as a mesh: header declares " + std::to_string(element.count) + " " +
+                                 element.name + ", more than the file's " + std::to_string(file_size_bytes) +
                                  " bytes can hold (truncated or corrupt header)");
   }
 }

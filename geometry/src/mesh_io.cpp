@@ -35,10 +35,12 @@ bool writeSoup(std::ofstream& out, const std::string& ext, const std::vector<Poi
   const auto np = CGAL::parameters::stream_precision(17);
   if (ext == ".ply" || ext == ".stl") {
     CGAL::IO::set_mode(out, CGAL::IO::BINARY);
-    return ext == ".ply" ? CGAL::IO::write_PLY(out, points, polygons, np) : CGAL::IO::write_STL(out, points, polygons, np);
+    return ext == ".ply" ? CGAL::IO::write_PLY(out, points, polygons, np)
+                         : CGAL::IO::write_STL(out, points, polygons, np);
   }
   CGAL::IO::set_mode(out, CGAL::IO::ASCII);
-  return ext == ".obj" ? CGAL::IO::write_OBJ(out, points, polygons, np) : CGAL::IO::write_OFF(out, points, polygons, np);
+  return ext == ".obj" ? CGAL::IO::write_OBJ(out, points, polygons, np)
+                       : CGAL::IO::write_OFF(out, points, polygons, np);
 }
 }  // namespace
 

@@ -15,14 +15,14 @@
 
 #include "test_support.h"
 
-#include <chrono>
-#include <csignal>
-#include <functional>
 #include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
+#include <chrono>
+#include <csignal>
+#include <functional>
 
 namespace fs = std::filesystem;
 using solo::test::TempDir;
@@ -153,9 +153,12 @@ TEST(RegularFile, EveryReaderUsesIt) {
   ASSERT_EQ(::mkfifo((dir / "fifo.off").c_str(), 0600), 0);
   ASSERT_EQ(::mkfifo((dir / "fifo.json").c_str(), 0600), 0);
   const std::string fifo = ": is a FIFO (named pipe), expected a ";
-  EXPECT_EQ(messageOf([&] { solo::readColorImage(dir / "fifo.png"); }), (dir / "fifo.png").string() + fifo + "map or image file");
-  EXPECT_EQ(messageOf([&] { solo::readNpy(dir / "fifo.npy"); }), (dir / "fifo.npy").string() + fifo + "map or image file");
-  EXPECT_EQ(messageOf([&] { solo::probeImage(dir / "fifo.png"); }), (dir / "fifo.png").string() + fifo + "map or image file");
+  EXPECT_EQ(messageOf([&] { solo::readColorImage(dir / "fifo.png"); }),
+            (dir / "fifo.png").string() + fifo + "map or image file");
+  EXPECT_EQ(messageOf([&] { solo::readNpy(dir / "fifo.npy"); }),
+            (dir / "fifo.npy").string() + fifo + "map or image file");
+  EXPECT_EQ(messageOf([&] { solo::probeImage(dir / "fifo.png"); }),
+            (dir / "fifo.png").string() + fifo + "map or image file");
   EXPECT_EQ(messageOf([&] { solo::readMesh(dir / "fifo.off"); }), (dir / "fifo.off").string() + fifo + "mesh file");
   EXPECT_EQ(messageOf([&] { solo::loadScene(dir / "fifo.json"); }),
             (dir / "fifo.json").string() + fifo + "scene manifest file");
@@ -185,10 +188,11 @@ TEST(OutputPath, TheWorkingFolderItsParentsAndTheRootAreRefused) {
   fs::create_directories(dir / "work/sub");
   const fs::path saved = fs::current_path();
   fs::current_path(dir / "work");
-  for (const fs::path& folder : {fs::path("."), fs::path("./"), fs::path(".."), fs::path("sub/.."),
-                                 dir / "work", dir.path(), fs::path("/")})
-    EXPECT_NE(messageOf([&] { solo::refuseWorkingFolderOrParent(folder, "-o"); })
-                  .find("-o: \"" + folder.string() + "\" is the working folder or one of its parents"),
+  for (const fs::path& folder :
+       {fs::path("."), fs::path("./"), fs::path(".."), fs::path("sub/.."), dir / "work", dir.path(), fs::path("/")})
+    EXPECT_NE(messageOf([&] {
+                solo::refuseWorkingFolderOrParent(folder, "-o");
+              }).find("-o: \"" + folder.string() + "\" is the working folder or one of its parents"),
               std::string::npos)
         << folder;
   EXPECT_EQ(messageOf([&] { solo::refuseWorkingFolderOrParent("sub", "-o"); }), "(no InputError)");
@@ -249,17 +253,18 @@ TEST(ImageLimit, NpyShapesAreParsedStrictlyAndCheckedAgainstTheFileSize) {
   const std::vector<Case> cases = {
       {"('a', 3)", 0, "malformed .npy shape: \"'a'\" is not a whole number"},
       {"(12345678901234567890, 3)", 0, ".npy shape entry 12345678901234567890 is implausibly large"},
-      {"(3037000500, 3037000500)", 0, "image is 3037000500x3037000500 pixels, more than the limit of 268435456 "
-                                      "pixels (raise it with the environment variable SOLO_MAX_IMAGE_PIXELS)"},
-      {"(4611686018427387905, 1)", 4, "image is 1x4611686018427387905 pixels, more than the limit of 268435456 "
-                                      "pixels (raise it with the environment variable SOLO_MAX_IMAGE_PIXELS)"},
+      {"(3037000500, 3037000500)", 0,
+       "image is 3037000500x3037000500 pixels, more than the limit of 268435456 "
+       "pixels (raise it with the environment variable SOLO_MAX_IMAGE_PIXELS)"},
+      {"(4611686018427387905, 1)", 4,
+       "image is 1x4611686018427387905 pixels, more than the limit of 268435456 "
+       "pixels (raise it with the environment variable SOLO_MAX_IMAGE_PIXELS)"},
       {"(-2, 3)", 0, "malformed .npy shape: \"-2\" is not a whole number"},
       {"(2, 3)", 23, "truncated .npy data: the shape needs 24 bytes, the file holds 23"},
   };
   for (const Case& c : cases) {
     writeText(dir / "a.npy", npyFile(c.shape, c.data_bytes));
-    EXPECT_EQ(messageOf([&] { solo::readNpy(dir / "a.npy"); }), (dir / "a.npy").string() + ": " + c.problem)
-        << c.shape;
+    EXPECT_EQ(messageOf([&] { solo::readNpy(dir / "a.npy"); }), (dir / "a.npy").string() + ": " + c.problem) << c.shape;
   }
   // The same shape with its 24 bytes is read.
   writeText(dir / "a.npy", npyFile("(2, 3)", 24));
@@ -283,8 +288,9 @@ TEST(ImageLimit, PfmAndPngHeadersAreCheckedBeforeDecoding) {
   writeText(dir / "bomb.png", pngHeaderOnly(20000, 20000));
   const double seconds = secondsOf([&] {
     EXPECT_EQ(messageOf([&] { solo::readDepth(dir / "huge.pfm", 0); }),
-              (dir / "huge.pfm").string() + ": image is 100000x100000 pixels, more than the limit of 268435456 "
-                                           "pixels (raise it with the environment variable SOLO_MAX_IMAGE_PIXELS)");
+              (dir / "huge.pfm").string() +
+                  ": image is 100000x100000 pixels, more than the limit of 268435456 "
+                  "pixels (raise it with the environment variable SOLO_MAX_IMAGE_PIXELS)");
     EXPECT_EQ(messageOf([&] { solo::readDepth(dir / "short.pfm", 0); }),
               (dir / "short.pfm").string() +
                   ": PFM header declares 4x4 pixels, 64 bytes of data, but the file holds 63 after its header "
@@ -299,19 +305,23 @@ TEST(MeshHeader, CountsBeyondTheFileSizeAreRefusedBeforeReading) {
   TempDir dir;
   writeText(dir / "faces.off", "OFF\n3 1000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
   writeText(dir / "vertices.off", "# comment\nOFF # keyword\n# counts next\n20 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
-  writeText(dir / "vertices.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 100000000\nproperty float x\n"
-                                  "property float y\nproperty float z\nelement face 1\nproperty list uchar int "
-                                  "vertex_indices\nend_header\n" + std::string(64, '\0'));
-  writeText(dir / "ascii.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                               "property float z\nelement face 4000000000000000000\nproperty list uchar int "
-                               "vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  writeText(dir / "vertices.ply",
+            "ply\nformat binary_little_endian 1.0\nelement vertex 100000000\nproperty float x\n"
+            "property float y\nproperty float z\nelement face 1\nproperty list uchar int "
+            "vertex_indices\nend_header\n" +
+                std::string(64, '\0'));
+  writeText(dir / "ascii.ply",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 4000000000000000000\nproperty list uchar int "
+            "vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
   const auto expect = [&](const std::string& name, const std::string& problem) {
     EXPECT_EQ(messageOf([&] { solo::readMesh(dir / name); }),
               (dir / name).string() + ": cannot read as a mesh: " + problem);
   };
   const double seconds = secondsOf([&] {
-    expect("faces.off", "header declares 1000000000 faces, more than the file's 45 bytes can hold (truncated or "
-                        "corrupt header)");
+    expect("faces.off",
+           "header declares 1000000000 faces, more than the file's 45 bytes can hold (truncated or "
+           "corrupt header)");
     // 20 ASCII vertices need at least 20 x 6 bytes ("0 0 0\n"), more than the file's.
     expect("vertices.off", "header declares 20 vertices, more than the file's " +
                                std::to_string(fs::file_size(dir / "vertices.off")) +
@@ -344,8 +354,9 @@ TEST(CheckedWrites, EveryWriterFailsOnAFullDiskNamingTheTargetAndLeavesNothing) 
   solo::TriangleMesh mesh;
   for (int i = 0; i < 300; ++i) {
     mesh.vertices.emplace_back(i, i * 0.5, i * 0.25);
-    if (i >= 2) mesh.faces.push_back({static_cast<std::uint32_t>(i - 2), static_cast<std::uint32_t>(i - 1),
-                                      static_cast<std::uint32_t>(i)});
+    if (i >= 2)
+      mesh.faces.push_back(
+          {static_cast<std::uint32_t>(i - 2), static_cast<std::uint32_t>(i - 1), static_cast<std::uint32_t>(i)});
   }
   const std::vector<std::pair<std::string, std::function<void(const fs::path&)>>> writers = {
       {"a.png", [&](const fs::path& f) { solo::writeImage(f, noise); }},

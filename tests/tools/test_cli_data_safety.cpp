@@ -8,12 +8,12 @@
 
 #include "test_support.h"
 
-#include <chrono>
 #include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <chrono>
 
 namespace fs = std::filesystem;
 using solo::test::readText;
@@ -69,7 +69,8 @@ const std::string kFullDisk = "trap '' XFSZ; ulimit -f 2";
 std::vector<std::string> entries(const fs::path& folder) { return solo::test::listFolder(folder); }
 
 void synth(const fs::path& folder, int seed, const std::string& extra = "") {
-  const auto r = runSolo("synth -o " + shellQuoted(folder) + " --size 96x54 --seed " + std::to_string(seed) + " " + extra);
+  const auto r =
+      runSolo("synth -o " + shellQuoted(folder) + " --size 96x54 --seed " + std::to_string(seed) + " " + extra);
   ASSERT_EQ(r.exit_code, 0) << r.output;
 }
 
@@ -289,7 +290,8 @@ TEST(CliDataSafety, HeadersClaimingHugeImagesOrMeshesAreRefusedQuicklyAndSmall) 
   const std::vector<Case> cases = {
       {"convert depth huge.pfm out.exr", "huge.pfm: image is 100000x100000 pixels, more than the limit of 268435456"},
       {"convert depth huge.npy out.exr", "huge.npy: image is 1x4611686018427387905 pixels"},
-      {"mesh clean huge.off -o out.ply", "huge.off: cannot read as a mesh: header declares 1000000000 faces, more than the file's"},
+      {"mesh clean huge.off -o out.ply",
+       "huge.off: cannot read as a mesh: header declares 1000000000 faces, more than the file's"},
   };
   const double startup_s = startupSeconds(dir.path());
   for (const Case& c : cases) {
@@ -301,8 +303,8 @@ TEST(CliDataSafety, HeadersClaimingHugeImagesOrMeshesAreRefusedQuicklyAndSmall) 
   }
   // The limit is the documented environment variable's to raise: past the pixel limit the
   // PFM's header is still checked against its size.
-  const MeasuredRun raised = runMeasured(dir.path(), "convert depth huge.pfm out.exr",
-                                         "export SOLO_MAX_IMAGE_PIXELS=20000000000");
+  const MeasuredRun raised =
+      runMeasured(dir.path(), "convert depth huge.pfm out.exr", "export SOLO_MAX_IMAGE_PIXELS=20000000000");
   EXPECT_EQ(raised.exit_code, 2) << raised.output;
   EXPECT_NE(raised.output.find("huge.pfm: PFM header declares 100000x100000 pixels, 40000000000 bytes of data, but "
                                "the file holds 64 after its header"),
