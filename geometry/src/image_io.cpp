@@ -353,20 +353,23 @@ void writeOiio(const fs::path& file, const cv::Mat& image) {
   OIIO::TypeDesc type = oiioType(image.depth());
   if (type == OIIO::TypeDesc::UNKNOWN)
     throw InputError(file, "cannot write pixel type " + pixelTypeName(image.depth()));
+  // Declared before the writer, destroyed after it: a writer closed by its destructor (on an
+  // exception) still writes through a live proxy and file.
+  std::optional<OutputFileHandle> handle;
+  std::unique_ptr<CheckedOiioOutput> proxy;
+  const std::string ext = lowerExtension(file);
+  if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") {
+    handle.emplace(file);
+    proxy = std::make_unique<CheckedOiioOutput>(handle->get());
+  }
   auto out = OIIO::ImageOutput::create(file.string());
   if (!out) throw InputError(file, "no image writer for this extension (" + OIIO::geterror() + ")");
   OIIO::ImageSpec spec(image.cols, image.rows, image.channels(), type);
   // OpenImageIO stamps the write time unless DateTime is set: an empty one keeps outputs
   // byte-identical across runs, which seeded generation promises.
   spec.attribute("DateTime", "");
-  std::optional<OutputFileHandle> handle;
-  std::unique_ptr<CheckedOiioOutput> proxy;
-  const std::string format = out->format_name();
-  if ((format == "png" || format == "jpeg") && out->supports("ioproxy")) {
-    handle.emplace(file);
-    proxy = std::make_unique<CheckedOiioOutput>(handle->get());
-    if (!out->set_ioproxy(proxy.get())) throw InputError(file, "cannot open for writing: " + oiioError(*out));
-  }
+  if (proxy && !(out->supports("ioproxy") && out->set_ioproxy(proxy.get())))
+    throw InputError(file, "cannot open for writing: this OpenImageIO takes no output proxy for " + ext);
   if (!out->open(file.string(), spec)) throw InputError(file, "cannot open for writing: " + oiioError(*out));
   if (!out->write_image(type, contiguous.data)) throw InputError(file, "write failed: " + oiioError(*out));
   if (!out->close()) throw InputError(file, "write failed on close: " + oiioError(*out));
