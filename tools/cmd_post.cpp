@@ -12,6 +12,7 @@
 #include <solo/render/post_process.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cctype>
 #include <iostream>
 #include <stdexcept>
@@ -88,6 +89,8 @@ int runPost(const PostOptions& o) {
   else if (o.glare_method == "tiled") options.glare_options.method = GlareMethod::TiledFft;
   else throw InputError("--glare-method", "expected auto, direct, fft or tiled, got \"" + o.glare_method + "\"");
   if (!(o.glare_threshold >= 0)) throw InputError("--glare-threshold", "must be 0 or more");
+  if (!(o.glare_scatter > 0 && o.glare_scatter <= 1)) throw InputError("--glare-scatter", "must be in (0, 1]");
+  options.glare_options.scatter_fraction = o.glare_scatter;
   if (o.glare_size < 2 || o.glare_size > 11) throw InputError("--glare-size", "must be between 2 and 11");
 
   options.exposure_options.stops = o.stops;
@@ -130,6 +133,10 @@ int runPost(const PostOptions& o) {
   else throw InputError("--highlights", "expected desaturate or clip, got \"" + o.highlights + "\"");
   if (!(o.highlight_knee >= 0 && o.highlight_knee <= 1)) throw InputError("--highlight-knee", "must be between 0 and 1");
   options.encoding_options.highlight_knee = o.highlight_knee;
+  if (!(o.white_clip >= 1 && std::isfinite(o.white_clip))) throw InputError("--white-clip", "must be a finite level >= 1");
+  if (!(o.knee_point > 0 && o.knee_point < 1)) throw InputError("--knee-point", "must be between 0 and 1 (exclusive)");
+  options.encoding_options.white_clip = o.white_clip;
+  options.encoding_options.knee_point = o.knee_point;
   refuseOutputThatIsAnInput(o.output, {o.input}, "-o");
   if (o.report) refuseOutputThatIsAnInput(*o.report, {o.input}, "--report");
 

@@ -53,14 +53,23 @@ struct NightOptions {
   /// Stop sampling a pixel once its standard error is below noise_factor x the sensor noise's
   /// sigma there (instead of the relative error); docs/rendering.md.
   bool noise_target = true;
-  double noise_factor = 0.5;
+  double noise_factor = 4;
   /// Shadow-ray roulette below this fraction of the sensor noise at black (with noise_target;
   /// PathTracerOptions::shadow_roulette; preset). 0 = off.
   double shadow_roulette = 0.3;
   bool glare = true, noise = true;
   double glare_threshold = -1;  ///< Y before exposure; < 0: what will clip (the reference uses 0)
-  /// Luminance exposed to sensor white, cd/m^2; <= 0: auto exposure (metering the street).
+  /// Luminance exposed to sensor white, cd/m^2; <= 0: the night camera's auto exposure.
   double sensor_white_cd_m2 = 0;
+  /// The night camera's limits (NightCameraOptions): fixed aperture, longest shutter, highest ISO.
+  double camera_f_number = 2.8;
+  double camera_max_shutter_s = 1.0 / 30.0;
+  double camera_max_iso = 800;
+  /// Share of a clipping pixel's excess luminance the lens scatters into its glare (FogGlareOptions).
+  double glare_scatter = 0.02;
+  /// Linear level (in sensor whites) the camera's knee encodes as full white (ColourEncodingOptions).
+  double white_clip = 8;
+  double knee_point = 0.7;  ///< encoded luminance where the knee starts (ColourEncodingOptions)
   /// Quality preset (draft, default, final; tools/night_presets.cpp). main.cpp applies it to
   /// every knob not given on the command line or in the config file.
   std::string preset = "default";
@@ -257,6 +266,9 @@ struct PostOptions {
   std::string negatives = "desaturate";   ///< desaturate, clip
   std::string highlights = "desaturate";  ///< desaturate, clip
   double highlight_knee = 0.8;            ///< share of the chroma headroom left untouched (ColourEncodingOptions)
+  double white_clip = 1;                  ///< linear level encoded as full white (video knee); 1 = clip at white
+  double knee_point = 0.8;                ///< encoded luminance where the knee starts
+  double glare_scatter = 1;               ///< share of the excess the glow carries (1 = the reference)
 };
 int runPost(const PostOptions& options);
 /// Writes a post-processed image by extension: .png/.tif 8-bit (16-bit on request) of the

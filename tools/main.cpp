@@ -79,8 +79,24 @@ int main(int argc, char** argv) {
   night_cmd->add_flag("--glare,!--no-glare", night.glare, "Fog glare (preset)");
   night_cmd->add_flag("--noise,!--no-noise", night.noise, "Sensor noise (preset)");
   night_cmd->add_option("--sensor-white", night.sensor_white_cd_m2,
-                         "Luminance exposed to sensor white, cd/m2; 0 = auto exposure")
+                         "Luminance exposed to sensor white, cd/m2; 0 = the night camera's auto exposure")
       ->capture_default_str();
+  night_cmd->add_option("--camera-f-number", night.camera_f_number, "Night camera: fixed aperture")
+      ->capture_default_str()->check(CLI::Range(0.5, 64.0));
+  night_cmd->add_option("--camera-max-shutter", night.camera_max_shutter_s,
+                        "Night camera: longest exposure time, s (1/30: one frame of 30 fps video)")
+      ->capture_default_str()->check(CLI::Range(1e-4, 30.0));
+  night_cmd->add_option("--camera-max-iso", night.camera_max_iso,
+                        "Night camera: highest ISO (100-3200, the sensor noise calibration's range)")
+      ->capture_default_str()->check(CLI::Range(100.0, 3200.0));
+  night_cmd->add_option("--white-clip", night.white_clip,
+                        "Video knee: linear level encoded as full white, in sensor whites (1 = clip at white)")
+      ->capture_default_str()->check(CLI::Range(1.0, 64.0));
+  night_cmd->add_option("--knee-point", night.knee_point, "Video knee: encoded luminance where it starts")
+      ->capture_default_str()->check(CLI::Range(0.05, 0.99));
+  night_cmd->add_option("--glare-scatter", night.glare_scatter,
+                        "Share of a clipping pixel's excess light the lens scatters into glare (1 = the reference)")
+      ->capture_default_str()->check(CLI::Range(1e-6, 1.0));
   night_cmd->add_option("--glare-threshold", night.glare_threshold,
                         "Luminance above which pixels glow (render units before exposure); -1 = what clips; "
                         "the reference uses 0")
@@ -292,6 +308,14 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   post_cmd->add_option("--highlight-knee", post.highlight_knee,
                        "Desaturation starts above this share of a colour's headroom, 0 to 1 (1 = hard)")
+      ->capture_default_str();
+  post_cmd->add_option("--white-clip", post.white_clip,
+                       "Video knee: linear level encoded as full white, in sensor whites (1 = clip at white)")
+      ->capture_default_str();
+  post_cmd->add_option("--knee-point", post.knee_point, "Video knee: encoded luminance where it starts, 0 to 1")
+      ->capture_default_str();
+  post_cmd->add_option("--glare-scatter", post.glare_scatter,
+                       "Share of a bright pixel's excess the glow carries (1 = the reference)")
       ->capture_default_str();
 
   FdaCommandOptions fda;

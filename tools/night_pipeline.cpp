@@ -42,6 +42,24 @@ RenderOutput upsampleRender(RenderOutput r, cv::Size size) {
   return r;
 }
 
+/// What the night camera chose; `preview` is the metering preview's size (empty: white given).
+std::string exposureNote(const NightCameraExposure& e, cv::Size preview) {
+  char note[400];
+  if (!preview.empty())
+    std::snprintf(note, sizeof note,
+                  "night camera metered a mean %.4g cd/m2 on a %dx%d preview at %d spp (lamps seen directly left "
+                  "out): ISO %.0f, 1/%.0f s, f/%.1f, sensor white %.4g cd/m2%s",
+                  e.metered_cd_m2, preview.width, preview.height, kMeteringSamplesPerPixel, e.camera.iso,
+                  1.0 / e.camera.shutter_s, e.camera.f_number, e.white_cd_m2,
+                  e.at_exposure_limit ? "; at its exposure limit, so the street stays darker than the meter's grey"
+                  : e.at_bright_limit ? "; at its shortest exposure: over-exposed"
+                                      : "");
+  else
+    std::snprintf(note, sizeof note, "sensor white given, %.6g cd/m2 (noise at ISO %.0f)", e.white_cd_m2,
+                  e.camera.iso);
+  return note;
+}
+
 }  // namespace
 
 LightSamplerKind lightSamplerOption(const NightOptions& o) {
@@ -174,41 +192,50 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
                                                       std::max(16, image_camera.height / o.render_downsample))
                               : image_camera;
   const PreparedRenderScene prepared(night.scene);  // one BVH for the preview and the render
-  // Auto exposure meters a small preview (meteringPreviewSize, kMeteringSamplesPerPixel) before
-  // the full render, whatever the preset: the exposure does not depend on the render's samples
-  // (a few-sample render meters low), and --noise-target sets its target from it.
+  // The night camera meters a small preview (meteringPreviewSize, kMeteringSamplesPerPixel)
+  // before the full render, whatever the preset: the exposure does not depend on the render's
+  // samples, and --noise-target sets its target from it.
+  NightCameraOptions camera_limits;
+  camera_limits.f_number = o.camera_f_number;
+  camera_limits.max_shutter_s = o.camera_max_shutter_s;
+  camera_limits.max_iso = o.camera_max_iso;
+  camera_limits.min_shutter_s = std::min(camera_limits.min_shutter_s, camera_limits.max_shutter_s);
+  camera_limits.min_iso = std::min(camera_limits.min_iso, camera_limits.max_iso);
   const bool auto_white = !(o.sensor_white_cd_m2 > 0);
-  double sensor_white = o.sensor_white_cd_m2;
+  NightCameraExposure camera;
   double preview_seconds = 0;
-  std::string exposure_note;
+  cv::Size preview_size;
   if (auto_white) {
     Stopwatch preview_clock;
-    const cv::Size preview_size = meteringPreviewSize(render_camera.width, render_camera.height);
+    preview_size = meteringPreviewSize(render_camera.width, render_camera.height);
     PathTracerOptions preview = tracer;
     preview.min_samples = preview.max_samples = kMeteringSamplesPerPixel;
     preview.progress = false;
     const RenderOutput metered =
         renderPathTraced(prepared, render_camera.scaledTo(preview_size.width, preview_size.height), preview);
-    sensor_white = meteredSensorWhite(metered.radiance, metered.emitter_coverage);
+    camera = nightCameraExposure(meteredMeanLuminance(metered.radiance, metered.emitter_coverage), camera_limits);
     preview_seconds = preview_clock.seconds();
-    char note[160];
-    std::snprintf(note, sizeof note, "exposure metered on a %dx%d preview at %d spp (%.2f s), sensor white %.6g cd/m2",
-                  preview_size.width, preview_size.height, kMeteringSamplesPerPixel, preview_seconds, sensor_white);
-    exposure_note = note;
+  } else {
+    camera = nightCameraForWhite(o.sensor_white_cd_m2, camera_limits);
   }
+  const double sensor_white = camera.white_cd_m2;
+  const std::string exposure_note = exposureNote(camera, preview_size);
+  PostProcessOptions post;
+  post.glare = o.glare;
+  post.noise = o.noise;
+  post.noise_options.seed = o.seed;
+  post.noise_options.iso = camera.camera.iso;
   // --noise-target: stop where render noise is below noise_factor x the sensor noise the pixel
   // will get at that exposure.
   std::string render_note = exposure_note;
   if (o.noise_target && o.noise) {
-    tracer.noise_sigma = renderNoiseSigma(sensor_white);
+    tracer.noise_sigma = renderNoiseSigma(sensor_white, post);
     tracer.noise_factor = o.noise_factor;
     tracer.shadow_roulette = o.shadow_roulette;
     tracer.relative_error = 0;  // the sensor's noise is the target now; max_samples still caps
     char note[128];
     std::snprintf(note, sizeof note, "noise-matched target: standard error <= %.2f x sensor noise sigma; ", o.noise_factor);
-    char given[64];
-    std::snprintf(given, sizeof given, "sensor white given, %.6g cd/m2", sensor_white);
-    render_note = note + (auto_white ? exposure_note : std::string(given));
+    render_note = note + exposure_note;
   }
   r.rendered = renderPathTraced(prepared, render_camera, tracer);
   RenderOutput& rendered = r.rendered;
@@ -241,19 +268,25 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   if (!o.denoise) stages.back().skip_reason = "render denoising switched off (--no-denoise)";
 
   // post: radiance in cd/m^2 scaled so that the reference exposure (+3.25 stops) puts
-  // sensor_white at 1. Only what will clip glows (the reference lets every pixel glow).
-  PostProcessOptions post;
-  post.glare = o.glare;
-  post.noise = o.noise;
-  post.noise_options.seed = o.seed;
+  // sensor_white at 1. Only what will clip (above the knee's white clip) glows; the reference
+  // lets every pixel glow.
+  post.glare_options.scatter_fraction = o.glare_scatter;
+  post.encoding_options.white_clip = o.white_clip;
+  post.encoding_options.knee_point = o.knee_point;
   const double calibration = 1.0 / (sensor_white * exposureScale(post.exposure_options));
-  post.glare_options.threshold = o.glare_threshold >= 0 ? o.glare_threshold : 1.0 / exposureScale(post.exposure_options);
+  post.glare_options.threshold =
+      o.glare_threshold >= 0 ? o.glare_threshold : o.white_clip / exposureScale(post.exposure_options);
   cv::Mat xyz = rendered.radiance * calibration;
   r.developed = postProcess(xyz, post);
   const PostProcessResult& developed = r.developed;
   r.sensor_white_cd_m2 = sensor_white;
   StageReport post_report = developed.report;
   post_report.add("sensor_white", sensor_white, "cd/m2").add("sensor_white_auto", auto_white);
+  post_report.add("camera_iso", camera.camera.iso)
+      .add("camera_shutter", camera.camera.shutter_s, "s")
+      .add("camera_f_number", camera.camera.f_number)
+      .add("camera_at_exposure_limit", camera.at_exposure_limit);
+  if (auto_white) post_report.add("metered_mean_luminance", camera.metered_cd_m2, "cd/m2");
   if (!o.glare) post_report.notes.push_back("glare switched off (--no-glare)");
   if (!o.noise) post_report.notes.push_back("sensor noise switched off (--no-noise)");
   for (const StageReport& step : developed.steps)

@@ -35,9 +35,9 @@ struct PresetValues {
 
 //                                spp     rel.err sampler  opt   iter  tol   eval   glare noise  n.target factor
 //                                roulette bounces mesh/ render/ denoise
-constexpr PresetValues kDraft = {1, 2, 0.3, "power", true, 3, 1e-6, false, true, true, false, 0.5, 0.3, 12, 2, 2, true};
-constexpr PresetValues kDefault = {2, 8, 0.1, "power", true, 10, 1e-9, false, true, true, true, 0.5, 0.3, 12, 1, 1, true};
-constexpr PresetValues kFinal = {8, 64, 0.03, "power", true, 10, 1e-9, true, true, true, true, 0.25, 0.3, 12, 1, 1, false};
+constexpr PresetValues kDraft = {1, 2, 0.3, "power", true, 3, 1e-6, false, true, true, false, 4, 0.3, 12, 2, 2, true};
+constexpr PresetValues kDefault = {2, 8, 0.1, "power", true, 10, 1e-9, false, true, true, true, 4, 0.3, 12, 1, 1, true};
+constexpr PresetValues kFinal = {8, 64, 0.03, "power", true, 10, 1e-9, true, true, true, true, 1, 0.3, 12, 1, 1, false};
 
 struct Knob {
   const char* flag;
@@ -145,6 +145,12 @@ std::string nightConfigText(const NightOptions& o) {
   flag("glare", o.glare);
   flag("noise", o.noise);
   line("sensor-white", number(o.sensor_white_cd_m2));
+  line("camera-f-number", number(o.camera_f_number));
+  line("camera-max-shutter", number(o.camera_max_shutter_s));
+  line("camera-max-iso", number(o.camera_max_iso));
+  line("glare-scatter", number(o.glare_scatter));
+  line("white-clip", number(o.white_clip));
+  line("knee-point", number(o.knee_point));
   line("glare-threshold", number(o.glare_threshold));
   return out.str();
 }

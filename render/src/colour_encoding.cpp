@@ -94,6 +94,22 @@ cv::Vec3f desaturate(const cv::Vec3f& c, double knee, const cv::Vec3d& w, bool* 
   return out;
 }
 
+void checkRolloff(double white_clip, double knee_point) {
+  if (!(white_clip >= 1 && std::isfinite(white_clip)))
+    throw std::invalid_argument("white clip must be a finite linear level >= 1, got " + std::to_string(white_clip));
+  if (!(knee_point > 0 && knee_point < 1))
+    throw std::invalid_argument("knee point must be in (0, 1), got " + std::to_string(knee_point));
+}
+
+/// luminanceRolloff without the checks.
+double rolloff(double y, double white_clip, double knee_point) {
+  if (white_clip <= 1 || !(y > 0)) return y;
+  const double e = std::pow(y, 1 / 2.2);
+  if (e <= knee_point) return y;
+  const double slope = (1 - knee_point) / (std::pow(white_clip, 1 / 2.2) - knee_point);
+  return std::pow(std::min(1.0, knee_point + (e - knee_point) * slope), 2.2);
+}
+
 struct GamutCounts {
   std::int64_t out_of_gamut = 0, negative_luminance = 0, over_range = 0;
 };
@@ -144,6 +160,7 @@ std::int64_t encodeLinear(const cv::Mat& linear_rgb, const ColourEncodingOptions
   encoded.create(linear_rgb.size(), CV_32FC3);
   const cv::Vec3d w = linearSrgbLuminanceWeights();
   const bool desaturate_highlights = options.highlights == HighlightHandling::Desaturate;
+  const bool rolled = options.white_clip > 1;
   std::atomic<std::int64_t> desaturated{0};
   cv::parallel_for_(cv::Range(0, linear_rgb.rows), [&](const cv::Range& rows) {
     std::int64_t local = 0;
@@ -152,6 +169,10 @@ std::int64_t encodeLinear(const cv::Mat& linear_rgb, const ColourEncodingOptions
       cv::Vec3f* dst = encoded.ptr<cv::Vec3f>(y);
       for (int x = 0; x < linear_rgb.cols; ++x) {
         cv::Vec3f c = src[x];
+        if (rolled) {
+          const double y = w[0] * c[0] + w[1] * c[1] + w[2] * c[2];
+          if (y > 0) c *= static_cast<float>(rolloff(y, options.white_clip, options.knee_point) / y);
+        }
         bool changed = false;
         if (desaturate_highlights) c = desaturate(c, options.highlight_knee, w, &changed);
         local += changed;
@@ -165,6 +186,11 @@ std::int64_t encodeLinear(const cv::Mat& linear_rgb, const ColourEncodingOptions
 
 }  // namespace
 
+double luminanceRolloff(double y, double white_clip, double knee_point) {
+  checkRolloff(white_clip, knee_point);
+  return rolloff(y, white_clip, knee_point);
+}
+
 cv::Vec3f desaturateHighlight(const cv::Vec3f& linear_rgb, double knee) {
   checkKnee(knee);
   bool changed = false;
@@ -175,6 +201,7 @@ ColourEncodingResult encodeXyzToSrgb(const cv::Mat& xyz_d65, const ColourEncodin
   Stopwatch clock;
   CV_Assert(xyz_d65.type() == CV_32FC3);
   checkKnee(options.highlight_knee);
+  checkRolloff(options.white_clip, options.knee_point);
   ColourEncodingResult result;
   result.report.name = "colour";
   cv::transform(xyz_d65, result.linear_rgb, cv::Matx33f(xyzToLinearSrgbMatrix()));
@@ -194,6 +221,8 @@ ColourEncodingResult encodeXyzToSrgb(const cv::Mat& xyz_d65, const ColourEncodin
       .add("negative_luminance_pixels", counts.negative_luminance)
       .add("over_range_pixels", counts.over_range)
       .add("over_range_fraction", pixels > 0 ? counts.over_range / pixels : 0.0);
+  if (options.white_clip > 1)
+    result.report.add("white_clip", options.white_clip).add("knee_point", options.knee_point);
   if (desaturate_highlights)
     result.report.add("highlight_knee", options.highlight_knee)
         .add("desaturated_highlight_pixels", desaturated)

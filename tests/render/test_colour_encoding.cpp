@@ -282,3 +282,44 @@ TEST(ColourEncodingHighlights, TheShoulderEasesInWithoutAKink) {
   EXPECT_NEAR(desaturation(0.8 + d, 0.8), d * d / (2 * 0.2 * (0.8 + d)), 2e-5);
   EXPECT_NEAR(desaturation(1 + d, 1.0), d / (1 + d), 1e-5);
 }
+
+TEST(ColourEncodingKnee, VideoKneeCompressesAboveTheKneePointAndReachesWhiteAtTheClip) {
+  // Knee point 0.7 (encoded), white clip 8: slope = 0.3 / (8^(1/2.2) - 0.7).
+  const double slope = 0.3 / (std::pow(8.0, 1 / 2.2) - 0.7);
+  const double below = std::pow(0.6, 2.2);  // encodes to 0.6 < 0.7: unchanged
+  EXPECT_DOUBLE_EQ(solo::luminanceRolloff(below, 8, 0.7), below);
+  // Linear 1 encodes to 1 and becomes 0.7 + 0.3 slope.
+  EXPECT_NEAR(solo::luminanceRolloff(1.0, 8, 0.7), std::pow(0.7 + 0.3 * slope, 2.2), 1e-12);
+  EXPECT_NEAR(solo::luminanceRolloff(8.0, 8, 0.7), 1.0, 1e-12);
+  EXPECT_DOUBLE_EQ(solo::luminanceRolloff(1e6, 8, 0.7), 1.0);
+  // Monotone and continuous at the knee.
+  const double at_knee = std::pow(0.7, 2.2);
+  EXPECT_NEAR(solo::luminanceRolloff(at_knee * (1 + 1e-9), 8, 0.7), at_knee, 1e-9);
+  double previous = 0;
+  for (double y = 0; y < 10; y += 0.01) {
+    const double v = solo::luminanceRolloff(y, 8, 0.7);
+    EXPECT_GE(v, previous);
+    previous = v;
+  }
+  // White clip 1: the identity (the encoding then clips at 1).
+  EXPECT_DOUBLE_EQ(solo::luminanceRolloff(3.0, 1, 0.7), 3.0);
+  EXPECT_THROW(solo::luminanceRolloff(1.0, 0.5, 0.7), std::invalid_argument);
+  EXPECT_THROW(solo::luminanceRolloff(1.0, 8, 1.0), std::invalid_argument);
+}
+
+TEST(ColourEncodingKnee, AWindowTwiceAsBrightAsWhiteStaysBelowFullWhiteWithItsChromaticity) {
+  // A warm window at twice sensor white: with the knee it encodes below 1 in every channel and
+  // keeps its chromaticity (the ratio of its channels); without it, it clips to white.
+  const cv::Vec3d rgb(2.0, 1.6, 1.0);
+  solo::ColourEncodingOptions knee;
+  knee.white_clip = 8;
+  knee.knee_point = 0.7;
+  knee.highlight_knee = 1;  // isolate the luminance knee from the chroma shoulder
+  const cv::Vec3f kneed = solo::encodeXyzToSrgb(onePixel(xyzOfLinearSrgb(rgb)), knee).encoded.at<cv::Vec3f>(0, 0);
+  for (int k = 0; k < 3; ++k) EXPECT_LT(kneed[k], 1.f);
+  const auto linear = [](float e) { return std::pow(e, 2.2); };
+  EXPECT_NEAR(linear(kneed[1]) / linear(kneed[0]), 0.8, 2e-3);
+  EXPECT_NEAR(linear(kneed[2]) / linear(kneed[0]), 0.5, 2e-3);
+  const cv::Vec3f clipped = solo::encodeXyzToSrgb(onePixel(xyzOfLinearSrgb(rgb)), {}).encoded.at<cv::Vec3f>(0, 0);
+  EXPECT_EQ(clipped, cv::Vec3f(1.f, 1.f, 1.f));
+}

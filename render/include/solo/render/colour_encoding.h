@@ -41,7 +41,21 @@ struct ColourEncodingOptions {
   /// unchanged; above it the desaturation eases in with a continuous slope. 1 = a hard
   /// shoulder (every colour inside [0, 1]^3 unchanged).
   double highlight_knee = 0.8;
+  /// Luminance roll-off of a video camera's knee: the linear luminance that encodes to full
+  /// white (>= 1). 1 = none, everything above sensor white clips (the reference). Above it the
+  /// image's luminance is compressed in the gamma-2.2 domain from `knee_point` up, with a
+  /// straight slope that reaches 1 at white_clip (luminanceRolloff); the colour keeps its
+  /// chromaticity, and the highlight handling above then treats channels still above 1.
+  double white_clip = 1;
+  double knee_point = 0.8;  ///< gamma-2.2-encoded luminance where the knee starts, in (0, 1)
 };
+
+/// The knee of a video camera on a linear luminance y >= 0: with e = y^(1/2.2), e is kept up to
+/// `knee_point` and above it becomes knee_point + (e - knee_point) (1 - knee_point) /
+/// (white_clip^(1/2.2) - knee_point), capped at 1; the result is decoded back to linear. Monotone
+/// and continuous; the identity when white_clip is 1 (then only clipping at 1). Throws
+/// std::invalid_argument for white_clip < 1 or non-finite, or knee_point outside (0, 1).
+double luminanceRolloff(double y, double white_clip, double knee_point);
 
 /// Linear sRGB from XYZ relative to D65 (Y = 1 white), derived from the sRGB primaries
 /// and the D65 white (0.95047, 1, 1.08883): D65 white maps to (1, 1, 1).
@@ -70,7 +84,7 @@ struct ColourEncodingResult {
 };
 
 /// xyz_d65: CV_32FC3 XYZ relative to D65 (after adaptation), any finite values. Throws
-/// std::invalid_argument for a highlight knee outside [0, 1].
+/// std::invalid_argument for a highlight knee outside [0, 1] or an invalid white clip / knee point.
 ColourEncodingResult encodeXyzToSrgb(const cv::Mat& xyz_d65, const ColourEncodingOptions& options);
 
 /// CV_8UC3 or CV_16UC3 codes round(value * max) of an encoded image in [0, 1].
