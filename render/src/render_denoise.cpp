@@ -25,6 +25,7 @@ struct Guides {
   cv::Mat point_m;   // CV_32FC3 first-hit point, camera frame, metres
   cv::Mat normal;    // CV_32FC3 unit normal
   cv::Mat depth_m;   // CV_32F z-depth, metres
+  cv::Mat log_albedo;  // CV_32F ln of the demodulation albedo's Y (filled by demodulationAlbedo)
 };
 
 // The irradiance being filtered and the variance of its Y (empty: no luminance weight).
@@ -63,9 +64,10 @@ void validate(const RenderOutput& r, const PinholeCamera& camera, const RenderDe
                                 std::to_string(size.height));
   if (o.iterations < 1 || o.iterations > 10)
     throw std::invalid_argument("denoiseRender: iterations must be 1 to 10, got " + std::to_string(o.iterations));
-  if (!(o.albedo_floor > 0) || !(o.normal_exponent >= 0) || !(o.plane_tolerance > 0) || !(o.luminance_sigma > 0))
-    throw std::invalid_argument(
-        "denoiseRender: albedo_floor, plane_tolerance and luminance_sigma must be > 0 and normal_exponent >= 0");
+  if (!(o.albedo_floor > 0) || !(o.normal_exponent >= 0) || !(o.albedo_sigma >= 0) || !(o.plane_tolerance > 0) ||
+      !(o.luminance_sigma > 0))
+    throw std::invalid_argument("denoiseRender: albedo_floor, plane_tolerance and luminance_sigma must be > 0, "
+                                "normal_exponent and albedo_sigma >= 0");
 }
 
 bool isEmitter(const RenderOutput& r, int y, int x) {
@@ -105,8 +107,9 @@ Guides makeGuides(const RenderOutput& r, const PinholeCamera& camera, PixelCount
 }
 
 // max(albedo, floor) per channel where filtered, 1 elsewhere (and everywhere without albedo).
-cv::Mat demodulationAlbedo(const RenderOutput& r, const Guides& g, float albedo_floor) {
+cv::Mat demodulationAlbedo(const RenderOutput& r, Guides& g, float albedo_floor) {
   cv::Mat a(r.radiance.size(), CV_32FC3, cv::Scalar::all(1));
+  g.log_albedo = cv::Mat::zeros(r.radiance.size(), CV_32F);
   if (r.albedo.empty()) return a;
   for (int y = 0; y < a.rows; ++y)
     for (int x = 0; x < a.cols; ++x) {
@@ -114,6 +117,7 @@ cv::Mat demodulationAlbedo(const RenderOutput& r, const Guides& g, float albedo_
       const cv::Vec3f albedo = r.albedo.at<cv::Vec3f>(y, x);
       for (int c = 0; c < 3; ++c)
         a.at<cv::Vec3f>(y, x)[c] = std::isfinite(albedo[c]) ? std::max(albedo[c], albedo_floor) : albedo_floor;
+      g.log_albedo.at<float>(y, x) = std::log(a.at<cv::Vec3f>(y, x)[1]);
     }
   return a;
 }
@@ -153,6 +157,7 @@ void atrousRows(const Guides& g, const Estimate& in, int step, const RenderDenoi
       const cv::Vec3f point_p = g.point_m.at<cv::Vec3f>(y, x), normal_p = g.normal.at<cv::Vec3f>(y, x);
       const float inverse_tolerance = 1.f / (o.plane_tolerance * g.depth_m.at<float>(y, x));
       const float y_p = in.irradiance.at<cv::Vec3f>(y, x)[1];
+      const float log_albedo_p = g.log_albedo.at<float>(y, x);
       const float variance_p = luminance ? in.variance.at<float>(y, x) : 0.f;
       float sum_w = 0, sum_w2v = 0;
       cv::Vec3f sum{0, 0, 0};
@@ -166,6 +171,7 @@ void atrousRows(const Guides& g, const Estimate& in, int step, const RenderDenoi
           if (o.normal_exponent > 0 && cos_n <= 0.f) continue;
           float exponent = -std::abs(normal_p.dot(g.point_m.at<cv::Vec3f>(yq, xq) - point_p)) * inverse_tolerance;
           if (o.normal_exponent > 0) exponent += o.normal_exponent * std::log(std::min(cos_n, 1.f));
+          if (o.albedo_sigma > 0) exponent -= std::abs(log_albedo_p - g.log_albedo.at<float>(yq, xq)) / o.albedo_sigma;
           const cv::Vec3f& irradiance_q = in.irradiance.at<cv::Vec3f>(yq, xq);
           float variance_q = 0;
           if (luminance) {
@@ -208,7 +214,7 @@ StageReport denoiseRender(RenderOutput& render, const PinholeCamera& camera, con
   const Stopwatch clock;
   validate(render, camera, options);
   PixelCounts counts;
-  const Guides guides = makeGuides(render, camera, counts);
+  Guides guides = makeGuides(render, camera, counts);
   const cv::Mat albedo = demodulationAlbedo(render, guides, options.albedo_floor);
 
   Estimate estimate;

@@ -138,6 +138,29 @@ TEST(RenderDenoise, EdgesInDepthNormalAndAlbedoStaySharp) {
   }
 }
 
+TEST(RenderDenoise, RadianceThatIsNotAlbedoTimesIrradianceStaysOnItsAlbedo) {
+  // A texture of dark (0.05) and light (0.5) pixels at random, irradiance 2, plus a specular
+  // reflection of 0.1 that does not scale with the albedo: 0.2 and 1.1. Divided by the albedo, the
+  // dark pixels' reflection is 2 of irradiance; mixed into the light pixels and multiplied back
+  // it would make them 1.55.
+  cv::Mat light(kHeight, kWidth, CV_8U);
+  cv::RNG rng(17);
+  rng.fill(light, cv::RNG::UNIFORM, 0, 2);
+  solo::RenderOutput r = noisyRender(
+      [&](int x, int y) {
+        SurfaceTruth t;
+        t.albedo = light.at<std::uint8_t>(y, x) ? 0.5f : 0.05f;
+        return t;
+      },
+      0.05f, 29);
+  r.radiance += cv::Scalar::all(0.1);
+  solo::denoiseRender(r, camera());
+  cv::Mat y_channel;
+  cv::extractChannel(r.radiance, y_channel, 1);
+  EXPECT_NEAR(cv::mean(y_channel, light)[0], 1.1, 0.02);
+  EXPECT_NEAR(cv::mean(y_channel, light == 0)[0], 0.2, 0.02);
+}
+
 TEST(RenderDenoise, EmitterPixelsStayBitIdenticalAndLightNoNeighbour) {
   solo::RenderOutput r = noisyRender([](int, int) { return SurfaceTruth{}; }, 0.1f, 5);
   const cv::Rect lamp(40, 40, 12, 12), sliver(100, 60, 6, 6);

@@ -1,0 +1,65 @@
+#!/usr/bin/python3
+"""Error of linear renders against a reference render of the same scene (docs/accuracy.md, "Render denoising").
+
+  render_error.py REF.exr RUN.exr...
+
+Each EXR is a `solo night --render-exr` output (linear XYZ, render units) with its light-id AOV
+beside it (STEM.lightid.npy). Over the pixels whose light id is 0 in both images, on the
+luminance Y: relative RMSE sqrt(sum (y - r)^2 / sum r^2) and mean ratio sum y / sum r, unclipped
+and clipped at the reference's white W (95th percentile of its Y / 0.8, solo night's rule).
+Needs oiiotool (openimageio-tools) to read the EXRs, and numpy.
+"""
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+
+def read_exr(path):
+    """H x W x C float64 array of an EXR, through oiiotool's FITS writer (rows bottom-up there)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        fits = os.path.join(tmp, "image.fits")
+        subprocess.run(["oiiotool", path, "-d", "float", "-o", fits], check=True)
+        raw = open(fits, "rb").read()
+    header, offset = {}, 0
+    while True:
+        cards = [raw[offset + i:offset + i + 80].decode() for i in range(0, 2880, 80)]
+        offset += 2880
+        for card in cards:
+            if card[8:10] == "= ":
+                header[card[:8].strip()] = card[10:].split("/")[0].strip()
+        if any(card.startswith("END") for card in cards):
+            break
+    dims = [int(header["NAXIS%d" % (i + 1)]) for i in range(int(header["NAXIS"]))]
+    count = int(np.prod(dims))
+    image = np.frombuffer(raw[offset:offset + 4 * count], dtype=">f4").astype(np.float64).reshape(dims[::-1])
+    return image[::-1]
+
+
+def load(exr):
+    stem = exr[:-len(".exr")]
+    return read_exr(exr)[..., 1], np.load(stem + ".lightid.npy")
+
+
+def main(argv):
+    if len(argv) < 3:
+        sys.exit(__doc__)
+    ref_y, ref_id = load(argv[1])
+    white = np.percentile(ref_y[ref_id == 0], 95) / 0.8
+    print(f"reference {argv[1]}: white W = {white:.4g}")
+    print("run".ljust(28) + "rel.RMSE  mean ratio  rel.RMSE(clip W)  mean ratio(clip W)")
+    for exr in argv[2:]:
+        y, light_id = load(exr)
+        keep = (light_id == 0) & (ref_id == 0)
+        r, t = ref_y[keep], y[keep]
+        rc, tc = np.minimum(r, white), np.minimum(t, white)
+        rmse = np.sqrt(((t - r) ** 2).sum() / (r ** 2).sum())
+        rmse_clipped = np.sqrt(((tc - rc) ** 2).sum() / (rc ** 2).sum())
+        print(f"{os.path.basename(exr)[:27]:28s}{rmse:8.4f}  {t.sum() / r.sum():10.4f}  {rmse_clipped:16.4f}  "
+              f"{tc.sum() / rc.sum():18.4f}")
+
+
+if __name__ == "__main__":
+    main(sys.argv)
