@@ -54,7 +54,7 @@ struct PathTracerOptions {
   /// that stops on its own few samples stops most often when its rare bright paths have not
   /// appeared yet, so its mean is biased dark (measured: 27 % of the light lost at 4-16 spp, 47 %
   /// at 2-16, docs/rendering.md); a decision independent of its samples leaves its mean
-  /// unbiased. false: its own samples (as before session 5).
+  /// unbiased. false: the pixel's own samples (biased dark, kept for comparison).
   bool stop_on_neighbours = true;
   cv::Mat absolute_error;  ///< CV_32F per pixel, render units; empty = none
   /// Standard deviation of the noise the output will receive afterwards (the sensor noise)
