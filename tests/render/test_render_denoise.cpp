@@ -84,7 +84,7 @@ double metric(const solo::StageReport& r, const std::string& name) {
 
 }  // namespace
 
-TEST(RenderDenoise, FlatPlaneNoiseDropsTenfoldAndItsMeanStaysUnbiased) {
+TEST(RenderDenoise, FlatPlaneNoiseDropsTwentyFiveFoldAndItsMeanStaysUnbiased) {
   const float sigma = 0.2f;  // 20 % of the radiance 0.5 x 2 = 1
   solo::RenderOutput r = noisyRender([](int, int) { return SurfaceTruth{}; }, sigma, 11);
   const cv::Rect all(0, 0, kWidth, kHeight);
@@ -93,7 +93,8 @@ TEST(RenderDenoise, FlatPlaneNoiseDropsTenfoldAndItsMeanStaysUnbiased) {
 
   const solo::StageReport report = solo::denoiseRender(r, camera());
   const ErrorStats after = yError(r.radiance, all, 1.0);
-  EXPECT_LT(after.sigma, before.sigma / 10) << "noise " << before.sigma << " -> " << after.sigma;
+  // Measured 0.201 -> 0.0043 (46x); a plain linear filter of this footprint: about 65x (estimated).
+  EXPECT_LT(after.sigma, before.sigma / 25) << "noise " << before.sigma << " -> " << after.sigma;
   // Unfiltered, the mean's own noise is 0.2 / sqrt(19200) = 0.0014; symmetric noise must not
   // shift it.
   EXPECT_NEAR(after.mean, 0.0, 0.005);
@@ -128,13 +129,13 @@ TEST(RenderDenoise, EdgesInDepthNormalAndAlbedoStaySharp) {
     const double step = std::abs(left_truth - right_truth);
     // The columns on either side of the edge: a filter blind to it would put them half way.
     for (const int x : {edge - 2, edge - 1}) {
-      EXPECT_NEAR(columnMeanY(r.radiance, x, 0, kHeight), left_truth, 0.03 * step) << c.name << " column " << x;
+      EXPECT_NEAR(columnMeanY(r.radiance, x, 0, kHeight), left_truth, 0.01 * step) << c.name << " column " << x;
     }
     for (const int x : {edge, edge + 1}) {
-      EXPECT_NEAR(columnMeanY(r.radiance, x, 0, kHeight), right_truth, 0.03 * step) << c.name << " column " << x;
+      EXPECT_NEAR(columnMeanY(r.radiance, x, 0, kHeight), right_truth, 0.01 * step) << c.name << " column " << x;
     }
-    EXPECT_LT(yError(r.radiance, cv::Rect(edge - 1, 0, 1, kHeight), left_truth).sigma, sigma / 3) << c.name;
-    EXPECT_LT(yError(r.radiance, cv::Rect(edge, 0, 1, kHeight), right_truth).sigma, sigma / 3) << c.name;
+    EXPECT_LT(yError(r.radiance, cv::Rect(edge - 1, 0, 1, kHeight), left_truth).sigma, sigma / 10) << c.name;
+    EXPECT_LT(yError(r.radiance, cv::Rect(edge, 0, 1, kHeight), right_truth).sigma, sigma / 10) << c.name;
   }
 }
 
@@ -157,8 +158,8 @@ TEST(RenderDenoise, RadianceThatIsNotAlbedoTimesIrradianceStaysOnItsAlbedo) {
   solo::denoiseRender(r, camera());
   cv::Mat y_channel;
   cv::extractChannel(r.radiance, y_channel, 1);
-  EXPECT_NEAR(cv::mean(y_channel, light)[0], 1.1, 0.02);
-  EXPECT_NEAR(cv::mean(y_channel, light == 0)[0], 0.2, 0.02);
+  EXPECT_NEAR(cv::mean(y_channel, light)[0], 1.1, 0.01);
+  EXPECT_NEAR(cv::mean(y_channel, light == 0)[0], 0.2, 0.01);
 }
 
 TEST(RenderDenoise, EmitterPixelsStayBitIdenticalAndLightNoNeighbour) {
@@ -179,7 +180,7 @@ TEST(RenderDenoise, EmitterPixelsStayBitIdenticalAndLightNoNeighbour) {
   // The pixels around them still show the plane's radiance 1: none of the lamps' light leaked.
   for (const cv::Rect& emitter : {lamp, sliver}) {
     const cv::Rect ring(emitter.x - 2, emitter.y - 2, emitter.width + 4, 2);
-    EXPECT_NEAR(yError(r.radiance, ring, 1.0).mean, 0.0, 0.02);
+    EXPECT_NEAR(yError(r.radiance, ring, 1.0).mean, 0.0, 0.01);
   }
 }
 
