@@ -301,4 +301,19 @@ struct BenchAccuracyOptions {
 };
 int runBenchAccuracy(const BenchAccuracyOptions& options);
 
+/// `solo bench realism`: `solo night`'s pipeline (the preset applied) on the embedded default
+/// scene and on `solo synth` streets of several seeds and variants (one at twice the street
+/// size); into `output`: night/<scene>.png, scenes/ (the streets), realism.csv (realism
+/// statistics, day mean luma, road and window luminance in cd/m^2, seconds; one row per scene
+/// and a median row), README.md (the table against docs/realism.md's targets, the seed, the
+/// machine's load) and contact_sheet.png.
+struct BenchRealismOptions {
+  std::filesystem::path output;   ///< folder to write (created)
+  std::uint64_t seed = 1;         ///< lights, render and sensor noise of every run
+  bool quick = false;             ///< the default scene and two streets only
+  std::string preset = "default";  ///< `solo night` preset
+  int width = 960, height = 540;  ///< pixels of the streets; the large street is twice each
+};
+int runBenchRealism(const BenchRealismOptions& options);
+
 }  // namespace solo::tools

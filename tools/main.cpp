@@ -367,6 +367,21 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   bench_accuracy_cmd->add_flag("!--no-plots", bench_accuracy.plots, "Write no gnuplot script and run no gnuplot");
 
+  BenchRealismOptions bench_realism;
+  std::string realism_size = "960x540";
+  CLI::App* bench_realism_cmd = bench_cmd->add_subcommand(
+      "realism",
+      "solo night on the default scene and synthetic streets: realism statistics against the targets, "
+      "times, contact sheet (docs/realism.md)");
+  bench_realism_cmd->add_option("-o,--output", bench_realism.output, "Folder to write (CSV, README, PNG)")->required();
+  bench_realism_cmd->add_option("--seed", bench_realism.seed, "Seed of every night run")->capture_default_str();
+  bench_realism_cmd->add_flag("--quick", bench_realism.quick, "The default scene and two streets only");
+  bench_realism_cmd->add_option("--preset", bench_realism.preset, "solo night preset: draft, default or final")
+      ->capture_default_str()
+      ->check(CLI::IsMember(nightPresetNames()));
+  bench_realism_cmd->add_option("--size", realism_size, "Size WIDTHxHEIGHT of the streets (one is twice that)")
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -398,6 +413,11 @@ int main(int argc, char** argv) {
     std::cerr << "solo: error: --scene-size: expected WIDTHxHEIGHT, got \"" << bench_size << "\"\n";
     return 2;
   }
+  if (bench_realism_cmd->parsed() &&
+      std::sscanf(realism_size.c_str(), "%dx%d", &bench_realism.width, &bench_realism.height) != 2) {
+    std::cerr << "solo: error: --size: expected WIDTHxHEIGHT, got \"" << realism_size << "\"\n";
+    return 2;
+  }
   try {
     // The preset fills every knob the command line and the config file left unset.
     if (night_cmd->parsed())
@@ -424,6 +444,7 @@ int main(int argc, char** argv) {
     if (post_cmd->parsed()) return runPost(post);
     if (fda_cmd->parsed()) return runFda(fda);
     if (bench_accuracy_cmd->parsed()) return runBenchAccuracy(bench_accuracy);
+    if (bench_realism_cmd->parsed()) return runBenchRealism(bench_realism);
   } catch (const solo::InputError& e) {
     std::cerr << "solo: error: " << e.what() << "\n";
     return 2;

@@ -179,6 +179,98 @@ TEST(CliBench, AccuracyQuickWritesEveryStageAndTheRenderErrorFallsWithSamples) {
   }
 }
 
+/// Width and height of a PNG file, from its IHDR chunk (bytes 16-23, big-endian).
+std::pair<int, int> pngSize(const std::filesystem::path& file) {
+  const std::string bytes = readText(file);
+  EXPECT_GE(bytes.size(), 24u) << file;
+  if (bytes.size() < 24) return {0, 0};
+  const auto word = [&](std::size_t at) {
+    int v = 0;
+    for (std::size_t i = at; i < at + 4; ++i) v = v * 256 + static_cast<unsigned char>(bytes[i]);
+    return v;
+  };
+  return {word(16), word(20)};
+}
+
+/// The targets of docs/realism.md (and EN 13201 M1-M6 for the road) a row misses, from its values.
+std::string expectedMisses(const std::map<std::string, std::string>& row) {
+  const auto outside = [&](const std::string& key, double lo, double hi) {
+    const double v = number(row, key);
+    return !(v >= lo && v <= hi);
+  };
+  std::string missed;
+  const auto add = [&](bool miss, const std::string& key) {
+    if (miss) missed += (missed.empty() ? "" : ";") + key;
+  };
+  add(outside("mean", 30, 70), "mean");
+  add(outside("clipped", 0, 0.005), "clipped");
+  add(outside("bright", 0, 0.02), "bright");
+  add(outside("noise", 0.5, 1.5), "noise");
+  add(outside("chroma_noise", 0, 1.0), "chroma_noise");
+  add(!(number(row, "cast_cb") < 0 && number(row, "cast_cr") > 0), "cast");
+  add(outside("night_to_day", 0, 0.5), "night_to_day");
+  add(outside("road_cd_m2", 0.3, 2.0), "road_cd_m2");
+  return missed;
+}
+
+TEST(CliBench, RealismQuickMeasuresEachNightImageAsEvalNightDoes) {
+  TempDir dir;
+  const auto out = dir / "realism";
+  const auto r = runSolo("bench realism --quick --size 160x90 --preset draft --seed 5 -o " + quoted(out));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* line :
+       {"[1/3] default-scene 960x540", "[2/3] street-s1-default 160x90", "[3/3] street-s2-wide-sky 160x90"})
+    EXPECT_NE(r.output.find(line), std::string::npos) << line << "\n" << r.output;  // progress, one per scene
+
+  const Csv csv = readCsv(out / "realism.csv");
+  ASSERT_EQ(csv.rows.size(), 4u);
+  const std::vector<std::string> names = {"default-scene", "street-s1-default", "street-s2-wide-sky", "MEDIAN"};
+  const std::vector<std::string> statistics = {"mean",           "p50",       "p90",          "p99",     "clipped",
+                                               "bright",         "noise",     "chroma_noise", "cast_cb", "cast_cr",
+                                               "halo_radius_px", "halo_blobs"};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const auto& row = csv.rows[i];
+    EXPECT_EQ(row.at("scene"), names[i]);
+    EXPECT_EQ(row.at("seed"), "5");
+    EXPECT_EQ(row.at("preset"), "draft");
+    EXPECT_EQ(row.at("width_px"), i == 0 ? "960" : "160");
+    EXPECT_EQ(row.at("height_px"), i == 0 ? "540" : "90");
+    // The written image, measured by `solo eval night`: the same figures, to the last digit.
+    const auto night = out / "night" / (names[i] + ".png");
+    const auto eval_csv = dir / ("eval_" + names[i] + ".csv");
+    const auto e = runSolo("eval night " + quoted(night) + " --csv " + quoted(eval_csv));
+    ASSERT_EQ(e.exit_code, 0) << e.output;
+    const Csv eval = readCsv(eval_csv);
+    ASSERT_EQ(eval.rows.size(), 1u);
+    for (const std::string& key : statistics) EXPECT_EQ(row.at(key), eval.rows[0].at(key)) << names[i] << " " << key;
+    EXPECT_NEAR(number(row, "night_to_day"), number(row, "mean") / number(row, "day_mean"), 1e-12);
+    EXPECT_GT(number(row, "day_mean"), number(row, "mean"));  // night darker than day
+    EXPECT_GT(number(row, "road_pixels"), 0);
+    EXPECT_GT(number(row, "road_cd_m2"), 0);
+    EXPECT_GT(number(row, "seconds_total"), number(row, "seconds_render"));
+    EXPECT_EQ(row.at("missed_targets"), expectedMisses(row)) << names[i];
+  }
+  EXPECT_EQ(csv.rows[1].at("street_seed"), "1");
+  EXPECT_EQ(csv.rows[2].at("variant"), "wide-sky");
+  // The median row: the middle of the three scenes' values.
+  const auto& median = csv.rows[3];
+  EXPECT_EQ(median.at("scene"), "MEDIAN");
+  for (const char* key : {"mean", "bright", "noise", "chroma_noise", "road_cd_m2", "seconds_total"}) {
+    std::vector<double> v = {number(csv.rows[0], key), number(csv.rows[1], key), number(csv.rows[2], key)};
+    std::sort(v.begin(), v.end());
+    EXPECT_EQ(number(median, key), v[1]) << key;
+  }
+  EXPECT_EQ(median.at("missed_targets"), expectedMisses(median));
+
+  const std::string readme = readText(out / "README.md");
+  EXPECT_NE(readme.find("seed: 5"), std::string::npos) << readme;
+  EXPECT_NE(readme.find("| *target* | | 30-70 |"), std::string::npos) << readme;
+  EXPECT_NE(readme.find("| **median** |"), std::string::npos) << readme;
+  EXPECT_NE(readme.find("load average"), std::string::npos) << readme;
+  // Three 960x540 tiles at most 480 px wide in one row: 6 + 3 x (480 + 6) by 6 + 22 + 270 + 6.
+  EXPECT_EQ(pngSize(out / "contact_sheet.png"), std::make_pair(1464, 304));
+}
+
 TEST(CliBench, AccuracyRefusesBadInputBeforeWritingAnything) {
   TempDir dir;
   const auto missing = dir / "nowhere";
