@@ -87,12 +87,13 @@ Guides makeGuides(const RenderOutput& r, const PinholeCamera& camera, PixelCount
       const float z = r.depth_m.at<float>(y, x);
       const cv::Vec3f n = r.normal.at<cv::Vec3f>(y, x);
       const cv::Vec3f radiance = r.radiance.at<cv::Vec3f>(y, x);
-      const float n_length = static_cast<float>(cv::norm(n));
+      const float n_length = std::sqrt(n.dot(n));
       if (isEmitter(r, y, x)) {
         ++counts.emitter;
         continue;
       }
-      if (!(std::isfinite(z) && z > 0.f && std::isfinite(n_length) && n_length > 1e-3f && cv::checkRange(radiance))) {
+      const bool finite_radiance = std::isfinite(radiance[0]) && std::isfinite(radiance[1]) && std::isfinite(radiance[2]);
+      if (!(std::isfinite(z) && z > 0.f && std::isfinite(n_length) && n_length > 1e-3f && finite_radiance)) {
         ++counts.no_surface;
         continue;
       }
@@ -143,50 +144,67 @@ cv::Mat initialVariance(const RenderOutput& r, const Guides& g, const cv::Mat& a
   return out;
 }
 
+// What the weights of a pixel's neighbours read of the pixel itself.
+struct Centre {
+  cv::Vec3f point_m, normal;
+  float inverse_tolerance, log_albedo, luminance, variance;
+};
+
+// Below this ln weight a neighbour is left out (weight < 2e-9): no exp, no luminance term.
+constexpr float kNegligibleLogWeight = -20.f;
+
+// ln of neighbour q's geometric weight (normal, tangent plane, albedo) for pixel `c`;
+// kNegligibleLogWeight or less when it does not count.
+float geometryLogWeight(const Centre& c, const Guides& g, int yq, int xq, const RenderDenoiseOptions& o) {
+  const float cos_n = c.normal.dot(g.normal.at<cv::Vec3f>(yq, xq));
+  if (o.normal_exponent > 0 && cos_n <= 0.f) return kNegligibleLogWeight;
+  float log_w = -std::abs(c.normal.dot(g.point_m.at<cv::Vec3f>(yq, xq) - c.point_m)) * c.inverse_tolerance;
+  if (o.normal_exponent > 0 && cos_n < 1.f) log_w += o.normal_exponent * std::log(cos_n);
+  if (o.albedo_sigma > 0) log_w -= std::abs(c.log_albedo - g.log_albedo.at<float>(yq, xq)) / o.albedo_sigma;
+  return log_w;
+}
+
+// Pixel (x, y)'s filtered irradiance and its variance: the weighted mean over its 5x5 taps.
+void filterPixel(const Guides& g, const Estimate& in, int step, const RenderDenoiseOptions& o, int x, int y,
+                 Estimate& out) {
+  const bool luminance = !in.variance.empty();
+  const Centre c{g.point_m.at<cv::Vec3f>(y, x), g.normal.at<cv::Vec3f>(y, x),
+                 1.f / (o.plane_tolerance * g.depth_m.at<float>(y, x)), g.log_albedo.at<float>(y, x),
+                 in.irradiance.at<cv::Vec3f>(y, x)[1], luminance ? in.variance.at<float>(y, x) : 0.f};
+  float sum_w = 0, sum_w2v = 0;
+  cv::Vec3f sum{0, 0, 0};
+  for (int j = 0; j < 5; ++j) {
+    const int yq = y + (j - 2) * step;
+    if (yq < 0 || yq >= g.filtered.rows) continue;
+    for (int i = 0; i < 5; ++i) {
+      const int xq = x + (i - 2) * step;
+      if (xq < 0 || xq >= g.filtered.cols || !g.filtered.at<std::uint8_t>(yq, xq)) continue;
+      float log_w = geometryLogWeight(c, g, yq, xq, o);
+      if (log_w <= kNegligibleLogWeight) continue;
+      const cv::Vec3f& irradiance_q = in.irradiance.at<cv::Vec3f>(yq, xq);
+      const float variance_q = luminance ? in.variance.at<float>(yq, xq) : 0.f;
+      if (luminance)
+        log_w -= std::abs(c.luminance - irradiance_q[1]) / (o.luminance_sigma * std::sqrt(c.variance + variance_q) + 1e-30f);
+      const float w = kSpline[static_cast<std::size_t>(i)] * kSpline[static_cast<std::size_t>(j)] * std::exp(log_w);
+      sum_w += w;
+      sum += w * irradiance_q;
+      sum_w2v += w * w * variance_q;
+    }
+  }
+  // sum_w > 0: the pixel itself weighs (3/8)^2.
+  out.irradiance.at<cv::Vec3f>(y, x) = sum / sum_w;
+  if (luminance) out.variance.at<float>(y, x) = sum_w2v / (sum_w * sum_w);
+}
+
 // One a-trous pass with taps `step` px apart over rows [row_begin, row_end).
 void atrousRows(const Guides& g, const Estimate& in, int step, const RenderDenoiseOptions& o, Estimate& out,
                 int row_begin, int row_end) {
-  const bool luminance = !in.variance.empty();
-  const int rows = g.filtered.rows, cols = g.filtered.cols;
   for (int y = row_begin; y < row_end; ++y)
-    for (int x = 0; x < cols; ++x) {
-      if (!g.filtered.at<std::uint8_t>(y, x)) {
+    for (int x = 0; x < g.filtered.cols; ++x) {
+      if (g.filtered.at<std::uint8_t>(y, x))
+        filterPixel(g, in, step, o, x, y, out);
+      else
         out.irradiance.at<cv::Vec3f>(y, x) = in.irradiance.at<cv::Vec3f>(y, x);
-        continue;
-      }
-      const cv::Vec3f point_p = g.point_m.at<cv::Vec3f>(y, x), normal_p = g.normal.at<cv::Vec3f>(y, x);
-      const float inverse_tolerance = 1.f / (o.plane_tolerance * g.depth_m.at<float>(y, x));
-      const float y_p = in.irradiance.at<cv::Vec3f>(y, x)[1];
-      const float log_albedo_p = g.log_albedo.at<float>(y, x);
-      const float variance_p = luminance ? in.variance.at<float>(y, x) : 0.f;
-      float sum_w = 0, sum_w2v = 0;
-      cv::Vec3f sum{0, 0, 0};
-      for (int j = 0; j < 5; ++j) {
-        const int yq = y + (j - 2) * step;
-        if (yq < 0 || yq >= rows) continue;
-        for (int i = 0; i < 5; ++i) {
-          const int xq = x + (i - 2) * step;
-          if (xq < 0 || xq >= cols || !g.filtered.at<std::uint8_t>(yq, xq)) continue;
-          const float cos_n = normal_p.dot(g.normal.at<cv::Vec3f>(yq, xq));
-          if (o.normal_exponent > 0 && cos_n <= 0.f) continue;
-          float exponent = -std::abs(normal_p.dot(g.point_m.at<cv::Vec3f>(yq, xq) - point_p)) * inverse_tolerance;
-          if (o.normal_exponent > 0) exponent += o.normal_exponent * std::log(std::min(cos_n, 1.f));
-          if (o.albedo_sigma > 0) exponent -= std::abs(log_albedo_p - g.log_albedo.at<float>(yq, xq)) / o.albedo_sigma;
-          const cv::Vec3f& irradiance_q = in.irradiance.at<cv::Vec3f>(yq, xq);
-          float variance_q = 0;
-          if (luminance) {
-            variance_q = in.variance.at<float>(yq, xq);
-            exponent -= std::abs(y_p - irradiance_q[1]) / (o.luminance_sigma * std::sqrt(variance_p + variance_q) + 1e-30f);
-          }
-          const float w = kSpline[static_cast<std::size_t>(i)] * kSpline[static_cast<std::size_t>(j)] * std::exp(exponent);
-          sum_w += w;
-          sum += w * irradiance_q;
-          sum_w2v += w * w * variance_q;
-        }
-      }
-      // sum_w > 0: the pixel itself weighs (3/8)^2.
-      out.irradiance.at<cv::Vec3f>(y, x) = sum / sum_w;
-      if (luminance) out.variance.at<float>(y, x) = sum_w2v / (sum_w * sum_w);
     }
 }
 
