@@ -21,10 +21,10 @@ constexpr std::array<float, 5> kSpline = {1.f / 16, 1.f / 4, 3.f / 8, 1.f / 4, 1
 
 // What the weights read, per pixel.
 struct Guides {
-  cv::Mat filtered;  // CV_8U: 1 = filtered and used as a neighbour
-  cv::Mat point_m;   // CV_32FC3 first-hit point, camera frame, metres
-  cv::Mat normal;    // CV_32FC3 unit normal
-  cv::Mat depth_m;   // CV_32F z-depth, metres
+  cv::Mat filtered;    // CV_8U: 1 = filtered and used as a neighbour
+  cv::Mat point_m;     // CV_32FC3 first-hit point, camera frame, metres
+  cv::Mat normal;      // CV_32FC3 unit normal
+  cv::Mat depth_m;     // CV_32F z-depth, metres
   cv::Mat log_albedo;  // CV_32F ln of the demodulation albedo's Y (filled by demodulationAlbedo)
 };
 
@@ -40,10 +40,10 @@ struct PixelCounts {
 
 void checkAov(const cv::Mat& m, cv::Size size, int type, const char* name) {
   if (m.empty() || (m.size() == size && m.type() == type)) return;
-  throw std::invalid_argument(std::string("denoiseRender: the render's ") + name + " AOV is " +
-                              std::to_string(m.cols) + "x" + std::to_string(m.rows) + " of type " +
-                              std::to_string(m.type()) + ", the radiance " + std::to_string(size.width) + "x" +
-                              std::to_string(size.height) + " (expected type " + std::to_string(type) + ")");
+  throw std::invalid_argument(std::string("denoiseRender: the render's ") + name + " AOV is " + std::to_string(m.cols) +
+                              "x" + std::to_string(m.rows) + " of type " + std::to_string(m.type()) +
+                              ", the radiance " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                              " (expected type " + std::to_string(type) + ")");
 }
 
 void validate(const RenderOutput& r, const PinholeCamera& camera, const RenderDenoiseOptions& o) {
@@ -66,8 +66,9 @@ void validate(const RenderOutput& r, const PinholeCamera& camera, const RenderDe
     throw std::invalid_argument("denoiseRender: iterations must be 1 to 10, got " + std::to_string(o.iterations));
   if (!(o.albedo_floor > 0) || !(o.normal_exponent >= 0) || !(o.albedo_sigma >= 0) || !(o.plane_tolerance > 0) ||
       !(o.luminance_sigma > 0))
-    throw std::invalid_argument("denoiseRender: albedo_floor, plane_tolerance and luminance_sigma must be > 0, "
-                                "normal_exponent and albedo_sigma >= 0");
+    throw std::invalid_argument(
+        "denoiseRender: albedo_floor, plane_tolerance and luminance_sigma must be > 0, "
+        "normal_exponent and albedo_sigma >= 0");
 }
 
 bool isEmitter(const RenderOutput& r, int y, int x) {
@@ -92,7 +93,8 @@ Guides makeGuides(const RenderOutput& r, const PinholeCamera& camera, PixelCount
         ++counts.emitter;
         continue;
       }
-      const bool finite_radiance = std::isfinite(radiance[0]) && std::isfinite(radiance[1]) && std::isfinite(radiance[2]);
+      const bool finite_radiance =
+          std::isfinite(radiance[0]) && std::isfinite(radiance[1]) && std::isfinite(radiance[2]);
       if (!(std::isfinite(z) && z > 0.f && std::isfinite(n_length) && n_length > 1e-3f && finite_radiance)) {
         ++counts.no_surface;
         continue;
@@ -168,9 +170,12 @@ float geometryLogWeight(const Centre& c, const Guides& g, int yq, int xq, const 
 void filterPixel(const Guides& g, const Estimate& in, int step, const RenderDenoiseOptions& o, int x, int y,
                  Estimate& out) {
   const bool luminance = !in.variance.empty();
-  const Centre c{g.point_m.at<cv::Vec3f>(y, x), g.normal.at<cv::Vec3f>(y, x),
-                 1.f / (o.plane_tolerance * g.depth_m.at<float>(y, x)), g.log_albedo.at<float>(y, x),
-                 in.irradiance.at<cv::Vec3f>(y, x)[1], luminance ? in.variance.at<float>(y, x) : 0.f};
+  const Centre c{g.point_m.at<cv::Vec3f>(y, x),
+                 g.normal.at<cv::Vec3f>(y, x),
+                 1.f / (o.plane_tolerance * g.depth_m.at<float>(y, x)),
+                 g.log_albedo.at<float>(y, x),
+                 in.irradiance.at<cv::Vec3f>(y, x)[1],
+                 luminance ? in.variance.at<float>(y, x) : 0.f};
   float sum_w = 0, sum_w2v = 0;
   cv::Vec3f sum{0, 0, 0};
   for (int j = 0; j < 5; ++j) {
@@ -184,7 +189,8 @@ void filterPixel(const Guides& g, const Estimate& in, int step, const RenderDeno
       const cv::Vec3f& irradiance_q = in.irradiance.at<cv::Vec3f>(yq, xq);
       const float variance_q = luminance ? in.variance.at<float>(yq, xq) : 0.f;
       if (luminance)
-        log_w -= std::abs(c.luminance - irradiance_q[1]) / (o.luminance_sigma * std::sqrt(c.variance + variance_q) + 1e-30f);
+        log_w -=
+            std::abs(c.luminance - irradiance_q[1]) / (o.luminance_sigma * std::sqrt(c.variance + variance_q) + 1e-30f);
       const float w = kSpline[static_cast<std::size_t>(i)] * kSpline[static_cast<std::size_t>(j)] * std::exp(log_w);
       sum_w += w;
       sum += w * irradiance_q;
@@ -255,8 +261,9 @@ StageReport denoiseRender(RenderOutput& render, const PinholeCamera& camera, con
       .add("footprint_radius", static_cast<std::int64_t>(2 * ((1 << options.iterations) - 1)), "px")
       .add("luminance_weight", !render.std_error.empty())
       .add("luminance_ratio", y_before > 0 ? y_after / y_before : 1.0);
-  report.notes.push_back("a-trous filter of the albedo-demodulated radiance, guided by normal, tangent plane and "
-                         "luminance against the standard error; emitter and sky pixels kept exact");
+  report.notes.push_back(
+      "a-trous filter of the albedo-demodulated radiance, guided by normal, tangent plane and "
+      "luminance against the standard error; emitter and sky pixels kept exact");
   report.seconds = clock.seconds();
   return report;
 }

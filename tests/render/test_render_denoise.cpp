@@ -115,13 +115,12 @@ TEST(RenderDenoise, EdgesInDepthNormalAndAlbedoStaySharp) {
   near_bright.depth_m = 5.f;
   near_bright.irradiance = 1.6f;  // radiance 0.8
   far_dark.depth_m = 10.f;
-  far_dark.irradiance = 0.4f;  // radiance 0.2
+  far_dark.irradiance = 0.4f;                              // radiance 0.2
   tilted.normal = {std::sin(1.0f), 0.f, -std::cos(1.0f)};  // 57 degrees from the left side's
   tilted.irradiance = 0.4f;
   dark_paint.albedo = 0.1f;  // radiance 0.2, same irradiance 2 as the left side
-  const Case cases[] = {{"depth", near_bright, far_dark},
-                        {"normal", SurfaceTruth{}, tilted},
-                        {"albedo", SurfaceTruth{}, dark_paint}};
+  const Case cases[] = {
+      {"depth", near_bright, far_dark}, {"normal", SurfaceTruth{}, tilted}, {"albedo", SurfaceTruth{}, dark_paint}};
   for (const Case& c : cases) {
     solo::RenderOutput r = noisyRender([&](int x, int) { return x < edge ? c.left : c.right; }, sigma, 23);
     solo::denoiseRender(r, camera());
