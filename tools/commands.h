@@ -53,7 +53,7 @@ struct NightOptions {
   /// Stop sampling a pixel once its standard error is below noise_factor x the sensor noise's
   /// sigma there (instead of the relative error); docs/rendering.md.
   bool noise_target = true;
-  double noise_factor = 4;
+  double noise_factor = 1;
   /// Shadow-ray roulette below this fraction of the sensor noise at black (with noise_target;
   /// PathTracerOptions::shadow_roulette; preset). 0 = off.
   double shadow_roulette = 0.3;

@@ -47,14 +47,14 @@ TEST(NightNoiseTarget, MetersAPreviewStopsAtTheSensorNoiseAndReportsTheShareReac
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto report = nlohmann::json::parse(readText(dir / "n.report.json"));
   const auto& render = stage(report, "render");
-  EXPECT_EQ(metric(render, "noise_factor"), 4.0);
+  EXPECT_EQ(metric(render, "noise_factor"), 1.0);
   const double below = metric(render, "pixels_below_noise_target");
   EXPECT_GT(below, 0.0);
   EXPECT_LE(below, 1.0);
   // The note names the preview (a quarter of 128x72, at kMeteringSamplesPerPixel) and the
   // sensor white it metered, which is the one the post-process used.
   const std::string note =
-      noteStartingWith(render, "noise-matched target: standard error <= 4.00 x sensor noise sigma");
+      noteStartingWith(render, "noise-matched target: standard error <= 1.00 x sensor noise sigma");
   ASSERT_FALSE(note.empty()) << render.dump(2);
   EXPECT_NE(note.find("preview at 32 spp"), std::string::npos) << note;
   EXPECT_NE(note.find("32x18"), std::string::npos) << note;
@@ -98,7 +98,7 @@ TEST(NightNoiseTarget, MetersAPreviewStopsAtTheSensorNoiseAndReportsTheShareReac
   const auto by_default = runSolo(base + " -o " + q(dir / "d.png"));
   ASSERT_EQ(by_default.exit_code, 0) << by_default.output;
   const auto default_report = nlohmann::json::parse(readText(dir / "d.report.json"));
-  EXPECT_FALSE(noteStartingWith(stage(default_report, "render"), "noise-matched target: standard error <= 4.00").empty());
+  EXPECT_FALSE(noteStartingWith(stage(default_report, "render"), "noise-matched target: standard error <= 1.00").empty());
 
   // Shadow-ray roulette (on in the default preset, 0.3 x the sensor noise at black): at a fixed
   // sample count the paths are the same with it and without (it draws no number), so the rays
