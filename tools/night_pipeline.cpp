@@ -248,24 +248,28 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
     stages.back().add("preview_seconds", preview_seconds, "s");
     stages.back().seconds += preview_seconds;
   }
+  if (!render_note.empty()) stages.back().notes.push_back(render_note);
+  if (o.noise_target && !o.noise)
+    stages.back().notes.push_back(
+        "noise-matched target skipped: sensor noise is off (--no-noise), the relative-error target applies");
+  StageReport& render_report = stages.back();
+
+  // denoise: the render's Monte Carlo noise, edge-aware, at the render's own size (before any
+  // upsampling: cheaper, and the upsampled pixels would not be independent) (render_denoise.h)
+  RenderDenoiseOptions denoise;
+  denoise.enabled = o.denoise;
+  StageReport denoise_report = denoiseRender(rendered, render_camera, denoise);
+  if (!o.denoise) denoise_report.skip_reason = "render denoising switched off (--no-denoise)";
+
   if (o.render_downsample > 1) {
     rendered = upsampleRender(std::move(rendered), cv::Size(image_camera.width, image_camera.height));
     char note[160];
     std::snprintf(note, sizeof note, "rendered at %dx%d and upsampled to %dx%d (bilinear): --render-downsample %d",
                   render_camera.width, render_camera.height, image_camera.width, image_camera.height,
                   o.render_downsample);
-    stages.back().notes.push_back(note);
+    render_report.notes.push_back(note);
   }
-  if (!render_note.empty()) stages.back().notes.push_back(render_note);
-  if (o.noise_target && !o.noise)
-    stages.back().notes.push_back(
-        "noise-matched target skipped: sensor noise is off (--no-noise), the relative-error target applies");
-
-  // denoise: the render's Monte Carlo noise, edge-aware, at the image size (render_denoise.h)
-  RenderDenoiseOptions denoise;
-  denoise.enabled = o.denoise;
-  stages.push_back(denoiseRender(rendered, image_camera, denoise));
-  if (!o.denoise) stages.back().skip_reason = "render denoising switched off (--no-denoise)";
+  stages.push_back(std::move(denoise_report));
 
   // post: radiance in cd/m^2 scaled so that the reference exposure (+3.25 stops) puts
   // sensor_white at 1. Only what will clip (above the knee's white clip) glows; the reference
