@@ -64,7 +64,11 @@ struct NightOptions {
   /// The night camera's limits (NightCameraOptions): fixed aperture, longest shutter, highest ISO.
   double camera_f_number = 2.8;
   double camera_max_shutter_s = 1.0 / 30.0;
-  double camera_max_iso = 800;
+  double camera_max_iso = 3200;
+  double camera_compensation_ev = -2;  ///< the night mode's exposure compensation, EV
+  /// Sensor noise standard deviation multiplier (SensorNoiseOptions::std_scale) at the ISO the
+  /// camera chose; calibrated for the night camera's ISOs (docs/post-processing.md).
+  double noise_scale = 0.6;
   /// Share of a clipping pixel's excess luminance the lens scatters into its glare (FogGlareOptions).
   double glare_scatter = 0.02;
   /// Linear level (in sensor whites) the camera's knee encodes as full white (ColourEncodingOptions).

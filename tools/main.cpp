@@ -89,6 +89,11 @@ int main(int argc, char** argv) {
   night_cmd->add_option("--camera-max-iso", night.camera_max_iso,
                         "Night camera: highest ISO (100-3200, the sensor noise calibration's range)")
       ->capture_default_str()->check(CLI::Range(100.0, 3200.0));
+  night_cmd->add_option("--camera-compensation", night.camera_compensation_ev,
+                        "Night camera: exposure compensation of its night mode, EV")
+      ->capture_default_str()->check(CLI::Range(-6.0, 6.0));
+  night_cmd->add_option("--noise-scale", night.noise_scale, "Sensor noise standard deviation multiplier")
+      ->capture_default_str()->check(CLI::Range(0.0, 10.0));
   night_cmd->add_option("--white-clip", night.white_clip,
                         "Video knee: linear level encoded as full white, in sensor whites (1 = clip at white)")
       ->capture_default_str()->check(CLI::Range(1.0, 64.0));

@@ -199,6 +199,7 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   camera_limits.f_number = o.camera_f_number;
   camera_limits.max_shutter_s = o.camera_max_shutter_s;
   camera_limits.max_iso = o.camera_max_iso;
+  camera_limits.compensation_ev = o.camera_compensation_ev;
   camera_limits.min_shutter_s = std::min(camera_limits.min_shutter_s, camera_limits.max_shutter_s);
   camera_limits.min_iso = std::min(camera_limits.min_iso, camera_limits.max_iso);
   const bool auto_white = !(o.sensor_white_cd_m2 > 0);
@@ -225,6 +226,7 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
   post.noise = o.noise;
   post.noise_options.seed = o.seed;
   post.noise_options.iso = camera.camera.iso;
+  post.noise_options.std_scale = o.noise_scale;
   // --noise-target: stop where render noise is below noise_factor x the sensor noise the pixel
   // will get at that exposure.
   std::string render_note = exposure_note;

@@ -148,6 +148,8 @@ std::string nightConfigText(const NightOptions& o) {
   line("camera-f-number", number(o.camera_f_number));
   line("camera-max-shutter", number(o.camera_max_shutter_s));
   line("camera-max-iso", number(o.camera_max_iso));
+  line("camera-compensation", number(o.camera_compensation_ev));
+  line("noise-scale", number(o.noise_scale));
   line("glare-scatter", number(o.glare_scatter));
   line("white-clip", number(o.white_clip));
   line("knee-point", number(o.knee_point));

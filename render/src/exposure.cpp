@@ -86,6 +86,7 @@ void checkNightCamera(const NightCameraOptions& o) {
         positive(o.max_iso) && positive(o.meter_constant) && positive(o.saturation_exposure) &&
         positive(o.lens_factor)))
     throw std::invalid_argument("night camera: every setting must be positive and finite");
+  if (!(std::abs(o.compensation_ev) <= 10)) throw std::invalid_argument("night camera: compensation outside +-10 EV");
   if (o.min_shutter_s > o.max_shutter_s) throw std::invalid_argument("night camera: min shutter above max shutter");
   if (o.min_iso > o.max_iso) throw std::invalid_argument("night camera: min ISO above max ISO");
 }
@@ -98,7 +99,7 @@ NightCameraExposure nightCameraExposure(double metered_cd_m2, const NightCameraO
     throw std::invalid_argument("night camera: the metered luminance must be finite and >= 0");
   const double n2 = o.f_number * o.f_number;
   // Exposure product S t the meter asks for; infinite when nothing is lit.
-  const double wanted_st = metered_cd_m2 > 0 ? o.meter_constant * n2 / metered_cd_m2
+  const double wanted_st = metered_cd_m2 > 0 ? std::exp2(o.compensation_ev) * o.meter_constant * n2 / metered_cd_m2
                                              : std::numeric_limits<double>::infinity();
   NightCameraExposure e;
   e.metered_cd_m2 = metered_cd_m2;

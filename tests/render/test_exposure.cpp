@@ -156,3 +156,17 @@ TEST(NightCamera, MeterAveragesTheFrameWithoutTheLampsSeenDirectly) {
   EXPECT_EQ(solo::meteredMeanLuminance(radiance, coverage), 0.0);
   EXPECT_THROW(solo::meteredMeanLuminance(radiance, cv::Mat(1, 3, CV_32F, cv::Scalar(0))), std::invalid_argument);
 }
+
+TEST(NightCamera, CompensationScalesTheExposureTheMeterAsksFor) {
+  // -2 EV: S t = 9.8 / 4 = 2.45 for 10 cd/m^2, reached at ISO 100 with 24.5 ms; white 4 x 96.
+  solo::NightCameraOptions o;
+  o.compensation_ev = -2;
+  const solo::NightCameraExposure e = solo::nightCameraExposure(10.0, o);
+  EXPECT_DOUBLE_EQ(e.camera.iso, 100.0);
+  EXPECT_NEAR(e.camera.shutter_s, 0.0245, 1e-12);
+  EXPECT_NEAR(e.white_cd_m2, 384.0, 1e-9);
+  // At the limit the compensation changes nothing: the camera gives all it has.
+  EXPECT_NEAR(solo::nightCameraExposure(0.01, o).white_cd_m2, solo::nightCameraExposure(0.01).white_cd_m2, 1e-12);
+  o.compensation_ev = 20;
+  EXPECT_THROW(solo::nightCameraExposure(1.0, o), std::invalid_argument);
+}

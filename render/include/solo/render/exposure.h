@@ -70,6 +70,9 @@ struct NightCameraOptions {
   double meter_constant = 12.5;         ///< reflected-light meter calibration K (ISO 2720), cd s / m^2
   double saturation_exposure = 78;      ///< H_sat * S in lux s: ISO 12232 saturation-based speed
   double lens_factor = 0.65;            ///< q of ISO 12232: image-plane illuminance = q L / N^2
+  /// Exposure compensation of the camera's night mode, EV: the meter aims at 2^ev times the
+  /// exposure that puts the mean at the meter's grey (a negative value keeps night scenes dark).
+  double compensation_ev = 0;
 };
 
 /// What the camera chose for one frame.
@@ -82,10 +85,11 @@ struct NightCameraExposure {
 };
 
 /// The auto exposure of the camera above for a frame whose metered mean luminance is
-/// `metered_cd_m2`: the exposure that puts it at the meter's grey, N^2 / t = L S / K, reached
+/// `metered_cd_m2`: the exposure that puts it at the meter's grey, N^2 / t = L S / K, times
+/// 2^compensation_ev, reached
 /// by lengthening the shutter at the lowest ISO first and then raising the ISO, each within its
 /// limits. White is the saturation luminance of ISO 12232, L_white = H_sat N^2 / (q S t); at the
-/// meter's grey a frame's mean sits at K q / H_sat = 10.4 % of white. A metered luminance of 0
+/// meter's grey (no compensation) a frame's mean sits at K q / H_sat = 10.4 % of white. A metered luminance of 0
 /// (nothing lit) takes the exposure limit. Throws std::invalid_argument for a negative or
 /// non-finite luminance and for options that are not positive, finite and ordered.
 NightCameraExposure nightCameraExposure(double metered_cd_m2, const NightCameraOptions& options = {});
