@@ -48,7 +48,7 @@ std::string exposureNote(const NightCameraExposure& e, cv::Size preview) {
   if (!preview.empty())
     std::snprintf(note, sizeof note,
                   "night camera metered a mean %.4g cd/m2 on a %dx%d preview at %d spp (lamps seen directly left "
-                  "out): ISO %.0f, 1/%.0f s, f/%.1f, sensor white %.4g cd/m2%s",
+                  "out): ISO %.0f, 1/%.0f s, f/%.1f, sensor white %.6g cd/m2%s",
                   e.metered_cd_m2, preview.width, preview.height, kMeteringSamplesPerPixel, e.camera.iso,
                   1.0 / e.camera.shutter_s, e.camera.f_number, e.white_cd_m2,
                   e.at_exposure_limit ? "; at its exposure limit, so the street stays darker than the meter's grey"
@@ -58,6 +58,45 @@ std::string exposureNote(const NightCameraExposure& e, cv::Size preview) {
     std::snprintf(note, sizeof note, "sensor white given, %.6g cd/m2 (noise at ISO %.0f)", e.white_cd_m2,
                   e.camera.iso);
   return note;
+}
+
+NightCameraOptions nightCameraOptions(const NightOptions& o) {
+  NightCameraOptions camera;
+  camera.f_number = o.camera_f_number;
+  camera.max_shutter_s = o.camera_max_shutter_s;
+  camera.max_iso = o.camera_max_iso;
+  camera.compensation_ev = o.camera_compensation_ev;
+  camera.min_shutter_s = std::min(camera.min_shutter_s, camera.max_shutter_s);
+  camera.min_iso = std::min(camera.min_iso, camera.max_iso);
+  return camera;
+}
+
+struct MeteredCamera {
+  NightCameraExposure exposure;
+  cv::Size preview_size;  ///< empty when the white was given
+  double preview_seconds = 0;
+};
+
+/// The night camera's settings: metered on a preview (meteringPreviewSize at
+/// kMeteringSamplesPerPixel) of `render_camera`'s view, or derived from --sensor-white.
+MeteredCamera meterNightCamera(const PreparedRenderScene& prepared, const PinholeCamera& render_camera,
+                               const PathTracerOptions& tracer, const NightOptions& o) {
+  const NightCameraOptions limits = nightCameraOptions(o);
+  MeteredCamera m;
+  if (o.sensor_white_cd_m2 > 0) {
+    m.exposure = nightCameraForWhite(o.sensor_white_cd_m2, limits);
+    return m;
+  }
+  const Stopwatch clock;
+  m.preview_size = meteringPreviewSize(render_camera.width, render_camera.height);
+  PathTracerOptions preview = tracer;
+  preview.min_samples = preview.max_samples = kMeteringSamplesPerPixel;
+  preview.progress = false;
+  const RenderOutput rendered =
+      renderPathTraced(prepared, render_camera.scaledTo(m.preview_size.width, m.preview_size.height), preview);
+  m.exposure = nightCameraExposure(meteredMeanLuminance(rendered.radiance, rendered.emitter_coverage), limits);
+  m.preview_seconds = clock.seconds();
+  return m;
 }
 
 }  // namespace
@@ -192,35 +231,14 @@ NightPipelineResult runNightPipeline(const Scene& scene, const NightOptions& o, 
                                                       std::max(16, image_camera.height / o.render_downsample))
                               : image_camera;
   const PreparedRenderScene prepared(night.scene);  // one BVH for the preview and the render
-  // The night camera meters a small preview (meteringPreviewSize, kMeteringSamplesPerPixel)
-  // before the full render, whatever the preset: the exposure does not depend on the render's
-  // samples, and --noise-target sets its target from it.
-  NightCameraOptions camera_limits;
-  camera_limits.f_number = o.camera_f_number;
-  camera_limits.max_shutter_s = o.camera_max_shutter_s;
-  camera_limits.max_iso = o.camera_max_iso;
-  camera_limits.compensation_ev = o.camera_compensation_ev;
-  camera_limits.min_shutter_s = std::min(camera_limits.min_shutter_s, camera_limits.max_shutter_s);
-  camera_limits.min_iso = std::min(camera_limits.min_iso, camera_limits.max_iso);
+  // The night camera meters a small preview before the full render, whatever the preset: the
+  // exposure does not depend on the render's samples, and --noise-target sets its target from it.
   const bool auto_white = !(o.sensor_white_cd_m2 > 0);
-  NightCameraExposure camera;
-  double preview_seconds = 0;
-  cv::Size preview_size;
-  if (auto_white) {
-    Stopwatch preview_clock;
-    preview_size = meteringPreviewSize(render_camera.width, render_camera.height);
-    PathTracerOptions preview = tracer;
-    preview.min_samples = preview.max_samples = kMeteringSamplesPerPixel;
-    preview.progress = false;
-    const RenderOutput metered =
-        renderPathTraced(prepared, render_camera.scaledTo(preview_size.width, preview_size.height), preview);
-    camera = nightCameraExposure(meteredMeanLuminance(metered.radiance, metered.emitter_coverage), camera_limits);
-    preview_seconds = preview_clock.seconds();
-  } else {
-    camera = nightCameraForWhite(o.sensor_white_cd_m2, camera_limits);
-  }
+  const MeteredCamera metered = meterNightCamera(prepared, render_camera, tracer, o);
+  const NightCameraExposure& camera = metered.exposure;
+  const double preview_seconds = metered.preview_seconds;
   const double sensor_white = camera.white_cd_m2;
-  const std::string exposure_note = exposureNote(camera, preview_size);
+  const std::string exposure_note = exposureNote(camera, metered.preview_size);
   PostProcessOptions post;
   post.glare = o.glare;
   post.noise = o.noise;
