@@ -7,14 +7,6 @@
 
 namespace {
 
-double metric(const solo::StageReport& r, const std::string& name) {
-  const solo::MetricValue* v = r.find(name);
-  if (!v) return NAN;
-  if (const auto* d = std::get_if<double>(v)) return *d;
-  if (const auto* i = std::get_if<std::int64_t>(v)) return static_cast<double>(*i);
-  return NAN;
-}
-
 std::string method(const solo::StageReport& r) {
   const solo::MetricValue* v = r.find("method");
   return v ? std::get<std::string>(*v) : std::string();
@@ -63,7 +55,7 @@ TEST(FogGlare, SinglePixelGlowIsTheKernelAndPreservesEnergyByEveryMethod) {
     EXPECT_NEAR(total[0], 4.0, 4.0 * 1e-4);
     EXPECT_NEAR(total[1], 8.0, 8.0 * 1e-4);
     EXPECT_NEAR(total[2], 12.0, 12.0 * 1e-4);
-    EXPECT_NEAR(metric(report, "glow_in_frame_fraction"), 1.0, 1e-4);
+    EXPECT_NEAR(solo::test::metricNumber(report, "glow_in_frame_fraction"), 1.0, 1e-4);
     // The glow is the kernel times the pixel.
     EXPECT_NEAR(image.at<cv::Vec3f>(300, 310)[1], 4.0 * (1.0 + k.at<float>(256, 256)), 1e-4);
     EXPECT_NEAR(image.at<cv::Vec3f>(300 + 40, 310 - 17)[1], 4.0 * k.at<float>(256 + 40, 256 - 17), 1e-6);
@@ -87,8 +79,8 @@ TEST(FogGlare, ScatterFractionScalesTheGlowOfTheExcessOnly) {
     const solo::StageReport report = solo::applyFogGlare(image, options);
     EXPECT_NEAR(cv::sum(image)[1], 101.0 + 2.0, 1e-3);
     EXPECT_NEAR(image.at<cv::Vec3f>(100 + 9, 110 - 4)[1], 2.0 * k.at<float>(64 + 9, 64 - 4), 1e-6);
-    EXPECT_NEAR(metric(report, "glow_in_frame_fraction"), 1.0, 1e-4);
-    EXPECT_DOUBLE_EQ(metric(report, "scatter_fraction"), 0.02);
+    EXPECT_NEAR(solo::test::metricNumber(report, "glow_in_frame_fraction"), 1.0, 1e-4);
+    EXPECT_DOUBLE_EQ(solo::test::metricNumber(report, "scatter_fraction"), 0.02);
   }
   cv::Mat image = cv::Mat::zeros(8, 8, CV_32FC3);
   solo::FogGlareOptions options;
@@ -130,8 +122,8 @@ TEST(FogGlare, FullBrightFieldDoublesAwayFromTheBorders) {
   // A corner gets only the quarter of the kernel inside the frame, plus the centre tap.
   EXPECT_LT(image.at<cv::Vec3f>(0, 0)[1], 2.0 + 2.0 * 0.75);
   // The FFT is the image plus one kernel radius, not plus the full kernel width.
-  EXPECT_LE(metric(report, "fft_rows"), cv::getOptimalDFTSize(600 + 256));
-  EXPECT_LE(metric(report, "fft_cols"), cv::getOptimalDFTSize(700 + 256));
+  EXPECT_LE(solo::test::metricNumber(report, "fft_rows"), cv::getOptimalDFTSize(600 + 256));
+  EXPECT_LE(solo::test::metricNumber(report, "fft_cols"), cv::getOptimalDFTSize(700 + 256));
 }
 
 TEST(FogGlare, NothingAboveTheThresholdLeavesTheImageUnchanged) {
@@ -160,7 +152,7 @@ TEST(FogGlare, ThresholdKeepsOnlyTheExcessLuminanceAndTheColour) {
   solo::FogGlareOptions options;
   options.threshold = 1.0;
   const solo::StageReport report = solo::applyFogGlare(image, options);
-  EXPECT_EQ(metric(report, "bright_pixels"), 1);
+  EXPECT_EQ(solo::test::metricNumber(report, "bright_pixels"), 1);
   // Contribution = colour * (3 - 1) / 3 = (1, 2, 4).
   const cv::Scalar total = cv::sum(image);
   EXPECT_NEAR(total[0], 1.5 + 0.5 + 1.0, 1e-4);
@@ -177,7 +169,7 @@ TEST(FogGlare, TinyVeryBrightSourceIsSplattedDirectlyAndStaysFinite) {
   const cv::Mat k = solo::fogGlowKernel(9);
   EXPECT_NEAR(image.at<cv::Vec3f>(0, 1919)[1], 1e6 * (1.0 + k.at<float>(256, 256)), 1.0);
   // Quarter plane including its two edge lines and the centre: between 1/4 and 1/2 + centre.
-  const double in_frame = metric(report, "glow_in_frame_fraction");
+  const double in_frame = solo::test::metricNumber(report, "glow_in_frame_fraction");
   EXPECT_GT(in_frame, 0.42 + 0.25 * 0.58);
   EXPECT_LT(in_frame, 0.42 + 0.5 * 0.58);
 }
@@ -191,7 +183,7 @@ TEST(FogGlare, SpreadBrightClustersAreConvolvedTileByTile) {
   cv::Mat reference = image.clone();
   const solo::StageReport report = solo::applyFogGlare(image, {});
   EXPECT_EQ(method(report), "tiled-fft");
-  EXPECT_EQ(metric(report, "fft_regions"), 2);
+  EXPECT_EQ(solo::test::metricNumber(report, "fft_regions"), 2);
   solo::FogGlareOptions whole;
   whole.method = solo::GlareMethod::Fft;
   solo::applyFogGlare(reference, whole);

@@ -74,14 +74,6 @@ bool bitIdentical(const cv::Mat& a, const cv::Mat& b) {
   return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
 }
 
-double metric(const solo::StageReport& r, const std::string& name) {
-  const solo::MetricValue* v = r.find(name);
-  if (!v) return NAN;
-  if (const auto* d = std::get_if<double>(v)) return *d;
-  if (const auto* i = std::get_if<std::int64_t>(v)) return static_cast<double>(*i);
-  return NAN;
-}
-
 }  // namespace
 
 TEST(RenderDenoise, FlatPlaneNoiseDropsTwentyFiveFoldAndItsMeanStaysUnbiased) {
@@ -98,9 +90,9 @@ TEST(RenderDenoise, FlatPlaneNoiseDropsTwentyFiveFoldAndItsMeanStaysUnbiased) {
   // Unfiltered, the mean's own noise is 0.2 / sqrt(19200) = 0.0014; symmetric noise must not
   // shift it.
   EXPECT_NEAR(after.mean, 0.0, 0.005);
-  EXPECT_NEAR(metric(report, "luminance_ratio"), 1.0, 0.005);
-  EXPECT_EQ(metric(report, "pixels_filtered"), kWidth * kHeight);
-  EXPECT_EQ(metric(report, "footprint_radius"), 62);
+  EXPECT_NEAR(solo::test::metricNumber(report, "luminance_ratio"), 1.0, 0.005);
+  EXPECT_EQ(solo::test::metricNumber(report, "pixels_filtered"), kWidth * kHeight);
+  EXPECT_EQ(solo::test::metricNumber(report, "footprint_radius"), 62);
   EXPECT_FALSE(report.skipped);
 }
 
@@ -175,7 +167,7 @@ TEST(RenderDenoise, EmitterPixelsStayBitIdenticalAndLightNoNeighbour) {
   const solo::StageReport report = solo::denoiseRender(r, camera());
   EXPECT_TRUE(bitIdentical(r.radiance(lamp), before(lamp)));
   EXPECT_TRUE(bitIdentical(r.radiance(sliver), before(sliver)));
-  EXPECT_EQ(metric(report, "pixels_kept_emitter"), lamp.area() + sliver.area());
+  EXPECT_EQ(solo::test::metricNumber(report, "pixels_kept_emitter"), lamp.area() + sliver.area());
   // The pixels around them still show the plane's radiance 1: none of the lamps' light leaked.
   for (const cv::Rect& emitter : {lamp, sliver}) {
     const cv::Rect ring(emitter.x - 2, emitter.y - 2, emitter.width + 4, 2);
@@ -204,7 +196,7 @@ TEST(RenderDenoise, SkyAndBlackSurfacesGiveFiniteOutputAndSkyStaysExact) {
   const solo::StageReport report = solo::denoiseRender(r, camera());
   EXPECT_TRUE(cv::checkRange(r.radiance));
   EXPECT_TRUE(bitIdentical(r.radiance(sky), before(sky)));
-  EXPECT_EQ(metric(report, "pixels_kept_no_surface"), sky.area());
+  EXPECT_EQ(solo::test::metricNumber(report, "pixels_kept_no_surface"), sky.area());
   // Black paint: radiance only noise around 0, and it stays around 0 (albedo floor 0.02).
   EXPECT_NEAR(yError(r.radiance, cv::Rect(0, kHeight / 2, kWidth / 4 - 4, 20), 0.0).mean, 0.0, 0.01);
 }

@@ -1,6 +1,7 @@
 #include "test_support.h"
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <random>
@@ -72,6 +73,14 @@ std::int64_t metricInt(const solo::StageReport& report, const std::string& name)
   const solo::MetricValue* v = report.find(name);
   if (!v) ADD_FAILURE() << "no metric " << name;
   return v ? std::get<std::int64_t>(*v) : -1;
+}
+
+double metricNumber(const solo::StageReport& report, const std::string& name) {
+  const solo::MetricValue* v = report.find(name);
+  if (!v) return std::nan("");
+  if (const auto* d = std::get_if<double>(v)) return *d;
+  if (const auto* i = std::get_if<std::int64_t>(v)) return static_cast<double>(*i);
+  return std::nan("");
 }
 
 }  // namespace solo::test

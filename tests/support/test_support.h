@@ -41,6 +41,9 @@ std::filesystem::path sharedData(const std::string& relative);
 
 /// An integer metric of a stage report; a test failure and -1 when the report has none.
 std::int64_t metricInt(const solo::StageReport& report, const std::string& name);
+/// A numeric metric of a stage report (double or integer) as a double; NaN when the report has
+/// none or it is not a number.
+double metricNumber(const solo::StageReport& report, const std::string& name);
 
 /// Files in a folder (names only), for "no partial output" checks.
 std::vector<std::string> listFolder(const std::filesystem::path& folder);

@@ -6,8 +6,9 @@
 Each EXR is a `solo night --render-exr` output (linear XYZ, render units) with its light-id AOV
 beside it (STEM.lightid.npy). Over the pixels whose light id is 0 in both images, on the
 luminance Y: relative RMSE sqrt(sum (y - r)^2 / sum r^2) and mean ratio sum y / sum r, unclipped
-and clipped at the reference's white W (95th percentile of its Y / 0.8, solo night's rule).
-Needs oiiotool (openimageio-tools) to read the EXRs, and numpy.
+and clipped at the reference's white W (95th percentile of its Y / 0.8, the clip level of the
+render error in docs/accuracy.md). Needs oiiotool (openimageio-tools, in tools/setup.sh) and
+numpy (Debian python3-numpy, not needed by the build or the tests).
 """
 import os
 import subprocess
