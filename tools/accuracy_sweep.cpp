@@ -12,14 +12,14 @@
 #include <solo/geometry/mesh_metrics.h>
 #include <solo/geometry/normal_metrics.h>
 #include <solo/geometry/normals_from_depth.h>
-#include <solo/geometry/report.h>
+#include <solo/core/report.h>
 #include <solo/geometry/surface_mesh.h>
 #include <solo/geometry/view_mesh_distances.h>
 #include <solo/lighting/light_stage.h>
-#include <solo/render/exposure.h>
+#include <solo/post/exposure.h>
 #include <solo/render/night_scene.h>
 #include <solo/render/path_tracer.h>
-#include <solo/render/post_process.h>
+#include <solo/post/post_process.h>
 
 #include <algorithm>
 #include <cmath>
@@ -409,8 +409,8 @@ struct AccuracySweep::Impl {
           const DistancePart& part = v.by_origin[static_cast<std::size_t>(origin)];
           return part.samples > 0 ? num(part.mean_m) : std::string();
         };
-        row.insert(row.end(), {originMean(FaceOrigin::depth_surface), originMean(FaceOrigin::hole_fill),
-                               originMean(FaceOrigin::solid), num(far_share), num(far_contribution),
+        row.insert(row.end(), {originMean(FaceOrigin::DepthSurface), originMean(FaceOrigin::HoleFill),
+                               originMean(FaceOrigin::Solid), num(far_share), num(far_contribution),
                                num(v.mean_relative_to_truth), num(v.truth_covered)});
         distance_text = ", " + num(d.mean_to_reference) + " m mean to the true surfaces (" + num(far_contribution) +
                         " m of it beyond 80 m), " + num(v.mean_relative_to_truth) + " of the depth";

@@ -12,7 +12,7 @@
 //    render against a converged render of the scene made from the exact depth.
 // Each sweep returns one table: a row per point, the seed in every row.
 
-#include <solo/geometry/scene.h>
+#include <solo/core/scene.h>
 #include <solo/geometry/triangle_mesh.h>
 
 #include <cstdint>

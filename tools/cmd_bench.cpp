@@ -14,17 +14,17 @@
 #include "night_pipeline.h"
 #include "night_presets.h"
 
-#include <solo/geometry/atomic_file.h>
-#include <solo/geometry/error.h>
-#include <solo/geometry/image_io.h>
-#include <solo/geometry/report.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/atomic_file.h>
+#include <solo/core/error.h>
+#include <solo/core/image_io.h>
+#include <solo/core/report.h>
+#include <solo/core/scene.h>
 #include <solo/geometry/triangle_mesh.h>
-#include <solo/geometry/version.h>
+#include <solo/core/version.h>
 #include <solo/lighting/light_category.h>
-#include <solo/render/colour_encoding.h>
+#include <solo/post/colour_encoding.h>
 #include <solo/render/contact_sheet.h>
-#include <solo/render/night_statistics.h>
+#include <solo/post/night_statistics.h>
 
 #include <opencv2/imgproc.hpp>
 

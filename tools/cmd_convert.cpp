@@ -1,8 +1,8 @@
 #include "commands.h"
 
-#include <solo/geometry/error.h>
-#include <solo/geometry/image_io.h>
-#include <solo/geometry/output_path.h>
+#include <solo/core/error.h>
+#include <solo/core/image_io.h>
+#include <solo/core/output_path.h>
 
 #include <iostream>
 

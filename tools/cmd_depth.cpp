@@ -4,9 +4,9 @@
 #include "night_pipeline.h"
 
 #include <solo/geometry/depth_refinement.h>
-#include <solo/geometry/image_io.h>
-#include <solo/geometry/report.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/image_io.h>
+#include <solo/core/report.h>
+#include <solo/core/scene.h>
 
 #include <iostream>
 
@@ -45,8 +45,8 @@ int runDepth(const DepthOptions& options) {
   refine.filter = options.filter;
   refine.uncertain_regions = options.uncertain;
   refine.optimize = options.optimize;
-  refine.optimizer = options.optimizer == "adam" ? DepthOptimizer::kAdam : DepthOptimizer::kCeres;
-  const TangentModel model = options.tangent_model == "paper" ? TangentModel::kPaperGraph : TangentModel::kPerspective;
+  refine.optimizer = options.optimizer == "adam" ? DepthOptimizer::Adam : DepthOptimizer::Ceres;
+  const TangentModel model = options.tangent_model == "paper" ? TangentModel::PaperGraph : TangentModel::Perspective;
   refine.optimization.objective.tangent_model = model;
   refine.adam.objective.tangent_model = model;
   const DepthRefinementResult result = refineDepth(sceneForRefinement(scene), refine);

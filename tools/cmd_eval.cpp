@@ -9,18 +9,18 @@
 
 #include <solo/geometry/depth_mesh.h>
 #include <solo/geometry/depth_metrics.h>
-#include <solo/geometry/error.h>
-#include <solo/geometry/image_io.h>
+#include <solo/core/error.h>
+#include <solo/core/image_io.h>
 #include <solo/geometry/mesh_metrics.h>
 #include <solo/geometry/normal_metrics.h>
-#include <solo/geometry/quantile.h>
-#include <solo/geometry/report.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/quantile.h>
+#include <solo/core/report.h>
+#include <solo/core/scene.h>
 #include <solo/geometry/spurious_faces.h>
 #include <solo/geometry/triangle_mesh.h>
 #include <solo/geometry/upsample_maps.h>
 #include <solo/geometry/view_mesh_distances.h>
-#include <solo/render/night_statistics.h>
+#include <solo/post/night_statistics.h>
 
 #include <opencv2/imgproc.hpp>
 

@@ -1,6 +1,6 @@
 #include "commands.h"
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/lighting/chromaticity_region.h>
 #include <solo/lighting/colorimetry.h>
 #include <solo/lighting/illuminant_recipe.h>

@@ -1,7 +1,7 @@
 #include "commands.h"
 
-#include <solo/geometry/report.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/report.h>
+#include <solo/core/scene.h>
 #include <solo/lighting/light_category.h>
 
 #include <iostream>

@@ -1,9 +1,9 @@
 #include "commands.h"
 
-#include <solo/geometry/error.h>
-#include <solo/geometry/image_io.h>
-#include <solo/geometry/report.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/error.h>
+#include <solo/core/image_io.h>
+#include <solo/core/report.h>
+#include <solo/core/scene.h>
 #include <solo/lighting/light_overlay.h>
 #include <solo/lighting/light_record.h>
 #include <solo/lighting/light_stage.h>

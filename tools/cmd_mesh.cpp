@@ -4,11 +4,11 @@
 #include "night_pipeline.h"
 
 #include <solo/geometry/depth_mesh.h>
-#include <solo/geometry/error.h>
-#include <solo/geometry/image_io.h>
+#include <solo/core/error.h>
+#include <solo/core/image_io.h>
 #include <solo/geometry/mesh_cleanup.h>
-#include <solo/geometry/report.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/report.h>
+#include <solo/core/scene.h>
 #include <solo/geometry/triangle_mesh.h>
 
 #include <cstdio>

@@ -14,9 +14,9 @@
 
 #include "commands.h"
 
-#include <solo/geometry/atomic_file.h>
-#include <solo/geometry/error.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/atomic_file.h>
+#include <solo/core/error.h>
+#include <solo/core/scene.h>
 
 #include <nlohmann/json.hpp>
 

@@ -3,13 +3,13 @@
 
 #include "commands.h"
 
-#include <solo/geometry/error.h>
-#include <solo/geometry/image_io.h>
-#include <solo/geometry/output_path.h>
-#include <solo/geometry/report.h>
-#include <solo/render/colour_encoding.h>
-#include <solo/render/fda.h>
-#include <solo/render/post_process.h>
+#include <solo/core/error.h>
+#include <solo/core/image_io.h>
+#include <solo/core/output_path.h>
+#include <solo/core/report.h>
+#include <solo/post/colour_encoding.h>
+#include <solo/post/fda.h>
+#include <solo/post/post_process.h>
 
 #include <algorithm>
 #include <cmath>

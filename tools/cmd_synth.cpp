@@ -1,16 +1,16 @@
 #include "commands.h"
 
-#include <solo/geometry/atomic_file.h>
-#include <solo/geometry/error.h>
-#include <solo/geometry/image_io.h>
-#include <solo/geometry/output_path.h>
+#include <solo/core/atomic_file.h>
+#include <solo/core/error.h>
+#include <solo/core/image_io.h>
+#include <solo/core/output_path.h>
 #include <solo/geometry/prediction_noise.h>
-#include <solo/geometry/report.h>
+#include <solo/core/report.h>
 #include <solo/geometry/triangle_mesh.h>
-#include <solo/geometry/version.h>
-#include <solo/render/day_scene.h>
-#include <solo/render/scene_raster.h>
-#include <solo/render/street_scene.h>
+#include <solo/core/version.h>
+#include <solo/synth/day_scene.h>
+#include <solo/synth/scene_raster.h>
+#include <solo/synth/street_scene.h>
 
 #include <nlohmann/json.hpp>
 

@@ -2,7 +2,7 @@
 
 #include "solo_config.h"
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 
 #include <cstdlib>
 

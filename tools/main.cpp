@@ -5,7 +5,7 @@
 #include "large_buffer_allocator.h"
 #include "night_presets.h"
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 
 #include <CLI/CLI.hpp>
 

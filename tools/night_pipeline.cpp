@@ -3,14 +3,14 @@
 #include "night_pipeline.h"
 
 #include <solo/geometry/downsample_depth.h>
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/lighting/light_stage.h>
 #include <solo/lighting/street_light_instances.h>
-#include <solo/render/exposure.h>
+#include <solo/post/exposure.h>
 #include <solo/render/night_scene.h>
 #include <solo/render/render_denoise.h>
-#include <solo/render/sensor_noise.h>
+#include <solo/post/sensor_noise.h>
 
 #include <opencv2/imgproc.hpp>
 

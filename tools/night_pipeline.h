@@ -8,13 +8,13 @@
 #include <solo/geometry/depth_mesh.h>
 #include <solo/geometry/depth_refinement.h>
 #include <solo/geometry/mesh_holes.h>
-#include <solo/geometry/report.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/report.h>
+#include <solo/core/scene.h>
 #include <solo/lighting/light_record.h>
 #include <solo/render/light_sampler.h>
 #include <solo/render/night_scene.h>
 #include <solo/render/path_tracer.h>
-#include <solo/render/post_process.h>
+#include <solo/post/post_process.h>
 #include <solo/render/sampler.h>
 
 #include <filesystem>

@@ -3,7 +3,7 @@
 
 #include "night_presets.h"
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 
 #include <array>
 #include <charconv>

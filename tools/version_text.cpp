@@ -1,6 +1,6 @@
 #include "commands.h"
 
-#include <solo/geometry/version.h>
+#include <solo/core/version.h>
 #include <solo/render/ray_caster.h>
 
 #include <CLI/Version.hpp>

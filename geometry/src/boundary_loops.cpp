@@ -21,7 +21,7 @@ double twiceSignedArea(const std::vector<OpenMesh::Vec2i>& polygon) {
 // How a hole in DepthLoops::holes is to be closed: by its frame_paths entry (along the frame, or
 // nothing to add for an inner hole), by the chord between its ends, along the sky line, or as
 // the joined runs of several sheets (with its path_after entry).
-enum class ClosedBy { path, chord, sky_line, joined_runs, backdrop };
+enum class ClosedBy { Path, Chord, SkyLine, JoinedRuns, Backdrop };
 
 // Appends a hole with its entry in every per-hole array of DepthLoops, which stay aligned.
 void appendHole(DepthLoops& out, VertexLoop hole, ClosedBy by, std::vector<OpenMesh::Vec2i> path = {},
@@ -29,10 +29,10 @@ void appendHole(DepthLoops& out, VertexLoop hole, ClosedBy by, std::vector<OpenM
   out.holes.push_back(std::move(hole));
   out.frame_paths.push_back(std::move(path));
   out.path_after.push_back(std::move(after));
-  out.chord_closed.push_back(by == ClosedBy::chord);
-  out.sky_line_closed.push_back(by == ClosedBy::sky_line);
-  out.merged.push_back(by == ClosedBy::joined_runs || by == ClosedBy::backdrop);
-  out.backdrop.push_back(by == ClosedBy::backdrop);
+  out.chord_closed.push_back(by == ClosedBy::Chord);
+  out.sky_line_closed.push_back(by == ClosedBy::SkyLine);
+  out.merged.push_back(by == ClosedBy::JoinedRuns || by == ClosedBy::Backdrop);
+  out.backdrop.push_back(by == ClosedBy::Backdrop);
   out.frame_hole.push_back(frame_hole);
 }
 
@@ -73,10 +73,10 @@ std::vector<VertexLoop> findBoundaryLoops(const SurfaceMesh& mesh) {
 
 const char* loopKindName(LoopKind kind) {
   switch (kind) {
-    case LoopKind::hole: return "hole";
-    case LoopKind::sky_opening: return "sky_opening";
-    case LoopKind::border: return "border";
-    case LoopKind::silhouette: return "silhouette";
+    case LoopKind::Hole: return "hole";
+    case LoopKind::SkyOpening: return "sky_opening";
+    case LoopKind::Border: return "border";
+    case LoopKind::Silhouette: return "silhouette";
   }
   return "unknown";
 }
@@ -248,7 +248,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
     std::size_t behind = 0;
     for (std::size_t e = 1; e + 1 < run.size(); ++e) behind += behindOccluder(run[e]);
     if (2 * behind < run.size() - 2) return;
-    if (backdrops == BackdropMode::every_frame_hole) {
+    if (backdrops == BackdropMode::EveryFrameHole) {
       enclosing.push_back(run);
       return;
     }
@@ -258,7 +258,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       // Next along the sky line, over the occluder's outline: before the chord, which cuts
       // the occluder's part above the run's ends off (and sees no sky behind it).
       if (skyPath(run, path)) {
-        appendHole(out, run, ClosedBy::sky_line, std::move(path));
+        appendHole(out, run, ClosedBy::SkyLine, std::move(path));
         ++out.frame_holes;
         ++out.frame_holes_sky_line;
         return;
@@ -268,7 +268,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       pending.push_back(run);
       return;
     }
-    appendHole(out, run, ClosedBy::path, std::move(path));
+    appendHole(out, run, ClosedBy::Path, std::move(path));
     ++out.frame_holes;
   };
   const auto addChordOrUnclosable = [&](const VertexLoop& run) {
@@ -289,7 +289,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
         return;
       }
     }
-    appendHole(out, run, ClosedBy::chord);
+    appendHole(out, run, ClosedBy::Chord);
     ++out.frame_holes;
   };
 
@@ -430,7 +430,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       for (const auto& p : polygon) simple = simple && once.emplace(key(p), 1).second;
       if (!simple || !(twiceSignedArea(polygon) < 0)) continue;
       for (const std::size_t r : chain) used[r] = 1;
-      appendHole(out, std::move(hole), backdrop ? ClosedBy::backdrop : ClosedBy::joined_runs, std::move(hole_path),
+      appendHole(out, std::move(hole), backdrop ? ClosedBy::Backdrop : ClosedBy::JoinedRuns, std::move(hole_path),
                  std::move(after));
       ++out.frame_holes;
       ++(backdrop ? out.frame_holes_backdrop : out.frame_holes_merged);
@@ -449,7 +449,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       const auto a = loop[i], b = loop[(i + 1) % n];
       const OpenMesh::Vec2i pa = pixelOf(a), pb = pixelOf(b);
       // Vertices a frame hole's patch added along the frame or the sky line are part of the border.
-      if (mesh.property(m.properties.origin, a) != static_cast<std::uint8_t>(VertexOrigin::pixel) && frameSides(pa) == 0 &&
+      if (mesh.property(m.properties.origin, a) != static_cast<std::uint8_t>(VertexOrigin::Pixel) && frameSides(pa) == 0 &&
           !nextToNoDepth(pa))
         any_pixel_less = true;
       twice_area += double(pa[0]) * pb[1] - double(pb[0]) * pa[1];
@@ -457,20 +457,20 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
       any_border = any_border || border_edge[i];
     }
     LoopKind kind;
-    if (any_pixel_less) kind = LoopKind::hole;  // a loop through added vertices: not from the image grid
-    else if (twice_area < 0) kind = any_border ? LoopKind::sky_opening : LoopKind::hole;
-    else kind = any_border ? LoopKind::border : (twice_area == 0 ? LoopKind::hole : LoopKind::silhouette);
+    if (any_pixel_less) kind = LoopKind::Hole;  // a loop through added vertices: not from the image grid
+    else if (twice_area < 0) kind = any_border ? LoopKind::SkyOpening : LoopKind::Hole;
+    else kind = any_border ? LoopKind::Border : (twice_area == 0 ? LoopKind::Hole : LoopKind::Silhouette);
     out.kinds.push_back(kind);
     switch (kind) {
-      case LoopKind::hole:
+      case LoopKind::Hole:
         ++out.inner_holes;
-        appendHole(out, loop, ClosedBy::path, {}, {}, false);
+        appendHole(out, loop, ClosedBy::Path, {}, {}, false);
         break;
-      case LoopKind::sky_opening: ++out.sky_openings; break;
-      case LoopKind::silhouette: ++out.silhouettes; break;
-      case LoopKind::border: ++out.border_loops; break;
+      case LoopKind::SkyOpening: ++out.sky_openings; break;
+      case LoopKind::Silhouette: ++out.silhouettes; break;
+      case LoopKind::Border: ++out.border_loops; break;
     }
-    if (kind != LoopKind::border) continue;
+    if (kind != LoopKind::Border) continue;
     // Runs of non-border edges, starting after a border edge, cut at their vertices on the frame.
     std::size_t first = 0;
     while (!border_edge[first]) ++first;
@@ -505,7 +505,7 @@ DepthLoops classifyDepthLoops(const DepthMesh& m, const cv::Mat& had_depth, cons
   // A run whose outline trace finds no other run's start (its end at a pocket of sky walled in
   // by thin far structures) would stop every chain through it: left out, the others' trace
   // passes over its pixels, and it stays open alone (a few rounds).
-  for (int round = 0; backdrops != BackdropMode::off && round < 4; ++round) {
+  for (int round = 0; backdrops != BackdropMode::Off && round < 4; ++round) {
     const std::int64_t closed_before = out.frame_holes_backdrop;
     std::vector<std::size_t> dead_ends;
     closeMergedRuns(enclosing, true, &dead_ends);

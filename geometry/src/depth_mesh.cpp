@@ -1,6 +1,6 @@
 #include "solo/geometry/depth_mesh.h"
 
-#include "solo/geometry/scene.h"
+#include "solo/core/scene.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -32,7 +32,7 @@ DepthMesh meshFromDepth(const cv::Mat& depth_m, const PinholeCamera& camera, con
       const auto vh = mesh.add_vertex(SurfaceMesh::Point(p.x(), p.y(), p.z()));
       mesh.property(out.properties.pixel, vh) = OpenMesh::Vec2i(u, v);
       mesh.property(out.properties.instance, vh) = instance;
-      mesh.property(out.properties.origin, vh) = static_cast<std::uint8_t>(VertexOrigin::pixel);
+      mesh.property(out.properties.origin, vh) = static_cast<std::uint8_t>(VertexOrigin::Pixel);
       out.vertex_of_pixel[static_cast<std::size_t>(v) * out.width + u] = vh.idx();
     }
   }

@@ -1,7 +1,7 @@
 #include "solo/geometry/depth_metrics.h"
 
-#include "solo/geometry/error.h"
-#include "solo/geometry/quantile.h"
+#include "solo/core/error.h"
+#include "solo/core/quantile.h"
 
 #include <algorithm>
 #include <cmath>

@@ -62,7 +62,7 @@ DepthRefinementResult refineDepth(const Scene& scene, const DepthRefinementOptio
     out.steps.push_back(skippedStep("optimize", "no normals: no normal-guided optimisation"));
   } else {
     NormalGuidedOptimizationResult optimized =
-        options.optimizer == DepthOptimizer::kCeres
+        options.optimizer == DepthOptimizer::Ceres
             ? optimizeDepthWithNormals(out.filtered_depth_m, out.normals, out.uncertain, out.maps.instances,
                                        scene.camera, options.optimization)
             : optimizeDepthWithAdam(out.filtered_depth_m, out.normals, out.uncertain, out.maps.instances, scene.camera,

@@ -1,7 +1,7 @@
 #include "solo/geometry/foreground_solids.h"
 
 #include "solo/geometry/mesh_fragments.h"
-#include "solo/geometry/scene.h"
+#include "solo/core/scene.h"
 #include "triangle_raster.h"
 
 #include <algorithm>
@@ -103,7 +103,7 @@ SolidClosing closeForegroundSolids(DepthMesh& m, const std::vector<OpenMesh::Fac
     const int c = component[f.idx()];
     if (c < 0) continue;
     for (const auto v : mesh.fv_range(f))
-      if (mesh.property(props.origin, v) == static_cast<std::uint8_t>(VertexOrigin::pixel))
+      if (mesh.property(props.origin, v) == static_cast<std::uint8_t>(VertexOrigin::Pixel))
         ++votes[c][cityscapesClassOfInstance(mesh.property(props.instance, v))];
   }
   std::vector<double> thickness(count, 0.0);
@@ -168,7 +168,7 @@ SolidClosing closeForegroundSolids(DepthMesh& m, const std::vector<OpenMesh::Fac
     const auto back = mesh.add_vertex(p * ((p[2] + t) / p[2]));
     mesh.property(props.pixel, back) = pixel;
     mesh.property(props.instance, back) = mesh.property(props.instance, vh);
-    mesh.property(props.origin, back) = static_cast<std::uint8_t>(VertexOrigin::solid_back);
+    mesh.property(props.origin, back) = static_cast<std::uint8_t>(VertexOrigin::SolidBack);
     back_of[i] = back.idx();
     ++result.vertices_added;
     if (!counted[c]) {

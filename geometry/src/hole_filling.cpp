@@ -2,7 +2,7 @@
 
 #include "solo/geometry/hole_filling.h"
 
-#include "solo/geometry/report.h"
+#include "solo/core/report.h"
 
 #include "polygon_cdt.h"
 
@@ -251,10 +251,10 @@ std::vector<Point2> interiorPixelCentres(const std::vector<Point2>& uv, const Cd
 
 const char* holeFillMethodName(HoleFillMethod method) {
   switch (method) {
-    case HoleFillMethod::image_space: return "image_space";
-    case HoleFillMethod::triangulate_refine_fair: return "triangulate_refine_fair";
-    case HoleFillMethod::triangulate: return "triangulate";
-    case HoleFillMethod::centroid_fan: return "centroid_fan";
+    case HoleFillMethod::ImageSpace: return "image_space";
+    case HoleFillMethod::TriangulateRefineFair: return "triangulate_refine_fair";
+    case HoleFillMethod::Triangulate: return "triangulate";
+    case HoleFillMethod::CentroidFan: return "centroid_fan";
   }
   return "unknown";
 }
@@ -289,7 +289,7 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 
   const Stopwatch clock;
   try {
-    if (method == HoleFillMethod::centroid_fan) {
+    if (method == HoleFillMethod::CentroidFan) {
       Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
       for (const auto& p : boundary) centroid += p;
       centroid /= n;
@@ -313,7 +313,7 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
       patch.triangulation_failed = true;
       return patch;
     }
-    if (method == HoleFillMethod::triangulate_refine_fair) refineAndFair(polyline, options, clock, patch);
+    if (method == HoleFillMethod::TriangulateRefineFair) refineAndFair(polyline, options, clock, patch);
     patch.filled = true;
   } catch (const DeadlineExceeded&) {
     const bool triangulated = !patch.faces.empty();

@@ -3,7 +3,7 @@
 
 #include "solo/geometry/large_hole_filling.h"
 
-#include "solo/geometry/report.h"
+#include "solo/core/report.h"
 
 #include "polygon_cdt.h"
 
@@ -281,7 +281,7 @@ struct Splitter {
         pieces + 2 <= large.max_pieces ? chooseChords(points, top ? large.chord_candidates : 1, chord_blocked)
                                        : std::vector<std::pair<int, int>>{};
     if (chords.empty() && !top && k <= options.max_cubic_boundary_vertices) {
-      HolePatch patch = fillHolePolyline(points, HoleFillMethod::triangulate, options);
+      HolePatch patch = fillHolePolyline(points, HoleFillMethod::Triangulate, options);
       if (patch.filled) {
         add(loop, patch.faces, {});
         ++pieces;

@@ -1,12 +1,12 @@
 #include "solo/geometry/mesh_cleanup.h"
 
 #include "solo/geometry/boundary_loops.h"
-#include "solo/geometry/error.h"
+#include "solo/core/error.h"
 #include "solo/geometry/foreground_solids.h"
 #include "solo/geometry/mesh_fragments.h"
 #include "solo/geometry/mesh_holes.h"
 #include "solo/geometry/mesh_repair.h"
-#include "solo/geometry/scene.h"
+#include "solo/core/scene.h"
 
 #include <opencv2/imgproc.hpp>
 
@@ -26,7 +26,7 @@ cv::Mat hadDepthMask(const DepthMesh& m) {
 void rebuildPixelIndex(DepthMesh& m) {
   std::fill(m.vertex_of_pixel.begin(), m.vertex_of_pixel.end(), -1);
   for (const auto v : m.mesh.vertices()) {
-    if (m.mesh.property(m.properties.origin, v) != static_cast<std::uint8_t>(VertexOrigin::pixel)) continue;
+    if (m.mesh.property(m.properties.origin, v) != static_cast<std::uint8_t>(VertexOrigin::Pixel)) continue;
     const OpenMesh::Vec2i p = m.mesh.property(m.properties.pixel, v);
     m.vertex_of_pixel[static_cast<std::size_t>(p[1]) * m.width + p[0]] = v.idx();
   }
@@ -202,7 +202,7 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
 
   step = Stopwatch();
   const BackdropMode backdrop_mode =
-      options.backdrops && options.fill_holes ? BackdropMode::unclosable : BackdropMode::off;
+      options.backdrops && options.fill_holes ? BackdropMode::Unclosable : BackdropMode::Off;
   const DepthLoops loops = classifyDepthLoops(m, had_depth, depth_m, backdrop_mode);
   addLoopCounts(report, "found_", loops);
   for (const auto& note : loops.unclosable_notes) report.notes.push_back(note);
@@ -264,8 +264,8 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
       retried += loops.frame_hole[first_pass[k]] && holes.hole_methods[k] == "open";
     DepthLoops again;
     const DepthLoops* backdrop_source = &loops;
-    if (retried > 0 && backdrop_mode != BackdropMode::off) {
-      again = classifyDepthLoops(m, had_depth, depth_m, BackdropMode::every_frame_hole);
+    if (retried > 0 && backdrop_mode != BackdropMode::Off) {
+      again = classifyDepthLoops(m, had_depth, depth_m, BackdropMode::EveryFrameHole);
       backdrop_source = &again;
       backdrop_holes.clear();
       for (std::size_t i = 0; i < again.holes.size(); ++i)

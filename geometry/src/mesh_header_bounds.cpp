@@ -1,6 +1,6 @@
 #include "mesh_header_bounds.h"
 
-#include "solo/geometry/error.h"
+#include "solo/core/error.h"
 
 #include <algorithm>
 #include <fstream>

@@ -1,5 +1,5 @@
 #include "solo/geometry/mesh_holes.h"
-#include "solo/geometry/report.h"
+#include "solo/core/report.h"
 #include "triangle_raster.h"
 
 #include <algorithm>
@@ -20,7 +20,7 @@ using Face = std::array<int, 3>;
 
 struct Attempt {
   std::size_t hole = 0;
-  HoleFillMethod method = HoleFillMethod::triangulate_refine_fair;
+  HoleFillMethod method = HoleFillMethod::TriangulateRefineFair;
   std::string large_method;  ///< fillLargeHole's method when it made the patch
   HolePatch patch;
   std::vector<Face> faces;  ///< global indices: mesh vertex handles, then new points
@@ -50,14 +50,14 @@ int majorityInstance(const SurfaceMesh& mesh, const ImageVertexProperties& p, co
 /// image-space fill come the 3D methods, starting where a hole of `hole_vertices` would start.
 bool nextMethod(HoleFillMethod& method, std::size_t hole_vertices, const HoleFillOptions& options) {
   switch (method) {
-    case HoleFillMethod::image_space:
+    case HoleFillMethod::ImageSpace:
       method = static_cast<int>(hole_vertices) <= options.max_triangulation_only_vertices
-                   ? HoleFillMethod::triangulate
-                   : HoleFillMethod::triangulate_refine_fair;
+                   ? HoleFillMethod::Triangulate
+                   : HoleFillMethod::TriangulateRefineFair;
       return true;
-    case HoleFillMethod::triangulate_refine_fair: method = HoleFillMethod::triangulate; return true;
-    case HoleFillMethod::triangulate: method = HoleFillMethod::centroid_fan; return true;
-    case HoleFillMethod::centroid_fan: return false;
+    case HoleFillMethod::TriangulateRefineFair: method = HoleFillMethod::Triangulate; return true;
+    case HoleFillMethod::Triangulate: method = HoleFillMethod::CentroidFan; return true;
+    case HoleFillMethod::CentroidFan: return false;
   }
   return false;
 }
@@ -281,7 +281,7 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
   if (by_pixels) {
     std::vector<std::uint8_t> listed(mesh.n_faces(), 0);
     for (const auto v : mesh.vertices()) {
-      if (mesh.property(pixels->properties.origin, v) == static_cast<std::uint8_t>(VertexOrigin::pixel)) continue;
+      if (mesh.property(pixels->properties.origin, v) == static_cast<std::uint8_t>(VertexOrigin::Pixel)) continue;
       for (const auto f : mesh.vf_range(v)) {
         if (listed[f.idx()]) continue;
         listed[f.idx()] = 1;
@@ -294,14 +294,14 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
   }
   std::vector<std::string> last_failure(holes.size());
   std::vector<std::size_t> pending(holes.size());
-  std::vector<HoleFillMethod> method_of(holes.size(), HoleFillMethod::triangulate_refine_fair);
+  std::vector<HoleFillMethod> method_of(holes.size(), HoleFillMethod::TriangulateRefineFair);
   for (std::size_t i = 0; i < holes.size(); ++i) {
     pending[i] = i;
     result.largest_hole_vertices = std::max<std::int64_t>(result.largest_hole_vertices, holes[i].size());
     if (static_cast<int>(holes[i].size()) <= options.max_triangulation_only_vertices)
-      method_of[i] = HoleFillMethod::triangulate;
+      method_of[i] = HoleFillMethod::Triangulate;
     // A depth mesh's hole is first closed in the image, where the mesh has no face.
-    if (by_pixels && options.image_space_first) method_of[i] = HoleFillMethod::image_space;
+    if (by_pixels && options.image_space_first) method_of[i] = HoleFillMethod::ImageSpace;
   }
   std::vector<Attempt> accepted;
   std::vector<std::size_t> given_up;
@@ -359,7 +359,7 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
       large_stage.push_back(0);
       large_failure.push_back({});
       last_failure.push_back({});
-      method_of.push_back(tiny ? HoleFillMethod::triangulate : HoleFillMethod::triangulate_refine_fair);
+      method_of.push_back(tiny ? HoleFillMethod::Triangulate : HoleFillMethod::TriangulateRefineFair);
       into.push_back(id);
     }
     return true;
@@ -428,7 +428,7 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
   };
   while (!pending.empty()) {
     for (const std::size_t hole : pending)
-      if (method_of[hole] == HoleFillMethod::centroid_fan && large_stage[hole] == 0 && largeEligible(hole))
+      if (method_of[hole] == HoleFillMethod::CentroidFan && large_stage[hole] == 0 && largeEligible(hole))
         large_stage[hole] = 1;
     // Patches of independent holes: computed in parallel, each into its own slot.
     std::vector<Attempt> tries(pending.size());
@@ -458,13 +458,13 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
           continue;
         }
         std::vector<Eigen::Vector2d> closing_path;
-        if (method_of[hole] == HoleFillMethod::image_space && pixels->frame_paths && hole < pixels->frame_paths->size())
+        if (method_of[hole] == HoleFillMethod::ImageSpace && pixels->frame_paths && hole < pixels->frame_paths->size())
           for (const auto& p : (*pixels->frame_paths)[hole]) closing_path.emplace_back(p[0], p[1]);
         std::vector<int> closing_after;
         if (!closing_path.empty() && pixels->frame_path_after && hole < pixels->frame_path_after->size())
           closing_after = (*pixels->frame_path_after)[hole];
         tries[i].patch =
-            method_of[hole] == HoleFillMethod::image_space
+            method_of[hole] == HoleFillMethod::ImageSpace
                 ? fillHoleInImage(boundary, pixels->camera, options, obstacleDepth, closing_path, closing_after,
                                   pixels->backdrop && hole < pixels->backdrop->size() && (*pixels->backdrop)[hole]
                                       ? &backdrop
@@ -482,7 +482,7 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
         return;
       }
       last_failure[hole] = std::string(holeFillMethodName(method_of[hole])) + ": " + why;
-      const bool image_only = method_of[hole] == HoleFillMethod::image_space && by_pixels && pixels->image_space_only &&
+      const bool image_only = method_of[hole] == HoleFillMethod::ImageSpace && by_pixels && pixels->image_space_only &&
                               hole < pixels->image_space_only->size() && (*pixels->image_space_only)[hole];
       if (!image_only && nextMethod(method_of[hole], holes[hole].size(), options)) still_pending.push_back(hole);
       else if (!splitHole(hole, still_pending)) given_up.push_back(hole);
@@ -492,9 +492,9 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
       const std::size_t hole = attempt.hole;
       if (!attempt.patch.filled) {
         // A triangulation that failed inside the full pipeline fails alone too: go to the fan.
-        const bool skip = attempt.patch.triangulation_failed && method_of[hole] == HoleFillMethod::triangulate_refine_fair;
+        const bool skip = attempt.patch.triangulation_failed && method_of[hole] == HoleFillMethod::TriangulateRefineFair;
         retry(hole, attempt.patch.failure);
-        if (skip && !still_pending.empty() && still_pending.back() == hole) method_of[hole] = HoleFillMethod::centroid_fan;
+        if (skip && !still_pending.empty() && still_pending.back() == hole) method_of[hole] = HoleFillMethod::CentroidFan;
         continue;
       }
       const int n = static_cast<int>(holes[hole].size());
@@ -541,7 +541,7 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
     bool all_image_space = true;
     for (std::size_t a = 0; a < attempts.size(); ++a)
       if (!rejected[a])
-        ++candidate_patches, all_image_space = all_image_space && attempts[a].method == HoleFillMethod::image_space;
+        ++candidate_patches, all_image_space = all_image_space && attempts[a].method == HoleFillMethod::ImageSpace;
     const std::vector<std::uint8_t> hit =
         findIntersectingFaces(round_points, candidates, others, !(candidate_patches == 1 && all_image_space));
     for (std::size_t i = 0; i < hit.size(); ++i)
@@ -570,13 +570,13 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
         name = attempt.large_method;
       } else {
         switch (attempt.method) {  // a patch too large to fair came back as its triangulation
-          case HoleFillMethod::image_space: ++result.by_image_space, name = "image_space"; break;
-          case HoleFillMethod::triangulate_refine_fair:
+          case HoleFillMethod::ImageSpace: ++result.by_image_space, name = "image_space"; break;
+          case HoleFillMethod::TriangulateRefineFair:
             ++(attempt.patch.new_points.empty() ? result.by_triangulation : result.by_refine_fair);
             name = attempt.patch.new_points.empty() ? "triangulation" : "refine_fair";
             break;
-          case HoleFillMethod::triangulate: ++result.by_triangulation, name = "triangulation"; break;
-          case HoleFillMethod::centroid_fan: ++result.by_centroid_fan, name = "centroid_fan"; break;
+          case HoleFillMethod::Triangulate: ++result.by_triangulation, name = "triangulation"; break;
+          case HoleFillMethod::CentroidFan: ++result.by_centroid_fan, name = "centroid_fan"; break;
         }
       }
       accepted.push_back(std::move(attempt));
@@ -644,7 +644,7 @@ HoleClosing closeHoles(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
           const int v = std::clamp(static_cast<int>(std::lround(uv.y())), 0, pixels->height - 1);
           mesh.property(pixels->properties.pixel, vh) = OpenMesh::Vec2i(u, v);
           mesh.property(pixels->properties.instance, vh) = instance;
-          mesh.property(pixels->properties.origin, vh) = static_cast<std::uint8_t>(VertexOrigin::hole_fill);
+          mesh.property(pixels->properties.origin, vh) = static_cast<std::uint8_t>(VertexOrigin::HoleFill);
         }
     }
   }

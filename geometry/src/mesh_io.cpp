@@ -1,6 +1,6 @@
-#include "solo/geometry/atomic_file.h"
-#include "solo/geometry/error.h"
-#include "solo/geometry/input_file.h"
+#include "solo/core/atomic_file.h"
+#include "solo/core/error.h"
+#include "solo/core/input_file.h"
 #include "solo/geometry/triangle_mesh.h"
 
 #include "mesh_header_bounds.h"

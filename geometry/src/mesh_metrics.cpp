@@ -4,8 +4,8 @@
 
 #include "solo/geometry/mesh_metrics.h"
 
-#include "solo/geometry/error.h"
-#include "solo/geometry/quantile.h"
+#include "solo/core/error.h"
+#include "solo/core/quantile.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -233,10 +233,10 @@ FacePairs selfIntersections(const TriangleMesh& mesh, const std::vector<Point>& 
     polygon_face.push_back(f);
   }
   if (!CGAL::Polygon_mesh_processing::is_polygon_soup_a_polygon_mesh(polygons)) {
-    check = SelfIntersectionCheck::triangle_soup;
+    check = SelfIntersectionCheck::TriangleSoup;
     return soupSelfIntersections(mesh, points, non_degenerate);
   }
-  check = SelfIntersectionCheck::polygon_mesh;
+  check = SelfIntersectionCheck::PolygonMesh;
   using SurfaceMesh = CGAL::Surface_mesh<Point>;
   SurfaceMesh surface;
   CGAL::Polygon_mesh_processing::polygon_soup_to_polygon_mesh(points, polygons, surface);
@@ -268,7 +268,7 @@ std::pair<double, double> triangleShape(const Eigen::Vector3d& a, const Eigen::V
 }  // namespace
 
 const char* selfIntersectionCheckName(SelfIntersectionCheck check) {
-  return check == SelfIntersectionCheck::polygon_mesh ? "polygon_mesh" : "triangle_soup";
+  return check == SelfIntersectionCheck::PolygonMesh ? "polygon_mesh" : "triangle_soup";
 }
 
 MeshMetrics evaluateMesh(const TriangleMesh& mesh) {

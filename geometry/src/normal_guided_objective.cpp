@@ -74,7 +74,7 @@ NormalGuidedObjective::NormalGuidedObjective(const cv::Mat& filtered_depth_m, co
     const double length = std::sqrt(n.dot(n));
     if (!std::isfinite(length) || length < 1e-9) continue;
     n /= length;
-    const double c = options.tangent_model == TangentModel::kPerspective
+    const double c = options.tangent_model == TangentModel::Perspective
                          ? n.dot(cv::Vec3d((x - camera.cx) / camera.fx, (y - camera.cy) / camera.fy, 1.0))
                          : n[2];
     u_[i].offset = static_cast<float>(n[0]), u_[i].slope_factor = static_cast<float>(c * camera.fx);

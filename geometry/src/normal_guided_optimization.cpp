@@ -270,7 +270,7 @@ NormalGuidedOptimizationResult optimizeDepthWithNormals(const cv::Mat& filtered_
   SolveClock clock;
   NormalGuidedOptimizationResult result;
   result.report.name = "optimize";
-  const bool lbfgs = options.layout == DepthSolverLayout::kWholeImageLbfgs;
+  const bool lbfgs = options.layout == DepthSolverLayout::WholeImageLbfgs;
 
   const cv::Mat segments = options.stencil_within_instances ? instances : cv::Mat();
   const NormalGuidedObjective objective(filtered_depth_m, normals, uncertain, camera, options.objective, segments);
@@ -334,7 +334,7 @@ NormalGuidedOptimizationResult optimizeDepthWithNormals(const cv::Mat& filtered_
   StageReport& r = result.report;
   r.add("layout", std::string(lbfgs ? "whole_image_lbfgs" : "per_pixel_residual_blocks"));
   r.add("tangent_model",
-        std::string(options.objective.tangent_model == TangentModel::kPerspective ? "perspective" : "paper_graph"));
+        std::string(options.objective.tangent_model == TangentModel::Perspective ? "perspective" : "paper_graph"));
   r.add("unknowns", std::int64_t{objective.unknowns()});
   r.add("tangent_pixels", std::int64_t{objective.tangentPixels()});
   r.add("iterations", std::int64_t{full_iterations});

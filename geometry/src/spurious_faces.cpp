@@ -1,6 +1,6 @@
 #include "solo/geometry/spurious_faces.h"
 
-#include "solo/geometry/scene.h"
+#include "solo/core/scene.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -46,10 +46,10 @@ class JumpTest {
     return std::abs(za - zb) > factor * std::min(za, zb) / focal_px_ * std::sqrt(double(du * du + dv * dv));
   }
 
-  bool isJump(const OpenMesh::Vec2i& a, const OpenMesh::Vec2i& b) const { return classify(a, b, true) == Edge::kJump; }
+  bool isJump(const OpenMesh::Vec2i& a, const OpenMesh::Vec2i& b) const { return classify(a, b, true) == Edge::Jump; }
 
  private:
-  enum class Edge { kSmall, kContinuous, kThinStep, kJump };
+  enum class Edge { Small, Continuous, ThinStep, Jump };
 
   /// The jump test of one edge. with_planes = false leaves out the block planes of the step test
   /// (used on the blocks' own edges, so the test does not recurse).
@@ -64,13 +64,13 @@ class JumpTest {
     const double small_factor = options_.small_jump_fraction * factor;
     const bool small_jump = std::abs(za - zb) <= factor * footprint_m;
     if (small_jump && !(options_.small_jump_fraction > 0 && std::abs(za - zb) > small_factor * footprint_m))
-      return Edge::kSmall;
-    if (!options_.extrapolation_test) return small_jump ? Edge::kSmall : Edge::kJump;  // no step test either
+      return Edge::Small;
+    if (!options_.extrapolation_test) return small_jump ? Edge::Small : Edge::Jump;  // no step test either
     const double wa = 1.0 / za, wb = 1.0 / zb;
     // A side without a pixel behind it (image frame, sky) cannot be extrapolated: only jumps
     // larger than edge_of_data_factor times the criterion are cut there.
     if (!hasVertex(a[0] - du, a[1] - dv) || !hasVertex(b[0] + du, b[1] + dv))
-      return std::abs(za - zb) > options_.edge_of_data_factor * factor * footprint_m ? Edge::kJump : Edge::kContinuous;
+      return std::abs(za - zb) > options_.edge_of_data_factor * factor * footprint_m ? Edge::Jump : Edge::Continuous;
     const double slope_a = wa - inverseDepth(a[0] - du, a[1] - dv);
     const double slope_b = inverseDepth(b[0] + du, b[1] + dv) - wb;
     // Side a: wa + t slope_a; side b: wb + (t - 1) slope_b; t = 0 at a, 1 at b.
@@ -81,9 +81,9 @@ class JumpTest {
     const double g1 = (wa + slope_a) - wb;
     const double s = options_.crossing_slack_edges;
     const double lo = g0 - s * (g1 - g0), hi = g1 + s * (g1 - g0);
-    if (lo == 0 || hi == 0 || (lo < 0) != (hi < 0)) return Edge::kContinuous;
+    if (lo == 0 || hi == 0 || (lo < 0) != (hi < 0)) return Edge::Continuous;
     const double smallest_gap_m = std::min(std::abs(lo), std::abs(hi)) / (wa * wb);
-    if (smallest_gap_m <= options_.continuity_tolerance_footprints * footprint_m) return Edge::kContinuous;
+    if (smallest_gap_m <= options_.continuity_tolerance_footprints * footprint_m) return Edge::Continuous;
     // A thin step seen at a grazing angle (a window proud of a side facade) makes a large depth
     // jump between parallel surfaces only centimetres apart: measure how far each point lies
     // from the other side's surface line (through the point and the one behind it). A line
@@ -114,7 +114,7 @@ class JumpTest {
     }
     const double min_step_m =
         small_jump ? std::max(options_.min_step_m, small_factor * footprint_m) : options_.min_step_m;
-    return apart_m >= min_step_m ? Edge::kJump : Edge::kThinStep;
+    return apart_m >= min_step_m ? Edge::Jump : Edge::ThinStep;
   }
 
   /// Whether the line through pixel s and s + (eu, ev) is no surface: no vertex there, or the
@@ -162,8 +162,8 @@ class JumpTest {
       normal /= length;
       const double footprint_m = p0.z() / focal_px_;
       if (std::abs(normal.dot(p3 - p0)) > options_.block_plane_tolerance_footprints * footprint_m) continue;
-      if (classify(s, s2, false) == Edge::kJump || classify(s1, s3, false) == Edge::kJump ||
-          classify(s, s1, false) == Edge::kJump || classify(s2, s3, false) == Edge::kJump)
+      if (classify(s, s2, false) == Edge::Jump || classify(s1, s3, false) == Edge::Jump ||
+          classify(s, s1, false) == Edge::Jump || classify(s2, s3, false) == Edge::Jump)
         continue;
       best = std::min(best, std::abs(normal.dot(other - p0)));
     }

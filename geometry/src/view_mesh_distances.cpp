@@ -53,9 +53,9 @@ int bandOf(double z_m, const std::vector<double>& edges) {
 
 const char* faceOriginName(FaceOrigin origin) {
   switch (origin) {
-    case FaceOrigin::depth_surface: return "depth_surface";
-    case FaceOrigin::hole_fill: return "hole_fill";
-    case FaceOrigin::solid: return "solid";
+    case FaceOrigin::DepthSurface: return "depth_surface";
+    case FaceOrigin::HoleFill: return "hole_fill";
+    case FaceOrigin::Solid: return "solid";
   }
   return "unknown";
 }
@@ -66,12 +66,12 @@ std::vector<FaceOrigin> faceOrigins(const SurfaceMesh& mesh) {
   out.reserve(mesh.n_faces());
   for (const auto f : mesh.faces()) {
     if (mesh.status(f).deleted()) continue;
-    FaceOrigin origin = FaceOrigin::depth_surface;
+    FaceOrigin origin = FaceOrigin::DepthSurface;
     if (properties)
       for (const auto v : mesh.fv_range(f)) {
         const auto o = static_cast<VertexOrigin>(mesh.property(properties->origin, v));
-        if (o == VertexOrigin::solid_back) origin = FaceOrigin::solid;
-        else if (o == VertexOrigin::hole_fill && origin != FaceOrigin::solid) origin = FaceOrigin::hole_fill;
+        if (o == VertexOrigin::SolidBack) origin = FaceOrigin::Solid;
+        else if (o == VertexOrigin::HoleFill && origin != FaceOrigin::Solid) origin = FaceOrigin::HoleFill;
       }
     out.push_back(origin);
   }

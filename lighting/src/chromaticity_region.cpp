@@ -2,7 +2,7 @@
 
 #include "csv.h"
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/lighting/colorimetry.h>
 
 #include <sstream>

@@ -3,8 +3,8 @@
 // a field may be double-quoted (a doubled quote inside stands for one quote). Lines that
 // are empty or start with '#' are comments.
 
-#include <solo/geometry/error.h>
-#include <solo/geometry/input_file.h>
+#include <solo/core/error.h>
+#include <solo/core/input_file.h>
 
 #include <cmath>
 #include <cstdlib>

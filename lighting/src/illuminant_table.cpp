@@ -2,8 +2,8 @@
 
 #include "csv.h"
 
-#include <solo/geometry/atomic_file.h>
-#include <solo/geometry/error.h>
+#include <solo/core/atomic_file.h>
+#include <solo/core/error.h>
 
 #include <cmath>
 #include <cstdio>

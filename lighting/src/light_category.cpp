@@ -1,6 +1,6 @@
 #include "solo/lighting/light_category.h"
 
-#include <solo/geometry/scene.h>
+#include <solo/core/scene.h>
 
 #include <stdexcept>
 #include <unordered_set>

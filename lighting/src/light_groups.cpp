@@ -1,6 +1,6 @@
 #include "solo/lighting/light_groups.h"
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 
 #include <opencv2/imgproc.hpp>
 

@@ -1,8 +1,8 @@
 #include "solo/lighting/light_record.h"
 
-#include <solo/geometry/atomic_file.h>
-#include <solo/geometry/error.h>
-#include <solo/geometry/input_file.h>
+#include <solo/core/atomic_file.h>
+#include <solo/core/error.h>
+#include <solo/core/input_file.h>
 
 #include <nlohmann/json.hpp>
 

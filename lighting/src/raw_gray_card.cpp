@@ -2,8 +2,8 @@
 
 #include "solo/lighting/colorimetry.h"
 
-#include <solo/geometry/error.h>
-#include <solo/geometry/input_file.h>
+#include <solo/core/error.h>
+#include <solo/core/input_file.h>
 
 #include <OpenImageIO/imageio.h>
 

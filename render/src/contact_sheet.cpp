@@ -1,6 +1,6 @@
 #include <solo/render/contact_sheet.h>
 
-#include <solo/geometry/quantile.h>
+#include <solo/core/quantile.h>
 #include <solo/geometry/spurious_faces.h>
 
 #include <opencv2/imgproc.hpp>

@@ -106,8 +106,8 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     for (const auto vh : mesh.fv_range(f)) {
       if (props) {
         const auto origin = static_cast<VertexOrigin>(mesh.property(props->origin, vh));
-        behind |= origin == VertexOrigin::solid_back || origin == VertexOrigin::input;
-        filled |= origin == VertexOrigin::hole_fill;
+        behind |= origin == VertexOrigin::SolidBack || origin == VertexOrigin::Input;
+        filled |= origin == VertexOrigin::HoleFill;
       }
       int& index = index_of_vertex[static_cast<std::size_t>(vh.idx())];
       if (index < 0) {

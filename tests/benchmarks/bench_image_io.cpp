@@ -1,7 +1,7 @@
 // Reading a 1920x1080 depth map in each supported format; baseline: NPY (a raw memory copy).
 // Run: build/release/tests/benchmarks/bench_image_io
 
-#include <solo/geometry/image_io.h>
+#include <solo/core/image_io.h>
 
 #include "bench_support.h"
 

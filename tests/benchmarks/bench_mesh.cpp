@@ -6,8 +6,8 @@
 
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/mesh_metrics.h>
-#include <solo/render/scene_raster.h>
-#include <solo/render/street_scene.h>
+#include <solo/synth/scene_raster.h>
+#include <solo/synth/street_scene.h>
 
 #include "bench_support.h"
 

@@ -2,8 +2,8 @@
 // full bright field, one FFT of the frame) and the whole chain (baseline: all steps on).
 // Run: build/release/tests/benchmarks/bench_post
 
-#include <solo/render/fog_glare.h>
-#include <solo/render/post_process.h>
+#include <solo/post/fog_glare.h>
+#include <solo/post/post_process.h>
 
 #include "bench_support.h"
 

@@ -8,12 +8,12 @@
 #include <solo/geometry/adam_depth_optimizer.h>
 #include <solo/geometry/depth_metrics.h>
 #include <solo/geometry/depth_refinement.h>
-#include <solo/geometry/image_io.h>
+#include <solo/core/image_io.h>
 #include <solo/geometry/instance_bilateral_filter.h>
 #include <solo/geometry/normal_guided_optimization.h>
 #include <solo/geometry/normal_metrics.h>
 #include <solo/geometry/normals_from_depth.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/scene.h>
 #include <solo/geometry/uncertain_regions.h>
 #include <solo/geometry/upsample_maps.h>
 
@@ -188,13 +188,13 @@ int main(int argc, char** argv) {
     cv::resize(filtered.depth_m, d, small, 0, 0, cv::INTER_NEAREST);
     cv::resize(maps.normals, n, small, 0, 0, cv::INTER_NEAREST);
     cv::resize(uncertain.mask, u, small, 0, 0, cv::INTER_NEAREST);
-    for (const auto layout : {solo::DepthSolverLayout::kPerPixelResidualBlocks, solo::DepthSolverLayout::kWholeImageLbfgs}) {
+    for (const auto layout : {solo::DepthSolverLayout::PerPixelResidualBlocks, solo::DepthSolverLayout::WholeImageLbfgs}) {
       solo::NormalGuidedOptimizationOptions o;
       o.layout = layout;
-      if (layout == solo::DepthSolverLayout::kPerPixelResidualBlocks) o.max_iterations = 30;
+      if (layout == solo::DepthSolverLayout::PerPixelResidualBlocks) o.max_iterations = 30;
       solo::Stopwatch total;
       const solo::NormalGuidedOptimizationResult result = solo::optimizeDepthWithNormals(d, n, u, h, small_camera, o);
-      const std::string name = layout == solo::DepthSolverLayout::kPerPixelResidualBlocks ? "ceres_per_pixel_lm" : "ceres_lbfgs";
+      const std::string name = layout == solo::DepthSolverLayout::PerPixelResidualBlocks ? "ceres_per_pixel_lm" : "ceres_lbfgs";
       for (const solo::OptimizationIteration& it : result.trace)
         if (it.level == 0) table.add(Row{name + "_quarter", sizeText(d), it.iteration, it.seconds, it.value, true});
       std::printf("%s at %s: objective %.6g -> %.6g in %.3f s (with problem construction)\n", name.c_str(),

@@ -12,11 +12,11 @@
 #include "night_street.h"
 #include "pipeline_scene.h"
 
-#include <solo/geometry/report.h>
+#include <solo/core/report.h>
 #include <solo/lighting/light_category.h>
 #include <solo/render/path_tracer.h>
 #include <solo/render/ray_caster.h>
-#include <solo/render/street_scene.h>
+#include <solo/synth/street_scene.h>
 
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>

@@ -1,7 +1,7 @@
 #include "night_street.h"
 
 #include <solo/lighting/light_category.h>
-#include <solo/render/street_scene.h>
+#include <solo/synth/street_scene.h>
 
 #include <map>
 

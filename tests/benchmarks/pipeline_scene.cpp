@@ -2,8 +2,8 @@
 
 #include "night_pipeline.h"
 
-#include <solo/geometry/report.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/report.h>
+#include <solo/core/scene.h>
 
 #include <cstdio>
 

@@ -1,5 +1,5 @@
-#include <solo/geometry/camera.h>
-#include <solo/geometry/error.h>
+#include <solo/core/camera.h>
+#include <solo/core/error.h>
 
 #include "test_support.h"
 

@@ -1,14 +1,14 @@
 // Readers that take only regular files and check sizes before memory, writers that check every
 // write, and output paths that can never be an input or the working folder.
 
-#include <solo/geometry/atomic_file.h>
-#include <solo/geometry/camera.h>
-#include <solo/geometry/error.h>
-#include <solo/geometry/image_io.h>
-#include <solo/geometry/image_limits.h>
-#include <solo/geometry/input_file.h>
-#include <solo/geometry/output_path.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/atomic_file.h>
+#include <solo/core/camera.h>
+#include <solo/core/error.h>
+#include <solo/core/image_io.h>
+#include <solo/core/image_limits.h>
+#include <solo/core/input_file.h>
+#include <solo/core/output_path.h>
+#include <solo/core/scene.h>
 #include <solo/geometry/triangle_mesh.h>
 #include <solo/lighting/illuminant_table.h>
 #include <solo/lighting/light_record.h>

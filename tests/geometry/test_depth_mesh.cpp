@@ -5,7 +5,7 @@
 #include <solo/geometry/depth_mesh.h>
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/mesh_metrics.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/scene.h>
 #include <solo/geometry/spurious_faces.h>
 
 #include "test_support.h"
@@ -505,8 +505,8 @@ TEST(DepthMeshCleanup, HoleBehindAnOccluderIsFilledAndTheOccluderClosed) {
   double deepest_back = 0;
   for (const auto v : m.mesh.vertices()) {
     const auto origin = static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v));
-    if (origin == solo::VertexOrigin::solid_back) deepest_back = std::max(deepest_back, m.mesh.point(v)[2]);
-    if (origin == solo::VertexOrigin::hole_fill) {
+    if (origin == solo::VertexOrigin::SolidBack) deepest_back = std::max(deepest_back, m.mesh.point(v)[2]);
+    if (origin == solo::VertexOrigin::HoleFill) {
       EXPECT_NEAR(m.mesh.point(v)[2], 10.0, 1e-6);
     }
   }

@@ -1,8 +1,8 @@
 // Depth metrics on hand-computed cases, their invariances, and their failure cases.
 
 #include <solo/geometry/depth_metrics.h>
-#include <solo/geometry/error.h>
-#include <solo/geometry/quantile.h>
+#include <solo/core/error.h>
+#include <solo/core/quantile.h>
 
 #include <gtest/gtest.h>
 

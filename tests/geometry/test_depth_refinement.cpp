@@ -107,7 +107,7 @@ TEST(DepthRefinement, MissingInputsSkipStepsWithTheirReason) {
 TEST(DepthRefinement, TheAdamBaselineRunsTheSameStage) {
   const solo::Scene scene = solo::loadScene(kDefault / "scene.json");
   solo::DepthRefinementOptions o;
-  o.optimizer = solo::DepthOptimizer::kAdam;
+  o.optimizer = solo::DepthOptimizer::Adam;
   o.adam.iterations = 20;
   const solo::DepthRefinementResult r = solo::refineDepth(scene, o);
   EXPECT_EQ(std::get<std::string>(*step(r, "optimize").find("layout")), "adam");

@@ -1,6 +1,6 @@
 // Downsampling a depth map for a coarser mesh (geometry/downsample_depth.h).
 
-#include <solo/geometry/camera.h>
+#include <solo/core/camera.h>
 #include <solo/geometry/downsample_depth.h>
 
 #include <gtest/gtest.h>

@@ -2,7 +2,7 @@
 // hand-built meshes, and the real meshes with holes from ../shared/data/meshes.
 
 #include <solo/geometry/boundary_loops.h>
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/mesh_holes.h>
 #include <solo/geometry/mesh_metrics.h>
@@ -175,7 +175,7 @@ TEST(HoleFilling, StronglyNonPlanarBoundaryIsFilledSmoothly) {
 TEST(HoleFilling, SliverOnlyBoundaryIsLeftOpenWithAWarning) {
   // Three collinear boundary points: every triangle over them is degenerate.
   const std::vector<Eigen::Vector3d> boundary = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
-  for (const auto method : {solo::HoleFillMethod::triangulate_refine_fair, solo::HoleFillMethod::centroid_fan}) {
+  for (const auto method : {solo::HoleFillMethod::TriangulateRefineFair, solo::HoleFillMethod::CentroidFan}) {
     const solo::HolePatch patch = solo::fillHolePolyline(boundary, method);
     EXPECT_FALSE(patch.filled);
     EXPECT_NE(patch.failure.find("collinear"), std::string::npos);

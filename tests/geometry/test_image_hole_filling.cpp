@@ -8,7 +8,7 @@
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/mesh_holes.h>
 #include <solo/geometry/mesh_metrics.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/scene.h>
 
 #include "test_support.h"
 
@@ -425,7 +425,7 @@ TEST(ImageHoleFilling, FrameHoleBehindACornerOccluderClosesAlongTheFrame) {
   int fill_vertices = 0, on_frame = 0, behind_car = 0;
   bool corner = false;
   for (const auto v : m.mesh.vertices()) {
-    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) != solo::VertexOrigin::hole_fill) continue;
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) != solo::VertexOrigin::HoleFill) continue;
     ++fill_vertices;
     const auto& q = m.mesh.point(v);
     const Eigen::Vector3d p(q[0], q[1], q[2]);
@@ -497,7 +497,7 @@ TEST(ImageHoleFilling, FarWallSeenAtTheFrameContinuesBehindTheNearWall) {
     EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
     int fill = 0;
     for (const auto v : m.mesh.vertices())
-      if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::hole_fill) {
+      if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::HoleFill) {
         EXPECT_NEAR(m.mesh.point(v)[2], 30.0, 1e-4);  // a frontal plane: constant depth
         ++fill;
       }
@@ -522,7 +522,7 @@ TEST(ImageHoleFilling, FarWallSeenAtTheFrameContinuesBehindTheNearWall) {
   EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
   int fill = 0, on_sky_line = 0;
   for (const auto v : m.mesh.vertices())
-    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::hole_fill) {
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::HoleFill) {
       const auto& q = m.mesh.point(v);
       EXPECT_NEAR(q[2], 30.0, 1e-4);
       const Eigen::Vector2d uv = kCamera.project(Eigen::Vector3d(q[0], q[1], q[2]));
@@ -545,7 +545,7 @@ int checkFillOnPlaneBehindBox(const solo::DepthMesh& m, const Eigen::Vector3d& n
   int fill = 0;
   *over_box = 0;
   for (const auto v : m.mesh.vertices()) {
-    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) != solo::VertexOrigin::hole_fill) continue;
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) != solo::VertexOrigin::HoleFill) continue;
     ++fill;
     const auto& q = m.mesh.point(v);
     const Eigen::Vector3d p(q[0], q[1], q[2]);
@@ -600,7 +600,7 @@ TEST(ImageHoleFilling, FrameHoleBehindABoxRisingIntoTheSkyClosesAlongTheSkyLine)
   int over_box = 0, over_step = 0;
   const int fill = checkFillOnPlaneBehindBox(m, normal, d, box, 4.0, 10, &over_box);
   for (const auto v : m.mesh.vertices())
-    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::hole_fill) {
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::HoleFill) {
       const auto& q = m.mesh.point(v);
       const Eigen::Vector2d uv = kCamera.project(Eigen::Vector3d(q[0], q[1], q[2]));
       if (step.contains(cv::Point(static_cast<int>(std::lround(uv.x())), static_cast<int>(std::lround(uv.y()))))) {
@@ -640,7 +640,7 @@ TEST(ImageHoleFilling, FrameHoleAroundABoxHangingFromTheSkyClosesAlongTheSkyLine
   // Over the sky (rows 6..11): the path along the box's top and sides, and interior centres.
   int above_sky_line = 0;
   for (const auto v : m.mesh.vertices())
-    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::hole_fill) {
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::HoleFill) {
       const auto& q = m.mesh.point(v);
       above_sky_line += kCamera.project(Eigen::Vector3d(q[0], q[1], q[2])).y() < 11.5;
     }
@@ -685,7 +685,7 @@ TEST(ImageHoleFilling, AnOccluderSplittingThePlaneClosesWithTheRunsOfBothSheetsI
   int over_box = 0, over_step = 0, on_bottom_frame = 0, above_sky_line = 0;
   const int fill = checkFillOnPlaneBehindBox(m, normal, d, box, 4.0, 10, &over_box);
   for (const auto v : m.mesh.vertices())
-    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::hole_fill) {
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::HoleFill) {
       const auto& q = m.mesh.point(v);
       const Eigen::Vector2d uv = kCamera.project(Eigen::Vector3d(q[0], q[1], q[2]));
       const cv::Point pixel(static_cast<int>(std::lround(uv.x())), static_cast<int>(std::lround(uv.y())));
@@ -743,7 +743,7 @@ TEST(ImageHoleFilling, RunsJoinedAroundAnOccluderWithAFartherSurfaceSeenThroughI
     EXPECT_EQ(refused, 1);
     int fill = 0, behind_building = 0, behind_wall = 0;
     for (const auto v : m.mesh.vertices()) {
-      if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) != solo::VertexOrigin::hole_fill) continue;
+      if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) != solo::VertexOrigin::HoleFill) continue;
       ++fill;
       const auto& q = m.mesh.point(v);
       const Eigen::Vector2d uv = kCamera.project(Eigen::Vector3d(q[0], q[1], q[2]));
@@ -840,7 +840,7 @@ TEST(ImageHoleFilling, AFloatingSheetOfAFarSurfaceIsClosedIntoASlab) {
   // Every back vertex 0.2 m behind its front along the ray: at 40.2 m (80 of them).
   int backs = 0;
   for (const auto v : m.mesh.vertices())
-    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::solid_back) {
+    if (static_cast<solo::VertexOrigin>(m.mesh.property(m.properties.origin, v)) == solo::VertexOrigin::SolidBack) {
       EXPECT_NEAR(m.mesh.point(v)[2], 40.2, 1e-9);
       ++backs;
     }

@@ -1,9 +1,9 @@
 // Readers and writers: exact round trips, hand-computed decodings, invalid-pixel counts and
 // every malformed-file case named in the scene-format contract.
 
-#include <solo/geometry/atomic_file.h>
-#include <solo/geometry/error.h>
-#include <solo/geometry/image_io.h>
+#include <solo/core/atomic_file.h>
+#include <solo/core/error.h>
+#include <solo/core/image_io.h>
 
 #include "test_support.h"
 

@@ -1,4 +1,4 @@
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/geometry/triangle_mesh.h>
 
 #include "test_support.h"

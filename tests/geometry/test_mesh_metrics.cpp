@@ -1,7 +1,7 @@
 // Mesh metrics on small meshes whose answers can be counted by hand, the distance between a
 // cube and its shifted copy computed analytically, and the shared real meshes.
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/geometry/mesh_metrics.h>
 
 #include "test_support.h"
@@ -79,7 +79,7 @@ TEST(MeshMetrics, ClosedTetrahedron) {
   EXPECT_EQ(m.self_intersecting_pairs, 0);
   EXPECT_EQ(m.degenerate_faces, 0);
   EXPECT_EQ(m.unreferenced_vertices, 0);
-  EXPECT_EQ(m.self_intersection_check, solo::SelfIntersectionCheck::polygon_mesh);
+  EXPECT_EQ(m.self_intersection_check, solo::SelfIntersectionCheck::PolygonMesh);
   ASSERT_TRUE(m.quality.has_value());
   EXPECT_NEAR(m.quality->min_angle_deg, 45.0, 1e-12);
   EXPECT_NEAR(m.quality->aspect_ratio_min, 1.0, 1e-12);
@@ -117,7 +117,7 @@ TEST(MeshMetrics, EdgeSharedByThreeFacesIsNonManifold) {
   EXPECT_EQ(m.components, 1);
   EXPECT_EQ(m.edges, 7);
   EXPECT_EQ(m.self_intersecting_pairs, 0);
-  EXPECT_EQ(m.self_intersection_check, solo::SelfIntersectionCheck::triangle_soup);
+  EXPECT_EQ(m.self_intersection_check, solo::SelfIntersectionCheck::TriangleSoup);
 }
 
 // Bow-tie: two triangles sharing vertex 0 only. Vertex 0 has two fans: non-manifold. Each
@@ -131,7 +131,7 @@ TEST(MeshMetrics, BowTieHasOneNonManifoldVertex) {
   EXPECT_EQ(m.boundary_edges, 6);
   EXPECT_EQ(m.euler_characteristic, 5 - 6 + 2);
   EXPECT_EQ(m.self_intersecting_pairs, 0);
-  EXPECT_EQ(m.self_intersection_check, solo::SelfIntersectionCheck::triangle_soup);
+  EXPECT_EQ(m.self_intersection_check, solo::SelfIntersectionCheck::TriangleSoup);
 }
 
 // Each case is checked twice: alone (a valid polygon mesh: CGAL PMP on a Surface_mesh) and with
@@ -166,17 +166,17 @@ TEST(MeshMetrics, SelfIntersectionsAgreeBetweenPolygonMeshAndSoupChecks) {
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     const solo::MeshMetrics alone = solo::evaluateMesh(c.mesh);
-    EXPECT_EQ(alone.self_intersection_check, solo::SelfIntersectionCheck::polygon_mesh);
+    EXPECT_EQ(alone.self_intersection_check, solo::SelfIntersectionCheck::PolygonMesh);
     EXPECT_EQ(alone.self_intersecting_pairs, c.pairs);
     EXPECT_EQ(alone.self_intersecting_faces, 2 * c.pairs);
     const solo::MeshMetrics soup = solo::evaluateMesh(merged(c.mesh, farBowTie()));
-    EXPECT_EQ(soup.self_intersection_check, solo::SelfIntersectionCheck::triangle_soup);
+    EXPECT_EQ(soup.self_intersection_check, solo::SelfIntersectionCheck::TriangleSoup);
     EXPECT_EQ(soup.self_intersecting_pairs, c.pairs);
   }
   // The same triangle twice in the same orientation is no polygon mesh: a duplicated face.
   const solo::MeshMetrics duplicate =
       solo::evaluateMesh(makeMesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 1, 2}}));
-  EXPECT_EQ(duplicate.self_intersection_check, solo::SelfIntersectionCheck::triangle_soup);
+  EXPECT_EQ(duplicate.self_intersection_check, solo::SelfIntersectionCheck::TriangleSoup);
   EXPECT_EQ(duplicate.self_intersecting_pairs, 1);
   EXPECT_EQ(duplicate.non_manifold_edges, 0);
 }
@@ -268,7 +268,7 @@ TEST(MeshMetricsSharedData, PigHasSevenHoles) {
   EXPECT_EQ(m.non_manifold_edges + m.non_manifold_vertices, 0);
   // The soup check finds the same self-intersections as PMP on the Surface_mesh.
   const solo::MeshMetrics soup = solo::evaluateMesh(merged(solo::readMesh(file), farBowTie()));
-  EXPECT_EQ(soup.self_intersection_check, solo::SelfIntersectionCheck::triangle_soup);
+  EXPECT_EQ(soup.self_intersection_check, solo::SelfIntersectionCheck::TriangleSoup);
   EXPECT_EQ(soup.self_intersecting_pairs, m.self_intersecting_pairs);
   EXPECT_EQ(soup.boundary_loops, 7 + 2);
 }

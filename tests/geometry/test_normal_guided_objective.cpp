@@ -21,7 +21,7 @@ TEST(NormalGuidedObjective, HandComputedThreePixelRow) {
   const cv::Mat depth = (cv::Mat_<float>(1, 3) << 2, 3, 5);
   const cv::Mat normals(1, 3, CV_32FC3, cv::Scalar(0, 0, -1));
   solo::NormalGuidedObjectiveOptions o;
-  o.tangent_model = solo::TangentModel::kPaperGraph;
+  o.tangent_model = solo::TangentModel::PaperGraph;
   const solo::NormalGuidedObjective objective(depth, normals, {}, camera(3, 1, 10), o);
   ASSERT_EQ(objective.unknowns(), 3);
   std::vector<double> z = {2, 3, 5};
@@ -50,7 +50,7 @@ TEST(NormalGuidedObjective, GradientMatchesFiniteDifferences) {
   normals.at<cv::Vec3f>(5, 5) = {0, 0, 0};
   uncertain.at<uchar>(2, 2) = 255;
   labels.colRange(6, 9).setTo(2);
-  for (const auto model : {solo::TangentModel::kPerspective, solo::TangentModel::kPaperGraph}) {
+  for (const auto model : {solo::TangentModel::Perspective, solo::TangentModel::PaperGraph}) {
     solo::NormalGuidedObjectiveOptions o;
     o.tangent_model = model;
     const solo::NormalGuidedObjective objective(depth, normals, uncertain, camera(9, 7, 8), o, labels);
@@ -75,7 +75,7 @@ TEST(NormalGuidedObjective, GradientMatchesFiniteDifferences) {
 TEST(NormalGuidedObjective, AFrontoParallelPlaneWithItsNormalCostsNothing) {
   const cv::Mat depth(5, 6, CV_32F, cv::Scalar(7));
   const cv::Mat normals(5, 6, CV_32FC3, cv::Scalar(0, 0, -1));
-  for (const auto model : {solo::TangentModel::kPerspective, solo::TangentModel::kPaperGraph}) {
+  for (const auto model : {solo::TangentModel::Perspective, solo::TangentModel::PaperGraph}) {
     solo::NormalGuidedObjectiveOptions o;
     o.tangent_model = model;
     const solo::NormalGuidedObjective objective(depth, normals, {}, camera(6, 5), o);
@@ -93,7 +93,7 @@ TEST(NormalGuidedObjective, PerspectiveTangentsFitAGroundPlaneThePaperGraphCanno
   for (int y = 25; y < h; ++y) depth.row(y).setTo(1.5 * 50 / (y - c.cy));
   const cv::Mat normals(h, w, CV_32FC3, cv::Scalar(0, -1, 0));
   solo::NormalGuidedObjectiveOptions perspective, paper;
-  paper.tangent_model = solo::TangentModel::kPaperGraph;
+  paper.tangent_model = solo::TangentModel::PaperGraph;
   solo::ObjectiveValue vp, vg;
   const solo::NormalGuidedObjective exact(depth, normals, {}, c, perspective);
   exact.evaluate(exact.filteredDepths().data(), vp);

@@ -68,7 +68,7 @@ TEST(NormalGuidedOptimization, LayoutsAndOptimisersAgreeOnTheMinimum) {
   const cv::Mat input = noisy(truth.depth, 0.03, 2);
   solo::NormalGuidedOptimizationOptions lbfgs, per_pixel;
   lbfgs.max_iterations = 500, lbfgs.function_tolerance = 1e-12;
-  per_pixel.layout = solo::DepthSolverLayout::kPerPixelResidualBlocks;
+  per_pixel.layout = solo::DepthSolverLayout::PerPixelResidualBlocks;
   per_pixel.max_iterations = 100, per_pixel.function_tolerance = 1e-12;
   const auto a = solo::optimizeDepthWithNormals(input, truth.normals, {}, {}, cam, lbfgs);
   const auto b = solo::optimizeDepthWithNormals(input, truth.normals, {}, {}, cam, per_pixel);
@@ -104,7 +104,7 @@ TEST(NormalGuidedOptimizationStability, GrazingNormals) {
     }
   normals.row(0).setTo(cv::Scalar(1, 0, 0));
   const cv::Mat input = noisy(depth, 0.01, 4);
-  for (const auto model : {solo::TangentModel::kPerspective, solo::TangentModel::kPaperGraph}) {
+  for (const auto model : {solo::TangentModel::Perspective, solo::TangentModel::PaperGraph}) {
     solo::NormalGuidedOptimizationOptions o;
     o.objective.tangent_model = model;
     expectFiniteAndNotWorse(solo::optimizeDepthWithNormals(input, normals, {}, {}, cam, o), input);
@@ -171,7 +171,7 @@ TEST(NormalGuidedOptimizationStability, ASingleValidPixel) {
   cv::Mat depth(5, 5, CV_32F, cv::Scalar(0));
   depth.at<float>(2, 3) = 4;
   const cv::Mat normals(5, 5, CV_32FC3, cv::Scalar(0, 0, -1));
-  for (const auto layout : {solo::DepthSolverLayout::kWholeImageLbfgs, solo::DepthSolverLayout::kPerPixelResidualBlocks}) {
+  for (const auto layout : {solo::DepthSolverLayout::WholeImageLbfgs, solo::DepthSolverLayout::PerPixelResidualBlocks}) {
     solo::NormalGuidedOptimizationOptions o;
     o.layout = layout;
     const auto r = solo::optimizeDepthWithNormals(depth, normals, {}, {}, cam, o);
@@ -199,7 +199,7 @@ TEST(NormalGuidedOptimizationStability, AnImageOnePixelWide) {
   const solo::PinholeCamera cam = camera(1, 40, 30);
   const Plane truth = plane(cam, {0, 0.5, -1}, -6);
   const cv::Mat input = noisy(truth.depth, 0.02, 9);
-  for (const auto layout : {solo::DepthSolverLayout::kWholeImageLbfgs, solo::DepthSolverLayout::kPerPixelResidualBlocks}) {
+  for (const auto layout : {solo::DepthSolverLayout::WholeImageLbfgs, solo::DepthSolverLayout::PerPixelResidualBlocks}) {
     solo::NormalGuidedOptimizationOptions o;
     o.layout = layout;
     const auto r = solo::optimizeDepthWithNormals(input, truth.normals, {}, {}, cam, o);

@@ -1,6 +1,6 @@
 // Normal metrics on hand-computed angles, their robustness, invariances and failure cases.
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/geometry/normal_metrics.h>
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-#include <solo/geometry/report.h>
+#include <solo/core/report.h>
 
 #include <nlohmann/json.hpp>
 

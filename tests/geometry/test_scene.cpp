@@ -1,8 +1,8 @@
 // The scene contract: manifests, map loading, camera resolution and every malformed case.
 
-#include <solo/geometry/error.h>
-#include <solo/geometry/image_io.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/error.h>
+#include <solo/core/image_io.h>
+#include <solo/core/scene.h>
 
 #include "test_support.h"
 

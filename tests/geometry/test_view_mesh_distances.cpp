@@ -7,10 +7,10 @@
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/mesh_metrics.h>
 #include <solo/geometry/prediction_noise.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/scene.h>
 #include <solo/geometry/view_mesh_distances.h>
-#include <solo/render/scene_raster.h>
-#include <solo/render/street_scene.h>
+#include <solo/synth/scene_raster.h>
+#include <solo/synth/street_scene.h>
 
 #include <gtest/gtest.h>
 
@@ -51,8 +51,8 @@ TEST(ViewMeshDistances, FarSurfacesDominateTheAreaWeightedMeanNotTheRelativeOne)
   // The true planes are larger, so every nearest point is straight behind the sample.
   addSquare(truth, 10.5, 4);
   addSquare(truth, 105, 40);
-  const std::vector<FaceOrigin> origin = {FaceOrigin::depth_surface, FaceOrigin::depth_surface, FaceOrigin::solid,
-                                          FaceOrigin::solid};
+  const std::vector<FaceOrigin> origin = {FaceOrigin::DepthSurface, FaceOrigin::DepthSurface, FaceOrigin::Solid,
+                                          FaceOrigin::Solid};
   solo::ViewMeshDistanceOptions options;
   options.samples = 100000;
   options.depth_band_edges_m = {50};
@@ -68,11 +68,11 @@ TEST(ViewMeshDistances, FarSurfacesDominateTheAreaWeightedMeanNotTheRelativeOne)
   EXPECT_NEAR(d.by_depth[1].mean_m, 5.0, 1e-12);
   EXPECT_NEAR(d.by_depth[0].area_share, 4.0 / 404, 1e-12);
   EXPECT_NEAR(d.by_depth[1].area_share, 400.0 / 404, 1e-12);
-  const auto& surface = d.by_origin[static_cast<int>(FaceOrigin::depth_surface)];
-  const auto& solid = d.by_origin[static_cast<int>(FaceOrigin::solid)];
+  const auto& surface = d.by_origin[static_cast<int>(FaceOrigin::DepthSurface)];
+  const auto& solid = d.by_origin[static_cast<int>(FaceOrigin::Solid)];
   EXPECT_NEAR(surface.mean_m, 0.5, 1e-12);
   EXPECT_NEAR(solid.mean_m, 5.0, 1e-12);
-  EXPECT_EQ(d.by_origin[static_cast<int>(FaceOrigin::hole_fill)].samples, 0);
+  EXPECT_EQ(d.by_origin[static_cast<int>(FaceOrigin::HoleFill)].samples, 0);
   // The mean: (4 x 0.5 + 400 x 5) / 404 = 4.955; the near square's share of it is 0.1 %. The
   // share of samples on the near square has a standard deviation sqrt(p (1 - p) / N) = 3.1e-4,
   // times the 4.5 m difference: 1.4e-3; the bound is 7 sigma.
@@ -119,7 +119,7 @@ TEST(ViewMeshDistances, RefusesBadInput) {
   addSquare(mesh, 10, 2);
   addSquare(truth, 10.5, 4);
   const solo::PinholeCamera camera = smallCamera();
-  EXPECT_THROW(solo::measureViewMeshDistances(mesh, {FaceOrigin::solid}, truth, cv::Mat(), camera),
+  EXPECT_THROW(solo::measureViewMeshDistances(mesh, {FaceOrigin::Solid}, truth, cv::Mat(), camera),
                std::invalid_argument);
   solo::ViewMeshDistanceOptions options;
   options.depth_band_edges_m = {20, 10};
@@ -173,7 +173,7 @@ MeasuredMesh measure(const cv::Mat& depth_m, const cv::Mat& instances, const cv:
   TriangleMesh surface = soup;
   surface.faces.clear();
   for (std::size_t f = 0; f < soup.faces.size(); ++f)
-    if (origin[f] == FaceOrigin::depth_surface) surface.faces.push_back(soup.faces[f]);
+    if (origin[f] == FaceOrigin::DepthSurface) surface.faces.push_back(soup.faces[f]);
   out.surface = solo::measureViewMeshDistances(surface, {}, s.truth_mesh, cv::Mat(), s.scene.camera, options);
   const std::vector<double>& edges = options.depth_band_edges_m;
   for (std::size_t b = 0; b <= edges.size(); ++b) {
@@ -196,7 +196,7 @@ MeasuredMesh measure(const cv::Mat& depth_m, const cv::Mat& instances, const cv:
 TEST(ViewMeshDistances, ExactDepthMeshLiesOnTheTrueSurfaces) {
   const Street& s = street();
   const MeasuredMesh m = measure(s.truth.depth_m, s.truth.instances, cv::Mat());
-  const auto& surface = m.view.by_origin[static_cast<int>(FaceOrigin::depth_surface)];
+  const auto& surface = m.view.by_origin[static_cast<int>(FaceOrigin::DepthSurface)];
   EXPECT_GT(surface.area_share, 0.7);
   EXPECT_LT(surface.mean_relative, 0.01);
   EXPECT_GT(m.view.truth_covered, 0.99);
@@ -248,8 +248,8 @@ TEST(ViewMeshDistances, RefinedDepthMeshErrorIsTheDepthErrorWeightedByArea) {
   EXPECT_LT(static_cast<double>(far_pixels), 0.15 * static_cast<double>(pixels));
   EXPECT_GT(far_contribution_m, 0.5 * v.mean_to_truth_m);
   // Measured: solids 0.044 m, hole patches 0.001 m of the 11.9 m.
-  const double solids_and_patches_m = v.by_origin[static_cast<int>(FaceOrigin::solid)].contribution_m +
-                                      v.by_origin[static_cast<int>(FaceOrigin::hole_fill)].contribution_m;
+  const double solids_and_patches_m = v.by_origin[static_cast<int>(FaceOrigin::Solid)].contribution_m +
+                                      v.by_origin[static_cast<int>(FaceOrigin::HoleFill)].contribution_m;
   EXPECT_LT(solids_and_patches_m, 0.2 * v.mean_to_truth_m);
   // The refined mesh keeps the true surfaces (measured 0.94 of the pixels within 5 % of their depth;
   // the half-resolution estimate's own mesh keeps 0.93 at 960x540 but only 0.3 % of those beyond 160 m).

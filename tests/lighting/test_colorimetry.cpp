@@ -1,6 +1,6 @@
 // CIE 1931 colorimetry: chromaticities recomputed from spectra against published values.
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/lighting/colorimetry.h>
 
 #include "test_support.h"

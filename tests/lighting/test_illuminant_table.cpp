@@ -1,7 +1,7 @@
 // The night-illuminant table: coverage, reproducibility from its recipe, the signal-lamp
 // chromaticity regions (including the check of the reconstructed ITE inequalities), errors.
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/lighting/chromaticity_region.h>
 #include <solo/lighting/colorimetry.h>
 #include <solo/lighting/illuminant_recipe.h>

@@ -1,8 +1,8 @@
 // Light geometry: pixel footprints on analytic planes, and windows of a synthetic street.
 
 #include <solo/lighting/light_geometry.h>
-#include <solo/render/scene_raster.h>
-#include <solo/render/street_scene.h>
+#include <solo/synth/scene_raster.h>
+#include <solo/synth/street_scene.h>
 
 #include "test_support.h"
 

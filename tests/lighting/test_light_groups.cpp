@@ -1,10 +1,10 @@
 // The light-group tree on hand-made maps (every rule once) and on a synthetic street whose
 // true groups are known, and its errors.
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/lighting/light_groups.h>
-#include <solo/render/scene_raster.h>
-#include <solo/render/street_scene.h>
+#include <solo/synth/scene_raster.h>
+#include <solo/synth/street_scene.h>
 
 #include "test_support.h"
 

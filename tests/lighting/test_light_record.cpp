@@ -1,6 +1,6 @@
 // The light record: round trip, and edits a user might get wrong.
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/lighting/light_record.h>
 
 #include <nlohmann/json.hpp>

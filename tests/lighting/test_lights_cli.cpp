@@ -1,6 +1,6 @@
 // `solo lights` and `solo illuminant` end to end on the embedded default scene.
 
-#include <solo/geometry/image_io.h>
+#include <solo/core/image_io.h>
 #include <solo/lighting/illuminant_table.h>
 
 #include <nlohmann/json.hpp>

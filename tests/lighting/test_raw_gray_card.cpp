@@ -3,7 +3,7 @@
 // colour matrix (DNG ColorMatrix1 maps XYZ to camera RGB), so decoding must give the
 // illuminant's chromaticity back.
 
-#include <solo/geometry/error.h>
+#include <solo/core/error.h>
 #include <solo/lighting/colorimetry.h>
 #include <solo/lighting/raw_gray_card.h>
 

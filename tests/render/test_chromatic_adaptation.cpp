@@ -1,4 +1,4 @@
-#include <solo/render/chromatic_adaptation.h>
+#include <solo/post/chromatic_adaptation.h>
 
 #include "test_support.h"
 

@@ -1,5 +1,5 @@
-#include <solo/render/chromatic_adaptation.h>
-#include <solo/render/colour_encoding.h>
+#include <solo/post/chromatic_adaptation.h>
+#include <solo/post/colour_encoding.h>
 
 #include "test_support.h"
 

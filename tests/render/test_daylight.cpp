@@ -3,9 +3,9 @@
 // in a box's shadow (darker by exactly the sun term, with the sky the box hides), and the
 // street day scene's sky pixels against the raster day image's.
 
-#include <solo/render/day_scene.h>
+#include <solo/synth/day_scene.h>
 #include <solo/render/path_tracer.h>
-#include <solo/render/scene_raster.h>
+#include <solo/synth/scene_raster.h>
 
 #include "rectangle_irradiance.h"
 

@@ -1,4 +1,4 @@
-#include <solo/render/exposure.h>
+#include <solo/post/exposure.h>
 
 #include "test_support.h"
 

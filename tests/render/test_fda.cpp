@@ -1,4 +1,4 @@
-#include <solo/render/fda.h>
+#include <solo/post/fda.h>
 
 #include "test_support.h"
 

@@ -1,4 +1,4 @@
-#include <solo/render/fog_glare.h>
+#include <solo/post/fog_glare.h>
 
 #include "test_support.h"
 

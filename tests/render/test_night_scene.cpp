@@ -202,7 +202,7 @@ TEST(NightScene, AFluxLightKeepsItsFluxOnTheSeenFacesAndHiddenFacesUnderItDoNotE
   ASSERT_TRUE(props.has_value());
   for (const auto vh : mesh.mesh.vertices())
     if (mesh.mesh.property(props->pixel, vh)[0] == 5)
-      mesh.mesh.property(props->origin, vh) = static_cast<std::uint8_t>(solo::VertexOrigin::solid_back);
+      mesh.mesh.property(props->origin, vh) = static_cast<std::uint8_t>(solo::VertexOrigin::SolidBack);
   const solo::LightRecord record =
       oneLightRecord(solo::LightCategory::StreetLightLowCct, 3, 5, 6000, solo::StrengthUnit::FluxLm, 1900, {0.5, 0.42},
                      0.05);  // the record's area estimate: the mesh decides
@@ -284,7 +284,7 @@ TEST(NightScene, AFilledFaceEmitsWhereItIsTheSeenSurfaceNotBehindIt) {
   ASSERT_TRUE(props.has_value());
   for (const auto vh : mesh.mesh.vertices())
     if (mesh.mesh.property(props->pixel, vh)[0] == 4)
-      mesh.mesh.property(props->origin, vh) = static_cast<std::uint8_t>(solo::VertexOrigin::hole_fill);
+      mesh.mesh.property(props->origin, vh) = static_cast<std::uint8_t>(solo::VertexOrigin::HoleFill);
   std::array<solo::SurfaceMesh::VertexHandle, 4> back;
   const int corner_u[4] = {3, 5, 5, 3}, corner_v[4] = {0, 0, 3, 3};
   for (int k = 0; k < 4; ++k) {
@@ -293,7 +293,7 @@ TEST(NightScene, AFilledFaceEmitsWhereItIsTheSeenSurfaceNotBehindIt) {
         solo::SurfaceMesh::Point(0.8f * (corner_u[k] - 2.5f), 0.8f * (corner_v[k] - 1.5f), 8.f));
     mesh.mesh.property(props->pixel, back[static_cast<std::size_t>(k)]) = OpenMesh::Vec2i(corner_u[k], corner_v[k]);
     mesh.mesh.property(props->origin, back[static_cast<std::size_t>(k)]) =
-        static_cast<std::uint8_t>(solo::VertexOrigin::hole_fill);
+        static_cast<std::uint8_t>(solo::VertexOrigin::HoleFill);
   }
   mesh.mesh.add_face(back[0], back[1], back[2]);
   mesh.mesh.add_face(back[0], back[2], back[3]);

@@ -1,4 +1,4 @@
-#include <solo/render/night_statistics.h>
+#include <solo/post/night_statistics.h>
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include <solo/render/post_process.h>
+#include <solo/post/post_process.h>
 
 #include "test_support.h"
 

@@ -1,5 +1,5 @@
-#include <solo/render/post_process.h>
-#include <solo/render/sensor_noise.h>
+#include <solo/post/post_process.h>
+#include <solo/post/sensor_noise.h>
 
 #include "test_support.h"
 

@@ -1,13 +1,13 @@
 // solo synth: the ground truth is self-consistent, the hard variants hold what they promise,
 // and generation is deterministic.
 
-#include <solo/geometry/image_io.h>
+#include <solo/core/image_io.h>
 #include <solo/geometry/prediction_noise.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/scene.h>
 #include <solo/geometry/triangle_mesh.h>
 #include <solo/lighting/light_category.h>
-#include <solo/render/scene_raster.h>
-#include <solo/render/street_scene.h>
+#include <solo/synth/scene_raster.h>
+#include <solo/synth/street_scene.h>
 
 #include "test_support.h"
 

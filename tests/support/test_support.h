@@ -1,7 +1,7 @@
 #pragma once
 // Helpers shared by the tests: temporary folders, running the solo binary, shared data.
 
-#include <solo/geometry/report.h>
+#include <solo/core/report.h>
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // The solo binary end to end: exit codes, messages that name the file, no partial output.
 
-#include <solo/geometry/image_io.h>
+#include <solo/core/image_io.h>
 
 #include <nlohmann/json.hpp>
 

@@ -1,7 +1,7 @@
 // `solo night --batch` end to end (docs/batch.md): outputs per scene, failures recorded with
 // their reason, resuming, shards that partition the scenes, the per-scene seed, bad specs.
 
-#include <solo/geometry/image_io.h>
+#include <solo/core/image_io.h>
 
 #include <nlohmann/json.hpp>
 

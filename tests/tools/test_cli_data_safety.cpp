@@ -2,7 +2,7 @@
 // `synth --force` on folders it did not write, full disks, outputs that are inputs, devices,
 // FIFOs and folders given as files, headers that claim more than their file holds.
 
-#include <solo/geometry/image_io.h>
+#include <solo/core/image_io.h>
 
 #include <nlohmann/json.hpp>
 

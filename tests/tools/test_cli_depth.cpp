@@ -1,6 +1,6 @@
 // `solo depth`: outputs, report, switches and errors.
 
-#include <solo/geometry/image_io.h>
+#include <solo/core/image_io.h>
 
 #include <nlohmann/json.hpp>
 

@@ -1,6 +1,6 @@
 // `solo eval` end to end: JSON values, CSV rows appended under one header, the table, errors.
 
-#include <solo/geometry/image_io.h>
+#include <solo/core/image_io.h>
 #include <solo/geometry/triangle_mesh.h>
 
 #include <nlohmann/json.hpp>

@@ -1,7 +1,7 @@
 // `solo night`: quality presets, the config file (read, written, errors), the contact sheet and
 // the notes for effects skipped. Runs on a small `solo synth` scene with the draft preset.
 
-#include <solo/geometry/image_io.h>
+#include <solo/core/image_io.h>
 #include <solo/render/contact_sheet.h>
 
 #include <nlohmann/json.hpp>

@@ -1,6 +1,6 @@
 // `solo post` and `solo fda` end to end: files in, files and reports out, errors named.
 
-#include <solo/geometry/image_io.h>
+#include <solo/core/image_io.h>
 
 #include "test_support.h"
 

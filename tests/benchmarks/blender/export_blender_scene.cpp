@@ -39,13 +39,13 @@
 #include "../night_street.h"
 #include "../pipeline_scene.h"
 
-#include <solo/geometry/image_io.h>
-#include <solo/geometry/report.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/image_io.h>
+#include <solo/core/report.h>
+#include <solo/core/scene.h>
 #include <solo/lighting/light_category.h>
 #include <solo/render/night_scene.h>
 #include <solo/render/path_tracer.h>
-#include <solo/render/street_scene.h>
+#include <solo/synth/street_scene.h>
 
 #include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>

@@ -4,10 +4,10 @@
 // initialised with d~ (reference.md section 1.4). Same objective as the Ceres solver
 // (normal_guided_objective.h), so values compare directly.
 
-#include "solo/geometry/camera.h"
+#include "solo/core/camera.h"
 #include "solo/geometry/normal_guided_objective.h"
 #include "solo/geometry/normal_guided_optimization.h"
-#include "solo/geometry/report.h"
+#include "solo/core/report.h"
 
 #include <opencv2/core.hpp>
 

@@ -32,7 +32,7 @@ using VertexLoop = std::vector<OpenMesh::VertexHandle>;
 /// is split there, so no vertex appears twice in one loop.
 std::vector<VertexLoop> findBoundaryLoops(const SurfaceMesh& mesh);
 
-enum class LoopKind { hole, sky_opening, border, silhouette };
+enum class LoopKind { Hole, SkyOpening, Border, Silhouette };
 const char* loopKindName(LoopKind kind);
 
 struct DepthLoops {
@@ -89,8 +89,8 @@ struct DepthLoops {
 /// `depth_m` is the map the mesh was made from.
 /// How frame holes become backdrops: never (those a backdrop would close are reported
 /// unclosable), those no other closing reaches, or every one (after the other closings failed).
-enum class BackdropMode { off, unclosable, every_frame_hole };
+enum class BackdropMode { Off, Unclosable, EveryFrameHole };
 DepthLoops classifyDepthLoops(const DepthMesh& mesh, const cv::Mat& had_depth, const cv::Mat& depth_m,
-                              BackdropMode backdrops = BackdropMode::unclosable);
+                              BackdropMode backdrops = BackdropMode::Unclosable);
 
 }  // namespace solo

@@ -10,7 +10,7 @@
 // gets the one triangle of those three, so silhouettes against the sky are not staircased.
 // Triangles face the camera (their normal n has n . ray < 0).
 
-#include "solo/geometry/camera.h"
+#include "solo/core/camera.h"
 #include "solo/geometry/surface_mesh.h"
 
 #include <opencv2/core.hpp>

@@ -8,8 +8,8 @@
 #include "solo/geometry/adam_depth_optimizer.h"
 #include "solo/geometry/instance_bilateral_filter.h"
 #include "solo/geometry/normal_guided_optimization.h"
-#include "solo/geometry/report.h"
-#include "solo/geometry/scene.h"
+#include "solo/core/report.h"
+#include "solo/core/scene.h"
 #include "solo/geometry/uncertain_regions.h"
 #include "solo/geometry/upsample_maps.h"
 
@@ -19,7 +19,7 @@
 
 namespace solo {
 
-enum class DepthOptimizer { kCeres, kAdam };
+enum class DepthOptimizer { Ceres, Adam };
 
 struct DepthRefinementOptions {
   UpsampleOptions upsampling;  ///< .enabled = false: nearest-neighbour resizing only
@@ -28,7 +28,7 @@ struct DepthRefinementOptions {
   bool uncertain_regions = true;
   UncertainRegionOptions uncertainty;
   bool optimize = true;
-  DepthOptimizer optimizer = DepthOptimizer::kCeres;
+  DepthOptimizer optimizer = DepthOptimizer::Ceres;
   NormalGuidedOptimizationOptions optimization;  ///< Ceres
   AdamOptions adam;                              ///< the paper's optimiser
 };

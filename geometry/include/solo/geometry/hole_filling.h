@@ -8,7 +8,7 @@
 // the mesh (findIntersectingFaces) and falls back to a simpler method. Units: those of the points.
 // For depth meshes, fillHoleInImage triangulates the hole in image space instead (see there).
 
-#include "solo/geometry/camera.h"
+#include "solo/core/camera.h"
 
 #include <Eigen/Core>
 
@@ -21,10 +21,10 @@
 namespace solo {
 
 enum class HoleFillMethod {
-  image_space,              ///< depth meshes: triangulated in pixel space, lifted (fillHoleInImage)
-  triangulate_refine_fair,  ///< the full CGAL pipeline
-  triangulate,              ///< the triangulation only (no new vertex): the first fallback
-  centroid_fan,             ///< one new vertex at the boundary's centroid: the last fallback
+  ImageSpace,             ///< depth meshes: triangulated in pixel space, lifted (fillHoleInImage)
+  TriangulateRefineFair,  ///< the full CGAL pipeline
+  Triangulate,            ///< the triangulation only (no new vertex): the first fallback
+  CentroidFan,            ///< one new vertex at the boundary's centroid: the last fallback
 };
 const char* holeFillMethodName(HoleFillMethod method);
 

@@ -5,7 +5,7 @@
 // over valid q (depth > 0) in a (2 * ceil(3 sigma) + 1)^2 window, G a Gaussian of sigma_s
 // pixels and h the instance label. No colour term: colour edges are not depth edges.
 
-#include "solo/geometry/report.h"
+#include "solo/core/report.h"
 
 #include <opencv2/core.hpp>
 

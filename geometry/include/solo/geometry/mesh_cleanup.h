@@ -10,7 +10,7 @@
 #include "solo/geometry/hole_filling.h"
 #include "solo/geometry/large_hole_filling.h"
 #include "solo/geometry/mesh_metrics.h"
-#include "solo/geometry/report.h"
+#include "solo/core/report.h"
 #include "solo/geometry/spurious_faces.h"
 
 #include <opencv2/core.hpp>

@@ -24,8 +24,8 @@ struct TriangleQuality {
 
 /// How self-intersections were found.
 enum class SelfIntersectionCheck {
-  polygon_mesh,   ///< the soup is a valid polygon mesh: CGAL PMP self_intersections on a Surface_mesh
-  triangle_soup,  ///< it is not: the same rules on the soup (CGAL 5.5 has no soup version)
+  PolygonMesh,   ///< the soup is a valid polygon mesh: CGAL PMP self_intersections on a Surface_mesh
+  TriangleSoup,  ///< it is not: the same rules on the soup (CGAL 5.5 has no soup version)
 };
 const char* selfIntersectionCheckName(SelfIntersectionCheck check);
 
@@ -46,7 +46,7 @@ struct MeshMetrics {
   // Self-intersections, between non-degenerate faces:
   std::int64_t self_intersecting_pairs = 0;  ///< face pairs that meet other than in a shared edge or vertex
   std::int64_t self_intersecting_faces = 0;  ///< faces in at least one such pair
-  SelfIntersectionCheck self_intersection_check = SelfIntersectionCheck::polygon_mesh;
+  SelfIntersectionCheck self_intersection_check = SelfIntersectionCheck::PolygonMesh;
   std::optional<TriangleQuality> quality;  ///< none when no face is non-degenerate
 };
 

@@ -19,7 +19,7 @@
 // without a valid normal have no tangent term. Units: z and d~ metres, L in square metres
 // for the data term and unitless for the tangent term (as in the paper).
 
-#include "solo/geometry/camera.h"
+#include "solo/core/camera.h"
 
 #include <opencv2/core.hpp>
 
@@ -28,12 +28,12 @@
 
 namespace solo {
 
-enum class TangentModel { kPerspective, kPaperGraph };
+enum class TangentModel { Perspective, PaperGraph };
 
 struct NormalGuidedObjectiveOptions {
   double tangent_weight = 50;  ///< lambda1 (reference: 50)
   double data_weight = 1;      ///< lambda2 (reference: 1)
-  TangentModel tangent_model = TangentModel::kPerspective;
+  TangentModel tangent_model = TangentModel::Perspective;
 };
 
 /// The objective's parts: total = tangent + data, each already weighted and divided by m.

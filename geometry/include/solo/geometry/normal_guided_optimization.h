@@ -3,7 +3,7 @@
 // Minimises NormalGuidedObjective (normal_guided_objective.h) from z = d~.
 //
 // Layouts (docs/depth-refinement.md has the measurements behind the default):
-//  - kWholeImageLbfgs (default): one ceres::GradientProblem whose FirstOrderFunction is the
+//  - WholeImageLbfgs (default): one ceres::GradientProblem whose FirstOrderFunction is the
 //    whole image with its analytic gradient (two parallel passes over the pixels), solved by
 //    Ceres' L-BFGS line search. Unknowns are Jacobi-scaled (z = z0 + s w, s = 1 / sqrt of the
 //    Gauss-Newton diagonal), which equalises the 1 / z^2 stiffness of near and far pixels.
@@ -11,13 +11,13 @@
 //    resolutions (coarse-to-fine: the coarse corrections z - d~ are upsampled and added to d~),
 //    used only when it is better than d~ itself. Ceres' line search only accepts decreasing
 //    steps, and a result worse than d~ is replaced by d~: never worse than d~ on the objective.
-//  - kPerPixelResidualBlocks: one ceres::Problem with a parameter block per pixel and an
+//  - PerPixelResidualBlocks: one ceres::Problem with a parameter block per pixel and an
 //    analytic residual block per pixel (2 tangent residuals, 1 data residual), solved by
 //    Levenberg-Marquardt with CGNR + Jacobi. Kept as the reference layout for comparison.
 
-#include "solo/geometry/camera.h"
+#include "solo/core/camera.h"
 #include "solo/geometry/normal_guided_objective.h"
-#include "solo/geometry/report.h"
+#include "solo/core/report.h"
 
 #include <opencv2/core.hpp>
 
@@ -27,14 +27,14 @@
 
 namespace solo {
 
-enum class DepthSolverLayout { kWholeImageLbfgs, kPerPixelResidualBlocks };
+enum class DepthSolverLayout { WholeImageLbfgs, PerPixelResidualBlocks };
 
 struct NormalGuidedOptimizationOptions {
   NormalGuidedObjectiveOptions objective;
   /// Differences do not pair pixels of two instances (false: the paper's stencil everywhere,
   /// which lets unmasked depth edges dominate the objective; docs/depth-refinement.md).
   bool stencil_within_instances = true;
-  DepthSolverLayout layout = DepthSolverLayout::kWholeImageLbfgs;
+  DepthSolverLayout layout = DepthSolverLayout::WholeImageLbfgs;
   /// Solver iterations at full resolution. 10: already far below Adam-1000's objective; more
   /// iterations lower the objective further but move the depth away from the truth on the
   /// synthetic benchmark (docs/depth-refinement.md).

@@ -3,7 +3,7 @@
 // along the image axes, oriented toward the camera. Used to write the refined depth's normals
 // and to measure a depth map against true normals.
 
-#include "solo/geometry/camera.h"
+#include "solo/core/camera.h"
 
 #include <opencv2/core.hpp>
 

@@ -30,10 +30,10 @@ using SurfaceMesh = OpenMesh::TriMesh_ArrayKernelT<SurfaceMeshTraits>;
 
 /// Where a vertex comes from.
 enum class VertexOrigin : std::uint8_t {
-  pixel = 0,       ///< backprojected from a depth pixel
-  hole_fill = 1,   ///< added by hole filling (its pixel is where it projects, clamped to the map)
-  solid_back = 2,  ///< back side of a foreground solid (same pixel as its front vertex)
-  input = 3,       ///< read from a mesh file (no pixel)
+  Pixel = 0,      ///< backprojected from a depth pixel
+  HoleFill = 1,   ///< added by hole filling (its pixel is where it projects, clamped to the map)
+  SolidBack = 2,  ///< back side of a foreground solid (same pixel as its front vertex)
+  Input = 3,      ///< read from a mesh file (no pixel)
 };
 
 /// Handles of the image properties, stored in the mesh under the names "solo:pixel",

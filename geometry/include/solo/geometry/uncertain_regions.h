@@ -5,7 +5,7 @@
 // mid-range, (max + min) / 2 of the valid depth). Every pixel of an uncertain window is
 // uncertain. The normal-guided optimisation drops its tangent term there.
 
-#include "solo/geometry/report.h"
+#include "solo/core/report.h"
 
 #include <opencv2/core.hpp>
 

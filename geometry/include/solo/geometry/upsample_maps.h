@@ -4,8 +4,8 @@
 // roughness by joint bilateral upsampling guided by the day image, label maps by nearest
 // neighbour. Maps already at the image resolution are passed through unchanged.
 
-#include "solo/geometry/report.h"
-#include "solo/geometry/scene.h"
+#include "solo/core/report.h"
+#include "solo/core/scene.h"
 
 #include <opencv2/core.hpp>
 

@@ -15,7 +15,7 @@
 //
 // Camera frame throughout (camera at the origin, +z forward, metres), as solo's meshes are.
 
-#include "solo/geometry/camera.h"
+#include "solo/core/camera.h"
 #include "solo/geometry/surface_mesh.h"
 #include "solo/geometry/triangle_mesh.h"
 
@@ -29,7 +29,7 @@ namespace solo {
 
 /// What made a face of a depth mesh: its vertices' VertexOrigin, a solid back vertex winning
 /// over a hole-fill one (a solid's side wall joins a front and a back vertex).
-enum class FaceOrigin : std::uint8_t { depth_surface = 0, hole_fill = 1, solid = 2 };
+enum class FaceOrigin : std::uint8_t { DepthSurface = 0, HoleFill = 1, Solid = 2 };
 constexpr int kFaceOriginCount = 3;
 const char* faceOriginName(FaceOrigin origin);  ///< "depth_surface", "hole_fill", "solid"
 

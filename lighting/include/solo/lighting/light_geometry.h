@@ -15,7 +15,7 @@
 
 #include "solo/lighting/light_groups.h"
 
-#include <solo/geometry/camera.h>
+#include <solo/core/camera.h>
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>

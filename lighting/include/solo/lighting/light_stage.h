@@ -8,8 +8,8 @@
 #include "solo/lighting/light_instantiation.h"
 #include "solo/lighting/light_record.h"
 
-#include <solo/geometry/report.h>
-#include <solo/geometry/scene.h>
+#include <solo/core/report.h>
+#include <solo/core/scene.h>
 
 #include <filesystem>
 

@@ -7,7 +7,7 @@
 #include "solo/render/render_scene.h"
 
 #include <solo/geometry/depth_mesh.h>
-#include <solo/geometry/report.h>
+#include <solo/core/report.h>
 #include <solo/lighting/light_record.h>
 
 #include <opencv2/core.hpp>

@@ -9,7 +9,7 @@
 #include "solo/render/sampler.h"
 #include "solo/render/surface_bsdf.h"
 
-#include <solo/geometry/report.h>
+#include <solo/core/report.h>
 
 #include <opencv2/core.hpp>
 

@@ -7,8 +7,8 @@
 // the render's own standard error, and the result is multiplied by the albedo again. Pixels that
 // see an emitter or no surface (sky) are neither changed nor used.
 
-#include <solo/geometry/camera.h>
-#include <solo/geometry/report.h>
+#include <solo/core/camera.h>
+#include <solo/core/report.h>
 
 #include "solo/render/path_tracer.h"
 

@@ -5,7 +5,7 @@
 // light unchanged), the space the reference renders in. Units: metres; radiance in the
 // renderer's unit (docs/rendering.md states its mapping to cd/m^2).
 
-#include <solo/geometry/camera.h>
+#include <solo/core/camera.h>
 
 #include <Eigen/Core>
 

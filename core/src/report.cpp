@@ -1,0 +1,100 @@
+#include "solo/core/report.h"
+
+#include "solo/core/atomic_file.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <sstream>
+
+namespace solo {
+
+const MetricValue* StageReport::find(const std::string& metric) const {
+  for (const Metric& m : metrics)
+    if (m.name == metric) return &m.value;
+  return nullptr;
+}
+
+namespace {
+
+nlohmann::json toJson(const MetricValue& v) {
+  return std::visit([](const auto& x) { return nlohmann::json(x); }, v);
+}
+
+std::string formatValue(const MetricValue& v) {
+  if (const double* d = std::get_if<double>(&v)) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.4g", *d);
+    return buf;
+  }
+  if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) return std::to_string(*i);
+  if (const bool* b = std::get_if<bool>(&v)) return *b ? "yes" : "no";
+  return std::get<std::string>(v);
+}
+
+}  // namespace
+
+std::string reportToJson(const RunReport& r) {
+  nlohmann::ordered_json j;
+  j["command"] = r.command;
+  j["scene"] = r.scene;
+  j["seed"] = r.seed;
+  if (!r.preset.empty()) j["preset"] = r.preset;
+  j["total_seconds"] = r.total_seconds;
+  auto& versions = j["versions"] = nlohmann::ordered_json::object();
+  for (const auto& [name, version] : r.versions) versions[name] = version;
+  auto& stages = j["stages"] = nlohmann::ordered_json::array();
+  for (const StageReport& s : r.stages) {
+    nlohmann::ordered_json js;
+    js["name"] = s.name;
+    js["seconds"] = s.seconds;
+    js["skipped"] = s.skipped;
+    if (s.skipped) js["skip_reason"] = s.skip_reason;
+    auto& metrics = js["metrics"] = nlohmann::ordered_json::object();
+    for (const Metric& m : s.metrics) {
+      if (m.unit.empty()) metrics[m.name] = toJson(m.value);
+      else metrics[m.name] = {{"value", toJson(m.value)}, {"unit", m.unit}};
+    }
+    js["notes"] = s.notes;
+    stages.push_back(js);
+  }
+  j["notes"] = r.notes;
+  return j.dump(2) + "\n";
+}
+
+void writeReportJson(const std::filesystem::path& file, const RunReport& report) {
+  writeTextAtomically(file, reportToJson(report));
+}
+
+std::string reportSummary(const RunReport& r) {
+  std::ostringstream out;
+  out << "solo " << r.command << "  scene: " << r.scene << "  seed: " << r.seed;
+  if (!r.preset.empty()) out << "  preset: " << r.preset;
+  out << "\n";
+  for (const StageReport& s : r.stages) {
+    char head[96];
+    std::snprintf(head, sizeof head, "  %-12s %8.3f s  ", s.name.c_str(), s.seconds);
+    out << head;
+    if (s.skipped) {
+      out << "skipped: " << s.skip_reason << "\n";
+      continue;
+    }
+    int shown = 0;
+    for (const Metric& m : s.metrics) {
+      if (shown++ == 6) {
+        out << " ...";
+        break;
+      }
+      out << (shown > 1 ? ", " : "") << m.name << " " << formatValue(m.value) << (m.unit.empty() ? "" : " " + m.unit);
+    }
+    out << "\n";
+    for (const std::string& n : s.notes) out << "               note: " << n << "\n";
+  }
+  for (const std::string& n : r.notes) out << "  note: " << n << "\n";
+  char total[64];
+  std::snprintf(total, sizeof total, "  total        %8.3f s\n", r.total_seconds);
+  out << total;
+  return out.str();
+}
+
+}  // namespace solo

@@ -1,0 +1,307 @@
+#include "solo/core/scene.h"
+
+#include "solo/core/error.h"
+#include "solo/core/input_file.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace solo {
+namespace {
+
+const std::set<std::string> kKnownKeys = {"image",     "depth",  "normals", "albedo",       "roughness",
+                                          "instances", "labels", "lights",  "light_groups", "camera",
+                                          "name",      "comment", "ground_truth"};
+
+std::string typeName(const json& v) { return v.type_name(); }
+
+fs::path resolve(const fs::path& manifest, const std::string& relative) {
+  fs::path p(relative);
+  return p.is_absolute() ? p : manifest.parent_path() / p;
+}
+
+fs::path pathValue(const fs::path& manifest, const json& j, const std::string& key) {
+  const json& v = j.at(key);
+  if (!v.is_string()) throw InputError(manifest, "\"" + key + "\" must be a path string, found " + typeName(v));
+  if (v.get<std::string>().empty()) throw InputError(manifest, "\"" + key + "\" is an empty path");
+  return resolve(manifest, v.get<std::string>());
+}
+
+double numberValue(const fs::path& manifest, const json& obj, const std::string& where, const std::string& key) {
+  if (!obj.contains(key)) throw InputError(manifest, "\"" + where + "\" lacks \"" + key + "\"");
+  const json& v = obj.at(key);
+  if (!v.is_number()) throw InputError(manifest, "\"" + where + "\".\"" + key + "\" must be a number, found " + typeName(v));
+  return v.get<double>();
+}
+
+int intValue(const fs::path& manifest, const json& obj, const std::string& where, const std::string& key) {
+  const json& v = obj.at(key);
+  if (!v.is_number_integer() || v.get<long long>() <= 0)
+    throw InputError(manifest, "\"" + where + "\".\"" + key + "\" must be a positive integer");
+  return v.get<int>();
+}
+
+void warnUnknown(const json& obj, const std::set<std::string>& known, const std::string& where,
+                 std::vector<std::string>& warnings) {
+  for (const auto& item : obj.items())
+    if (!known.count(item.key())) warnings.push_back("unknown key \"" + where + item.key() + "\" ignored");
+}
+
+void checkAspect(const std::string& name, const cv::Mat& map, const cv::Mat& image, std::vector<std::string>& warnings) {
+  if (map.empty() || map.size() == image.size()) return;
+  const double a = static_cast<double>(map.cols) / map.rows, b = static_cast<double>(image.cols) / image.rows;
+  if (std::abs(a / b - 1.0) > 0.01)
+    warnings.push_back(name + " is " + std::to_string(map.cols) + "x" + std::to_string(map.rows) +
+                       ", a different aspect ratio than the " + std::to_string(image.cols) + "x" +
+                       std::to_string(image.rows) + " image: it will be stretched when upsampled");
+}
+
+std::string sizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
+
+}  // namespace
+
+SceneManifest readSceneManifest(const fs::path& manifest_file) {
+  SceneManifest m;
+  m.file = manifest_file;
+  requireRegularFile(manifest_file, "scene manifest");
+  std::ifstream in(manifest_file);
+  if (!in) throw InputError(manifest_file, "cannot open for reading");
+  json j;
+  try {
+    in >> j;
+  } catch (const json::exception& e) {
+    throw InputError(manifest_file, std::string("not valid JSON: ") + e.what());
+  }
+  if (!j.is_object()) throw InputError(manifest_file, "scene manifest must be a JSON object, found " + typeName(j));
+  warnUnknown(j, kKnownKeys, "", m.warnings);
+
+  if (!j.contains("image")) throw InputError(manifest_file, "required key \"image\" is missing");
+  m.image = pathValue(manifest_file, j, "image");
+  if (!j.contains("depth")) throw InputError(manifest_file, "required key \"depth\" is missing");
+  const json& depth = j.at("depth");
+  if (depth.is_string()) {
+    m.depth = pathValue(manifest_file, j, "depth");
+  } else if (depth.is_object()) {
+    if (!depth.contains("file")) throw InputError(manifest_file, "\"depth\" object lacks \"file\"");
+    m.depth = pathValue(manifest_file, depth, "file");
+    if (depth.contains("scale")) {
+      const double scale = numberValue(manifest_file, depth, "depth", "scale");
+      if (!(scale > 0) || !std::isfinite(scale))
+        throw InputError(manifest_file, "\"depth\".\"scale\" must be a positive number of metres per unit");
+      m.depth_scale_m_per_unit = scale;
+    }
+    warnUnknown(depth, {"file", "scale"}, "depth.", m.warnings);
+  } else {
+    throw InputError(manifest_file, "\"depth\" must be a path or {\"file\", \"scale\"}, found " + typeName(depth));
+  }
+
+  auto optionalPath = [&](const char* key, std::optional<fs::path>& out) {
+    if (j.contains(key) && !j.at(key).is_null()) out = pathValue(manifest_file, j, key);
+  };
+  optionalPath("normals", m.normals);
+  optionalPath("albedo", m.albedo);
+  optionalPath("roughness", m.roughness);
+  optionalPath("instances", m.instances);
+  optionalPath("labels", m.labels);
+  optionalPath("lights", m.lights);
+  optionalPath("light_groups", m.light_groups);
+  optionalPath("ground_truth", m.ground_truth);
+  for (const char* text_key : {"name", "comment"})
+    if (j.contains(text_key) && !j.at(text_key).is_string())
+      throw InputError(manifest_file, std::string("\"") + text_key + "\" must be a string");
+
+  if (j.contains("camera") && !j.at("camera").is_null()) {
+    const json& c = j.at("camera");
+    if (c.is_string()) {
+      m.camera_file = pathValue(manifest_file, j, "camera");
+    } else if (c.is_object() && c.contains("file")) {
+      m.camera_file = pathValue(manifest_file, c, "file");
+      PinholeCamera resolution;
+      if (c.contains("width") || c.contains("height")) {
+        resolution.width = intValue(manifest_file, c, "camera", "width");
+        resolution.height = intValue(manifest_file, c, "camera", "height");
+        m.camera = resolution;  // resolution only; intrinsics come from the file
+      }
+      warnUnknown(c, {"file", "width", "height"}, "camera.", m.warnings);
+    } else if (c.is_object()) {
+      PinholeCamera k;
+      k.fx = numberValue(manifest_file, c, "camera", "fx");
+      k.fy = numberValue(manifest_file, c, "camera", "fy");
+      k.cx = numberValue(manifest_file, c, "camera", "cx");
+      k.cy = numberValue(manifest_file, c, "camera", "cy");
+      if (c.contains("width") != c.contains("height"))
+        throw InputError(manifest_file, "\"camera\" needs both \"width\" and \"height\" or neither");
+      if (c.contains("width")) {
+        k.width = intValue(manifest_file, c, "camera", "width");
+        k.height = intValue(manifest_file, c, "camera", "height");
+      }
+      m.camera = k;
+      warnUnknown(c, {"fx", "fy", "cx", "cy", "width", "height"}, "camera.", m.warnings);
+    } else {
+      throw InputError(manifest_file, "\"camera\" must be an object of intrinsics or a path, found " + typeName(c));
+    }
+  }
+  return m;
+}
+
+Scene loadScene(const fs::path& manifest_file) {
+  Scene s;
+  s.manifest = readSceneManifest(manifest_file);
+  const SceneManifest& m = s.manifest;
+  s.warnings = m.warnings;
+
+  ImageFileInfo info;
+  s.image = readColorImage(m.image, &info);
+  s.maps.push_back({"image", m.image, info});
+  s.depth_m = readDepth(m.depth, m.depth_scale_m_per_unit.value_or(0.0), &s.depth_stats, &info);
+  s.maps.push_back({"depth", m.depth, info});
+  if (s.depth_stats.valid == 0) throw InputError(m.depth, "depth has no valid pixel (all 0, NaN, inf or negative)");
+
+  if (m.normals) {
+    NormalReadStats stats;
+    s.normals = readNormals(*m.normals, &stats, &info);
+    s.normal_stats = stats;
+    s.maps.push_back({"normals", *m.normals, info});
+  }
+  if (m.albedo) {
+    s.albedo = readColorImage(*m.albedo, &info);
+    s.maps.push_back({"albedo", *m.albedo, info});
+  }
+  if (m.roughness) {
+    s.roughness = readScalarMap(*m.roughness, &info);
+    s.maps.push_back({"roughness", *m.roughness, info});
+  }
+  auto labelMap = [&](const char* name, const std::optional<fs::path>& file, cv::Mat& out) {
+    if (!file) return;
+    out = readLabels(*file, &info);
+    s.maps.push_back({name, *file, info});
+    double lo = 0, hi = 0;
+    cv::minMaxLoc(out, &lo, &hi);
+    if (lo < 0) throw InputError(*file, std::string(name) + " holds negative ids");
+  };
+  labelMap("instances", m.instances, s.instances);
+  labelMap("labels", m.labels, s.labels);
+  labelMap("lights", m.lights, s.lights);
+  labelMap("light_groups", m.light_groups, s.light_groups);
+  if (!s.lights.empty()) {
+    for (int y = 0; y < s.lights.rows; ++y)
+      for (int x = 0; x < s.lights.cols; ++x) {
+        const int id = s.lights.at<int>(y, x);
+        const int category = id / 1000;
+        if (id != 0 && (category < 1 || category > kLightCategoryCount))
+          throw InputError(*m.lights, "light id " + std::to_string(id) + " at pixel (" + std::to_string(x) + ", " +
+                                          std::to_string(y) + ") has category " + std::to_string(category) +
+                                          ", expected categoryId * 1000 + k with categoryId in 1.." +
+                                          std::to_string(kLightCategoryCount));
+      }
+  }
+  if (s.labels.empty() && !s.instances.empty()) {
+    s.labels = s.instances.clone();
+    s.labels.forEach<int>([](int& v, const int*) { v = cityscapesClassOfInstance(v); });
+    s.warnings.push_back("labelIds derived from instanceIds");
+  }
+
+  // Camera: validate where it was stated, then scale to the image resolution.
+  PinholeCamera camera;
+  fs::path camera_source = m.file;
+  if (m.camera_file) {
+    camera = readCityscapesCamera(*m.camera_file);
+    camera_source = *m.camera_file;
+    if (m.camera && m.camera->width > 0) {
+      camera.width = m.camera->width;
+      camera.height = m.camera->height;
+    }
+  } else if (m.camera) {
+    camera = *m.camera;
+  } else {
+    camera = PinholeCamera::acdc();
+    s.camera_is_default = true;
+    s.warnings.push_back("no camera given: using the ACDC intrinsics (fx = fy = 1780 px at 1920x1080) scaled to the image");
+  }
+  if (camera.width <= 0) {
+    camera.width = s.image.cols;
+    camera.height = s.image.rows;
+  }
+  validateCamera(camera, camera_source);
+  if (camera.width != s.image.cols || camera.height != s.image.rows) {
+    const double a = static_cast<double>(camera.width) / camera.height;
+    const double b = static_cast<double>(s.image.cols) / s.image.rows;
+    if (std::abs(a / b - 1.0) > 0.01)
+      s.warnings.push_back("camera intrinsics are for " + sizeText(camera.width, camera.height) +
+                           ", a different aspect ratio than the image: scaled per axis");
+    camera = camera.scaledTo(s.image.cols, s.image.rows);
+  }
+  s.camera = camera;
+
+  if (!s.normals.empty()) {
+    // Visible surfaces face the camera: n . (K^-1 (u, v, 1)) < 0 at the normal map's own resolution.
+    const PinholeCamera at_map = camera.scaledTo(s.normals.cols, s.normals.rows);
+    std::int64_t back_facing = 0;
+    for (int y = 0; y < s.normals.rows; ++y)
+      for (int x = 0; x < s.normals.cols; ++x) {
+        const cv::Vec3f n = s.normals.at<cv::Vec3f>(y, x);
+        const double along_ray = n[0] * (x - at_map.cx) / at_map.fx + n[1] * (y - at_map.cy) / at_map.fy + n[2];
+        if ((n[0] != 0 || n[1] != 0 || n[2] != 0) && along_ray > 0) ++back_facing;
+      }
+    s.normal_stats->back_facing = back_facing;
+  }
+
+  for (const auto& [name, map] : {std::pair<const char*, const cv::Mat*>{"depth", &s.depth_m},
+                                  {"normals", &s.normals}, {"albedo", &s.albedo}, {"roughness", &s.roughness},
+                                  {"instances", &s.instances}, {"labels", &s.labels}, {"lights", &s.lights},
+                                  {"light_groups", &s.light_groups}})
+    checkAspect(name, *map, s.image, s.warnings);
+  if (s.normal_stats && s.normal_stats->renormalised > 0)
+    s.warnings.push_back(std::to_string(s.normal_stats->renormalised) + " normals were not unit length: renormalised");
+  return s;
+}
+
+StageReport describeScene(const Scene& s) {
+  StageReport r;
+  r.name = "input";
+  r.add("image_size", sizeText(s.width(), s.height()), "px");
+  const DepthReadStats& d = s.depth_stats;
+  r.add("depth_valid", d.valid).add("depth_invalid", d.invalid());
+  r.add("depth_zero", d.zero).add("depth_nan", d.nan).add("depth_inf", d.inf).add("depth_negative", d.negative);
+  r.add("depth_min", d.min_m, "m").add("depth_max", d.max_m, "m");
+  if (s.normal_stats) {
+    r.add("normals_valid", s.normal_stats->valid).add("normals_invalid", s.normal_stats->invalid);
+    r.add("normals_renormalised", s.normal_stats->renormalised).add("normals_back_facing", s.normal_stats->back_facing);
+  }
+  r.add("camera_fx", s.camera.fx, "px").add("camera_fy", s.camera.fy, "px");
+  r.add("camera_cx", s.camera.cx, "px").add("camera_cy", s.camera.cy, "px");
+  r.add("camera_default", s.camera_is_default);
+  for (const MapRecord& map : s.maps)
+    r.add(map.name + "_file", map.info.format + " " + sizeText(map.info.width, map.info.height) + " " +
+                                  std::to_string(map.info.channels) + "ch " + map.info.pixel_type);
+  for (const char* optional_map : {"normals", "albedo", "roughness", "instances", "labels", "lights", "light_groups"}) {
+    bool present = false;
+    for (const MapRecord& map : s.maps) present |= map.name == optional_map;
+    if (!present) r.notes.push_back(std::string("no ") + optional_map + " map given");
+  }
+  for (const std::string& w : s.warnings) r.notes.push_back(w);
+  return r;
+}
+
+std::vector<fs::path> manifestFiles(const SceneManifest& m) {
+  std::vector<fs::path> files = {m.file, m.image, m.depth};
+  for (const auto* optional : {&m.normals, &m.albedo, &m.roughness, &m.instances, &m.labels, &m.lights,
+                               &m.light_groups, &m.ground_truth, &m.camera_file})
+    if (*optional) files.push_back(**optional);
+  return files;
+}
+
+fs::path groundTruthManifest(const fs::path& manifest_file) {
+  const SceneManifest m = readSceneManifest(manifest_file);
+  if (!m.ground_truth)
+    throw InputError(manifest_file, "has no \"ground_truth\" entry: not a synthetic scene (`solo synth` writes one)");
+  return *m.ground_truth;
+}
+
+}  // namespace solo
