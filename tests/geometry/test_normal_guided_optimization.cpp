@@ -1,5 +1,6 @@
 // Normal-guided depth optimisation (Ceres) and the paper's Adam: accuracy on planes with
-// known truth, agreement of the layouts, and the numerical-stability cases of issue 4.
+// known truth, agreement of the layouts, and the numerical-stability cases (grazing and
+// back-facing normals, invalid pixels in the stencil, 0.5 m to 1 km, degenerate images).
 
 #include <solo/geometry/adam_depth_optimizer.h>
 #include <solo/geometry/normal_guided_optimization.h>
