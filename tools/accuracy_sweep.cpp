@@ -3,8 +3,8 @@
 // against the synthetic scene's exact ground truth.
 
 #include "accuracy_sweep.h"
-#include "night_pipeline.h"
-#include "night_presets.h"
+#include <solo/pipeline/night_conversion.h>
+#include <solo/pipeline/night_presets.h>
 
 #include <solo/geometry/depth_metrics.h>
 #include <solo/geometry/depth_refinement.h>
@@ -149,22 +149,15 @@ RadianceError radianceError(const RenderOutput& image, const RenderOutput& refer
   return e;
 }
 
-/// One setting of the whole pipeline: `solo night`'s options (a preset applied) and the
-/// pipeline's extras.
+/// One setting of the whole pipeline: the night conversion's options (a preset applied).
 struct PipelineSetting {
   std::string name;
-  NightOptions night;
-  NightPipelineExtras extras;
+  NightConversionOptions night;
 };
 
 /// A quality preset of `solo night` (night_presets.h) as a pipeline setting.
 PipelineSetting presetSetting(const std::string& preset) {
-  PipelineSetting s;
-  s.name = preset;
-  s.night.preset = preset;
-  applyNightPreset(s.night, [](const std::string&) { return false; });
-  s.extras.progress = false;
-  return s;
+  return PipelineSetting{preset, nightPreset(preset)};
 }
 
 }  // namespace
@@ -454,7 +447,7 @@ struct AccuracySweep::Impl {
     // The noise-matched target's sensor noise, at the reference's auto-exposure white (solo
     // night meters its own on a preview).
     const auto sensor_sigma = renderNoiseSigma(self.white);
-    const double kNoiseFactor = NightOptions{}.noise_factor;  // the default preset's
+    const double kNoiseFactor = NightConversionOptions{}.render.noise_factor;  // the default preset's
     // roulette < 0: a relative-error target (or none); >= 0: the noise-matched target with
     // that shadow-ray roulette fraction.
     const auto point = [&](const std::string& mode, LightSamplerKind kind, int min_spp, int max_spp, double target,
@@ -503,7 +496,7 @@ struct AccuracySweep::Impl {
                                                    : std::vector<Adaptive>{{2, 8, 0.2}, {4, 16, 0.1}, {8, 32, 0.05}};
     for (const Adaptive& a : adaptive) point("adaptive", LightSamplerKind::Power, a.min_spp, a.max_spp, a.target);
     // The default preset's noise-matched target (2-8 spp), shadow-ray roulette off and on.
-    const double preset_roulette = NightOptions{}.shadow_roulette;
+    const double preset_roulette = NightConversionOptions{}.render.shadow_roulette;
     const std::vector<double> roulettes = o.quick ? std::vector<double>{0, preset_roulette}
                                                   : std::vector<double>{0, 0.1, preset_roulette, 1};
     for (double roulette : roulettes) point("noise_target", LightSamplerKind::Power, 2, 8, 0, roulette);
@@ -562,16 +555,18 @@ struct AccuracySweep::Impl {
       settings.push_back(no_refine);
       PipelineSetting no_solids = standard;
       no_solids.name = "default_no_solids";
-      no_solids.night.solids = false;
+      no_solids.night.mesh.close_solids = false;
       settings.push_back(no_solids);
     }
 
     for (PipelineSetting& s : settings) {
       say("[end_to_end] " + s.name + " ...");
       s.night.seed = o.seed;
-      s.extras.illuminant_table = o.illuminant_table;
+      s.night.lights.illuminant_table = o.illuminant_table;
       Stopwatch clock;
-      const NightPipelineResult r = runNightPipeline(scene, s.night, s.extras);
+      NightConversionCallbacks quiet;
+      quiet.render_progress = false;
+      const NightConversionResult r = runNightConversion(scene, s.night, quiet);
       const double pipeline_s = clock.seconds();
       double refine_s = 0, mesh_s = 0, lights_s = 0, scene_s = 0, post_s = 0;
       for (const StageReport& step : r.refined.steps) refine_s += step.seconds;
@@ -590,13 +585,16 @@ struct AccuracySweep::Impl {
       d.ground_truth_m = truth.depth_m;
       const DepthMetrics dm = evaluateDepth(d);
 
-      const NightOptions& n = s.night;
+      const NightConversionOptions& n = s.night;
+      const bool optimized = n.refine && n.refinement.optimize;
       std::vector<std::string> row = head();
       row.insert(row.end(),
-                 {s.name, boolean(n.refine), integer(n.refine && n.optimize ? n.optimize_iterations : 0),
-                  num(n.optimize_tolerance), boolean(s.extras.fill_holes), integer(s.extras.max_fair_vertices),
-                  boolean(n.solids), n.light_sampler, integer(n.min_samples), integer(n.max_samples),
-                  num(n.relative_error), boolean(n.noise_target), num(n.noise_factor), integer(n.mesh_downsample),
+                 {s.name, boolean(n.refine), integer(optimized ? n.refinement.optimization.max_iterations : 0),
+                  num(n.refinement.optimization.function_tolerance), boolean(n.mesh.fill_holes),
+                  integer(n.mesh.hole_filling.max_fair_vertices), boolean(n.mesh.close_solids),
+                  lightSamplerName(n.render.light_sampler), integer(n.render.min_samples),
+                  integer(n.render.max_samples), num(n.render.relative_error), boolean(n.noise_target),
+                  num(n.render.noise_factor), integer(n.mesh_downsample),
                   integer(n.render_downsample), seconds(total_s), seconds(o.input_seconds), seconds(refine_s),
                   seconds(mesh_s), seconds(lights_s), seconds(scene_s), seconds(render_s), seconds(post_s),
                   num(metricDouble(r.rendered.report, "samples_per_pixel_mean")), num(dm.abs_rel), num(e.relative_rmse),

@@ -11,8 +11,8 @@
 
 #include "accuracy_sweep.h"
 #include "commands.h"
-#include "night_pipeline.h"
-#include "night_presets.h"
+#include <solo/pipeline/night_conversion.h>
+#include <solo/pipeline/night_presets.h>
 
 #include <solo/core/atomic_file.h>
 #include <solo/core/error.h>
@@ -414,7 +414,7 @@ cv::Mat litWindowMask(const RenderOutput& r) {
 }
 
 /// The seconds of the pipeline stage named `name` (0 when it did not run).
-double stageSeconds(const NightPipelineResult& result, const std::string& name) {
+double stageSeconds(const NightConversionResult& result, const std::string& name) {
   for (const StageReport& s : result.stages)
     if (s.name == name) return s.seconds;
   return 0;
@@ -444,14 +444,14 @@ fs::path makeStreet(const RealismCase& c, const fs::path& out) {
 
 /// Runs `solo night`'s pipeline (`night`: preset applied) on `scene_file`, writes the night
 /// image to out/night/<name>.png and measures it. `night8` receives the 8-bit night image (RGB).
-RealismRow runRealismCase(const RealismCase& c, const fs::path& scene_file, const NightOptions& night,
+RealismRow runRealismCase(const RealismCase& c, const fs::path& scene_file, const NightConversionOptions& night,
                           const fs::path& out, cv::Mat& night8) {
   Stopwatch clock;
   const Scene scene = loadScene(scene_file);
-  NightPipelineExtras extras;
-  extras.progress = false;
-  const NightPipelineResult result = runNightPipeline(scene, night, extras);
-  writePostOutput(out / "night" / (c.name + ".png"), result.developed.encoded, result.developed.linear_rgb, false);
+  NightConversionCallbacks quiet;
+  quiet.render_progress = false;
+  const NightConversionResult result = runNightConversion(scene, night, quiet);
+  writeDevelopedImage(out / "night" / (c.name + ".png"), result.developed.encoded, result.developed.linear_rgb, false);
   const double total_seconds = clock.seconds();
   night8 = quantiseEncoded(result.developed.encoded, 8);
 
@@ -646,10 +646,8 @@ int runBenchRealism(const BenchRealismOptions& o) {
   Stopwatch wall;
   if (o.width < 16 || o.height < 16 || o.width > 4096 || o.height > 4096)
     throw InputError("--size", "street size must be between 16 and 4096 pixels per side");
-  NightOptions night;
+  NightConversionOptions night = nightPreset(o.preset);  // throws for an unknown preset
   night.seed = o.seed;
-  night.preset = o.preset;
-  applyNightPreset(night, [](const std::string&) { return false; });  // throws for an unknown preset
   std::error_code ec;
   if (fs::exists(o.output, ec) && !fs::is_directory(o.output, ec))
     throw InputError(o.output, "exists and is not a folder");

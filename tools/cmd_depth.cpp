@@ -1,7 +1,7 @@
 // `solo depth SCENE -o refined.exr [--report r.json]`: the depth refinement stage alone.
 
 #include "commands.h"
-#include "night_pipeline.h"
+#include <solo/pipeline/night_conversion.h>
 
 #include <solo/geometry/depth_refinement.h>
 #include <solo/core/image_io.h>
@@ -14,7 +14,6 @@ namespace fs = std::filesystem;
 
 namespace solo::tools {
 
-StageReport inputStage(const Scene& scene, double seconds);
 
 namespace {
 
@@ -38,7 +37,7 @@ int runDepth(const DepthOptions& options) {
 
   Stopwatch clock;
   const Scene scene = loadScene(options.scene);
-  report.stages.push_back(inputStage(scene, clock.seconds()));
+  report.stages.push_back(sceneInputReport(scene, clock.seconds()));
 
   DepthRefinementOptions refine;
   refine.upsampling.enabled = options.upsample;

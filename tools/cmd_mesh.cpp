@@ -1,7 +1,7 @@
 // solo mesh from-depth / solo mesh clean: the mesh stage on its own (docs/mesh.md).
 
 #include "commands.h"
-#include "night_pipeline.h"
+#include <solo/pipeline/night_conversion.h>
 
 #include <solo/geometry/depth_mesh.h>
 #include <solo/core/error.h>
@@ -77,9 +77,9 @@ int runMeshFromDepth(const MeshFromDepthOptions& options) {
     true_normals = truth.normals;
   }
   DepthMeshCleanupOptions cleanup;
-  cleanup.close_solids = !options.no_solids;
-  cleanup.backdrops = !options.no_backdrops;
-  cleanup.evaluate = !options.no_evaluation;
+  cleanup.close_solids = options.close_solids;
+  cleanup.backdrops = options.backdrops;
+  cleanup.evaluate = options.evaluate;
   StageReport stage;
   // The instance map as solo night's mesh stage sees it: each street light an instance of its own.
   std::int64_t street_light_pixels = 0;

@@ -324,29 +324,29 @@ int runNightBatch(const NightBatchOptions& batch, const NightOptions& night) {
     throw InputError("--batch", std::string("given to a batch's scene (") + scene +
                                     "): a config file that sets batch cannot be forwarded to the scenes");
   const ForwardedArguments forwarded = forwardArguments(batch.arguments);
-  if (night.scene)
-    throw InputError(*night.scene, "a scene and --batch were both given: list the scene in the batch instead");
+  if (night.job.scene)
+    throw InputError(*night.job.scene, "a scene and --batch were both given: list the scene in the batch instead");
   if (!forwarded.output_given) throw InputError("--batch", "needs -o OUT_DIR, the folder for the outputs");
   // Options naming one file would make every scene write it (from the command line or a config file).
-  if (night.report)
+  if (night.job.report)
     throw InputError("--report", "cannot be used with --batch: each scene's report is OUT_DIR/<name>.report.json");
-  if (night.render_exr)
+  if (night.job.render_exr)
     throw InputError("--render-exr", "cannot be used with --batch: it names one file for every scene");
   if (night.write_config)
     throw InputError("--write-config", "cannot be used with --batch: write the configuration with a one-scene run");
-  const fs::path out_dir = fs::absolute(night.output);
+  const fs::path out_dir = fs::absolute(night.job.output);
   std::error_code ec;
   if (fs::exists(out_dir, ec) && !fs::is_directory(out_dir, ec))
-    throw InputError(night.output, "exists and is not a folder (with --batch, -o is the output folder)");
+    throw InputError(night.job.output, "exists and is not a folder (with --batch, -o is the output folder)");
 
   std::size_t ground_truth_skipped = 0;
-  const std::vector<BatchScene> all = collectScenes(*batch.list, night.seed, ground_truth_skipped);
+  const std::vector<BatchScene> all = collectScenes(*batch.list, night.conversion.seed, ground_truth_skipped);
   std::vector<BatchScene> scenes;
   for (std::size_t k = 0; k < all.size(); ++k)
     if (static_cast<int>(k % static_cast<std::size_t>(shard.count)) == shard.index) scenes.push_back(all[k]);
 
   fs::create_directories(out_dir, ec);
-  if (ec) throw InputError(night.output, "cannot create the output folder: " + ec.message());
+  if (ec) throw InputError(night.job.output, "cannot create the output folder: " + ec.message());
   const std::string shard_suffix =
       shard.count == 1 ? "" : ".shard-" + std::to_string(shard.index) + "-of-" + std::to_string(shard.count);
   const fs::path failures_file = out_dir / ("failures" + shard_suffix + ".json");
@@ -433,7 +433,7 @@ int runNightBatch(const NightBatchOptions& batch, const NightOptions& night) {
       for (const std::string& a : {std::string("-o"), png_of(i).string(), std::string("--report"), report_of(i).string(),
                                    std::string("--seed"), std::to_string(scenes[i].seed)})
         args.push_back(a);
-      if (night.contact_sheet) {  // one contact sheet per scene, whatever file was named
+      if (night.job.contact_sheet) {  // one contact sheet per scene, whatever file was named
         args.push_back("--contact-sheet");
         args.push_back(contact_sheet_of(i).string());
       }
@@ -576,7 +576,7 @@ int runNightBatch(const NightBatchOptions& batch, const NightOptions& night) {
                                   {"output_folder", out_dir.string()},
                                   {"shard", shard_text},
                                   {"jobs", batch.jobs},
-                                  {"seed", night.seed},
+                                  {"seed", night.conversion.seed},
                                   {"scenes_in_batch", all.size()},
                                   {"ground_truth_manifests_left_out", ground_truth_skipped},
                                   {"scenes", scenes.size()},

@@ -3,6 +3,8 @@
 
 #include "commands.h"
 
+#include <solo/pipeline/night_job.h>
+
 #include <solo/core/error.h>
 #include <solo/core/image_io.h>
 #include <solo/core/output_path.h>
@@ -55,32 +57,12 @@ cv::Mat readThreeChannels(const fs::path& file, StageReport* report) {
   return raw;
 }
 
-/// Writes the result by extension: .png/.tif 8-bit (16-bit on request) of the encoded
-/// image, .jpg 8-bit, .exr float linear sRGB.
-void writeOutput(const fs::path& file, const cv::Mat& encoded, const cv::Mat& linear_rgb, bool sixteen_bit) {
-  const std::string ext = lowerExtension(file);
-  if (ext == ".exr") {
-    writeImage(file, linear_rgb);
-  } else if (ext == ".png" || ext == ".tif" || ext == ".tiff") {
-    writeImage(file, quantiseEncoded(encoded, sixteen_bit ? 16 : 8));
-  } else if (ext == ".jpg" || ext == ".jpeg") {
-    if (sixteen_bit) throw InputError(file, "JPEG holds 8 bits only: use .png or .tif for --16bit");
-    writeImage(file, quantiseEncoded(encoded, 8));
-  } else {
-    throw InputError(file, "unsupported output format \"" + ext + "\" (use .png, .tif, .jpg or .exr)");
-  }
-}
-
 }  // namespace
-
-void writePostOutput(const fs::path& file, const cv::Mat& encoded, const cv::Mat& linear_rgb, bool sixteen_bit) {
-  writeOutput(file, encoded, linear_rgb, sixteen_bit);
-}
 
 int runPost(const PostOptions& o) {
   Stopwatch total;
   PostProcessOptions options;
-  options.glare = !o.no_glare;
+  options.glare = o.glare;
   options.glare_options.size = o.glare_size;
   options.glare_options.threshold = o.glare_threshold;
   if (o.glare_method == "auto") options.glare_options.method = GlareMethod::Automatic;
@@ -103,7 +85,7 @@ int runPost(const PostOptions& o) {
     if (!(camera.f_number > 0)) throw InputError("--f-number", "must be positive");
     options.exposure_options.camera = camera;
   }
-  options.noise = !o.no_noise;
+  options.noise = o.noise;
   options.noise_options.iso = o.iso;
   options.noise_options.std_scale = o.noise_scale;
   options.noise_options.seed = o.seed;
@@ -113,14 +95,14 @@ int runPost(const PostOptions& o) {
     throw InputError("--iso", e.what());
   }
   if (!(o.noise_scale >= 0)) throw InputError("--noise-scale", "must be 0 or more");
-  options.noise_options.demosaic = !o.no_demosaic;
+  options.noise_options.demosaic = o.demosaic;
   if (!(o.chroma_denoise_px >= 0 && o.chroma_denoise_px <= 100))
     throw InputError("--chroma-denoise", "must be a Gaussian sigma of 0 to 100 px");
   options.noise_options.chroma_denoise_sigma_px = o.chroma_denoise_px;
   if (!(o.chroma_denoise_strength >= 0 && o.chroma_denoise_strength <= 1))
     throw InputError("--chroma-denoise-strength", "must be between 0 and 1");
   options.noise_options.chroma_denoise_strength = o.chroma_denoise_strength;
-  options.adaptation = !o.no_adaptation;
+  options.adaptation = o.adaptation;
   if (o.curve == "gamma2.2") options.encoding_options.curve = TransferCurve::Gamma22;
   else if (o.curve == "srgb") options.encoding_options.curve = TransferCurve::Srgb;
   else if (o.curve == "linear") options.encoding_options.curve = TransferCurve::Linear;
@@ -158,7 +140,7 @@ int runPost(const PostOptions& o) {
   for (StageReport& step : result.steps) report.stages.push_back(std::move(step));
 
   clock = Stopwatch();
-  writeOutput(o.output, result.encoded, result.linear_rgb, o.sixteen_bit);
+  writeDevelopedImage(o.output, result.encoded, result.linear_rgb, o.sixteen_bit);
   StageReport write;
   write.name = "write";
   write.seconds = clock.seconds();

@@ -2,7 +2,9 @@
 // The solo subcommands. Each takes an options struct that maps one to one onto its
 // command-line flags (main.cpp is the only file that knows CLI11) and returns an exit code.
 
-#include <opencv2/core.hpp>
+#include <solo/pipeline/data_dir.h>
+#include <solo/pipeline/night_conversion.h>
+#include <solo/pipeline/night_job.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -13,14 +15,9 @@
 
 namespace solo::tools {
 
-/// Folder of the bundled data: $SOLO_DATA_DIR, else the source tree's data/, else the
-/// install prefix. Throws InputError if none holds the default scene.
-std::filesystem::path dataDirectory();
-/// The embedded default scene's manifest.
-std::filesystem::path defaultScene();
-
-/// Libraries solo was built against, name -> version (compile-time).
+/// Libraries solo was built against, name -> version (compile-time): the pipeline's and CLI11.
 std::vector<std::pair<std::string, std::string>> dependencyVersions();
+
 /// `solo --version`: solo's version and dependencyVersions().
 std::string versionText();
 
@@ -30,72 +27,22 @@ struct InfoOptions {
 };
 int runInfo(const InfoOptions& options);
 
+/// `solo night`: the job's files and the conversion's settings, each flag bound straight onto
+/// a field of the library's option structs (pipeline/night_job.h, night_conversion.h).
 struct NightOptions {
-  std::optional<std::filesystem::path> scene;  ///< none: the embedded default scene
-  std::filesystem::path output = "night.png";   ///< .png (8-bit, or 16 with sixteen_bit), .tif, .jpg, .exr (linear)
-  std::optional<std::filesystem::path> report;  ///< none: <output stem>.report.json
-  std::optional<std::filesystem::path> render_exr;  ///< also write the linear XYZ render and its AOVs
-  std::uint64_t seed = 0;
-  bool sixteen_bit = false;
-  bool refine = true;      ///< depth refinement (filter, uncertainty, optimisation)
-  bool optimize = true;    ///< the normal-guided optimisation inside it
-  bool solids = true;      ///< close foreground objects into solids
-  bool backdrops = true;   ///< close frame holes that nothing else closes as backdrops (docs/mesh.md)
-  bool evaluate_mesh = false;  ///< quality counts of the cleaned mesh (self-intersections: slow)
-  bool ablation = false;   ///< every light on, white, one strength
-  std::optional<std::filesystem::path> lights_record;  ///< an edited light record instead of a new draw
-  bool headlights = true;
-  double headlight_flux_lm = 1200;
-  std::string light_sampler = "power";
-  std::string sampler = "sobol";  ///< per-sample numbers: sobol (scrambled, stratified) or independent
-  int min_samples = 2, max_samples = 8;  ///< per pixel
-  double relative_error = 0.1;            ///< adaptive sampling target on each pixel's luminance
-  /// Stop sampling a pixel once its standard error is below noise_factor x the sensor noise's
-  /// sigma there (instead of the relative error); docs/rendering.md.
-  bool noise_target = true;
-  double noise_factor = 1;
-  /// Shadow-ray roulette below this fraction of the sensor noise at black (with noise_target;
-  /// PathTracerOptions::shadow_roulette; preset). 0 = off.
-  double shadow_roulette = 0.3;
-  bool glare = true, noise = true;
-  double glare_threshold = -1;  ///< Y before exposure; < 0: what will clip (the reference uses 0)
-  /// Luminance exposed to sensor white, cd/m^2; <= 0: the night camera's auto exposure.
-  double sensor_white_cd_m2 = 0;
-  /// The night camera's limits (NightCameraOptions): fixed aperture, longest shutter, highest ISO.
-  double camera_f_number = 2.8;
-  double camera_max_shutter_s = 1.0 / 30.0;
-  double camera_max_iso = 3200;
-  double camera_compensation_ev = -2;  ///< the night mode's exposure compensation, EV
-  /// Sensor noise standard deviation multiplier (SensorNoiseOptions::std_scale) at the ISO the
-  /// camera chose; calibrated for the night camera's ISOs (docs/post-processing.md).
-  double noise_scale = 0.6;
-  /// Share of a clipping pixel's excess luminance the lens scatters into its glare (FogGlareOptions).
-  double glare_scatter = 0.02;
-  /// Linear level (in sensor whites) the camera's knee encodes as full white (ColourEncodingOptions).
-  double white_clip = 8;
-  double knee_point = 0.7;  ///< encoded luminance where the knee starts (ColourEncodingOptions)
-  /// Quality preset (draft, default, final; tools/night_presets.cpp). main.cpp applies it to
-  /// every knob not given on the command line or in the config file.
+  NightJobOptions job;
+  NightConversionOptions conversion;
+  /// Quality preset (draft, default, final; night_presets.h). main.cpp applies it to every
+  /// knob not given on the command line or in the config file.
   std::string preset = "default";
-  int optimize_iterations = 10;      ///< Ceres iterations of the normal-guided optimisation
-  double optimize_tolerance = 1e-9;  ///< relative decrease of the objective that stops it
-  /// The mesh is made from the refined depth downsampled by this factor (1: every pixel a
-  /// vertex); geometry/downsample_depth.h. The draft preset's mesh simplification.
-  int mesh_downsample = 1;
-  /// The path tracer renders at the image size divided by this factor; the render is upsampled
-  /// (bilinear; light ids and depth nearest) before post-processing. Draft's cheaper render.
-  int render_downsample = 1;
-  int max_bounces = 12;  ///< path length limit of the tracer (Russian roulette after 3)
-  /// A sample's indirect luminance is clamped to this (cd/m2, PathTracerOptions::indirect_clamp);
-  /// 0 = off, unbiased.
-  double indirect_clamp_cd_m2 = 0;
-  /// Edge-aware, AOV-guided filter of the render's Monte Carlo noise before the post-process
-  /// (render_denoise.h, RenderDenoiseOptions' defaults; docs/rendering.md). Preset.
-  bool denoise = true;
-  std::optional<std::filesystem::path> contact_sheet;  ///< PNG grid of the stages' pictures
-  std::optional<std::filesystem::path> write_config;   ///< the effective configuration (TOML)
+  std::optional<std::filesystem::path> write_config;  ///< the effective configuration (TOML)
 };
 int runNight(const NightOptions& options);
+/// The night options as a config file `solo --config FILE night` (or `solo night --config
+/// FILE`) reads back to the same options: TOML, one `key = value` per option under `[night]`,
+/// keys the long option names without dashes. Unset optional paths and write_config are left
+/// out. Throws InputError for a path holding both quote characters (TOML strings cannot hold it).
+std::string nightConfigText(const NightOptions& options);
 
 /// `solo night --batch`: every scene of a list or folder, each in a child process (docs/batch.md).
 /// The NightOptions give the output folder (output), the batch seed and a scene (refused).
@@ -200,9 +147,9 @@ struct MeshFromDepthOptions {
   std::optional<std::filesystem::path> report;     ///< report JSON
   std::optional<std::filesystem::path> uncertain;  ///< uncertain mask (8/16-bit, non-zero = uncertain)
   std::optional<std::filesystem::path> truth;      ///< ground-truth scene: score the spurious-face removal
-  bool no_solids = false;      ///< leave foreground things as open sheets
-  bool no_backdrops = false;   ///< leave the frame holes only a backdrop closes open
-  bool no_evaluation = false;  ///< skip the final evaluateMesh (self-intersections are costly at 1080p)
+  bool close_solids = true;  ///< close foreground things into solids; false: open sheets
+  bool backdrops = true;     ///< close the frame holes only a backdrop closes; false: left open
+  bool evaluate = true;      ///< the final evaluateMesh (self-intersections are costly at 1080p)
 };
 int runMeshFromDepth(const MeshFromDepthOptions& options);
 
@@ -224,8 +171,6 @@ struct LightsOptions {
   double ablation_luminance_cd_m2 = 1000;   ///< the ablation's one strength, cd/m^2
 };
 int runLights(const LightsOptions& options);
-/// The bundled night-illuminant table.
-std::filesystem::path defaultIlluminantTable();
 
 struct IlluminantAddOptions {
   std::filesystem::path table;  ///< CSV to append to (created when absent)
@@ -255,17 +200,17 @@ struct PostOptions {
   std::optional<double> shutter_s;        ///< physical camera (with iso and f_number)
   std::optional<double> f_number;         ///< physical camera (with iso and shutter_s)
   double iso = 3200;                      ///< sensor ISO: noise calibration, and the camera's ISO
-  bool no_glare = false;
+  bool glare = true;
   double glare_threshold = 0;             ///< luminance in render units
   int glare_size = 9;                     ///< kernel 2^size px
   std::string glare_method = "auto";      ///< auto, direct, fft, tiled
-  bool no_noise = false;
+  bool noise = true;
   double noise_scale = 0.4;               ///< standard deviation multiplier (SensorNoiseOptions' default)
-  bool no_demosaic = false;               ///< every pixel samples R, G and B instead of an RGGB mosaic
+  bool demosaic = true;                   ///< an RGGB mosaic; false: every pixel samples R, G and B
   double chroma_denoise_px = 2;           ///< Gaussian sigma of the chroma noise reduction, px; 0 = off
   double chroma_denoise_strength = 1;     ///< share of the chroma noise replaced by its smoothed version
   std::uint64_t seed = 0;
-  bool no_adaptation = false;
+  bool adaptation = true;
   std::string curve = "gamma2.2";         ///< gamma2.2, srgb, linear
   std::string negatives = "desaturate";   ///< desaturate, clip
   std::string highlights = "desaturate";  ///< desaturate, clip
@@ -275,10 +220,6 @@ struct PostOptions {
   double glare_scatter = 1;               ///< share of the excess the glow carries (1 = the reference)
 };
 int runPost(const PostOptions& options);
-/// Writes a post-processed image by extension: .png/.tif 8-bit (16-bit on request) of the
-/// encoded image, .jpg 8-bit, .exr float linear sRGB. Atomic.
-void writePostOutput(const std::filesystem::path& file, const cv::Mat& encoded, const cv::Mat& linear_rgb,
-                     bool sixteen_bit);
 
 /// `solo fda`: Fourier domain adaptation of a day photo toward a night photo.
 struct FdaCommandOptions {

@@ -2,114 +2,163 @@
 // each subcommand fills an options struct (commands.h) and calls its run function.
 
 #include "commands.h"
-#include "large_buffer_allocator.h"
-#include "night_presets.h"
 
 #include <solo/core/error.h>
+#include <solo/pipeline/large_buffer_allocator.h>
+#include <solo/pipeline/night_presets.h>
+#include <solo/render/light_sampler.h>
+#include <solo/render/sampler.h>
 
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
+#include <functional>
 #include <iostream>
+#include <map>
+#include <memory>
 
-int main(int argc, char** argv) {
-  using namespace solo::tools;
-  keepFreedLargeBuffersForReuse();
-  CLI::App app{"solo: turns a daytime street photo into a physically based night image"};
-  app.require_subcommand(1);
-  app.set_version_flag("--version", [] { return versionText(); }, "Print solo's version and its libraries' versions");
+namespace {
 
-  InfoOptions info;
+const std::map<std::string, solo::LightSamplerKind> kLightSamplers = {{"uniform", solo::LightSamplerKind::Uniform},
+                                                                      {"power", solo::LightSamplerKind::Power},
+                                                                      {"hierarchy", solo::LightSamplerKind::Hierarchy}};
+const std::map<std::string, solo::SamplerKind> kSamplers = {{"sobol", solo::SamplerKind::Sobol},
+                                                            {"independent", solo::SamplerKind::Independent}};
+
+// A leaf command of the binary: its CLI11 subcommand and what runs when it was given.
+struct Command {
+  CLI::App* cli;
+  std::function<int()> run;
+};
+
+// "WIDTHxHEIGHT" into its two numbers; InputError naming `option` otherwise.
+void parseSize(const std::string& text, const char* option, int& width, int& height) {
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%dx%d%c", &width, &height, &tail) != 2)
+    throw solo::InputError(option, "expected WIDTHxHEIGHT, got \"" + text + "\"");
+}
+
+using namespace solo;
+using namespace solo::tools;
+
+void addInfoCommand(CLI::App& app, std::vector<Command>& commands) {
+  auto info_holder = std::make_shared<InfoOptions>();
+  InfoOptions& info = *info_holder;
   CLI::App* info_cmd = app.add_subcommand("info", "Load and validate a scene; print what was read");
   info_cmd->add_option("scene", info.scene, "Scene manifest (JSON)")->required();
   info_cmd->add_flag("--json", info.json, "Print the input report as JSON");
+  commands.push_back({info_cmd, [info_holder] { return runInfo(*info_holder); }});
+}
 
-  NightOptions night;
-  CLI::App* night_cmd = app.add_subcommand("night", "Convert a day scene to night (default: the embedded scene)");
-  night_cmd->add_option("scene", night.scene, "Scene manifest (JSON); omit for the embedded default scene");
-  night_cmd->add_option("-o,--output", night.output, "Night image to write")->capture_default_str();
-  night_cmd->add_option("--report", night.report, "Report JSON to write (default: <output>.report.json)");
-  night_cmd->add_option("--seed", night.seed, "Random seed (lights, render, sensor noise)")->capture_default_str();
-  night_cmd->add_option("--render-exr", night.render_exr, "Also write the linear XYZ render (and AOVs beside it)");
-  night_cmd->add_flag("--16bit", night.sixteen_bit, "16-bit PNG/TIFF output");
-  night_cmd->add_flag("--refine,!--no-refine", night.refine, "Depth filter, uncertainty and optimisation (default on)");
-  night_cmd->add_flag("--optimize,!--no-optimize", night.optimize, "Normal-guided depth optimisation (preset)");
-  night_cmd->add_option("--optimize-iterations", night.optimize_iterations, "Its solver iterations (preset)")
+// The night conversion's depth, mesh and light flags.
+void addNightSceneFlags(CLI::App* night_cmd, NightOptions& night) {
+  night_cmd->add_option("scene", night.job.scene, "Scene manifest (JSON); omit for the embedded default scene");
+  night_cmd->add_option("-o,--output", night.job.output, "Night image to write")->capture_default_str();
+  night_cmd->add_option("--report", night.job.report, "Report JSON to write (default: <output>.report.json)");
+  night_cmd->add_option("--seed", night.conversion.seed, "Random seed (lights, render, sensor noise)")->capture_default_str();
+  night_cmd->add_option("--render-exr", night.job.render_exr, "Also write the linear XYZ render (and AOVs beside it)");
+  night_cmd->add_flag("--16bit", night.job.sixteen_bit, "16-bit PNG/TIFF output");
+  night_cmd->add_flag("--refine,!--no-refine", night.conversion.refine, "Depth filter, uncertainty and optimisation (default on)");
+  night_cmd->add_flag("--optimize,!--no-optimize", night.conversion.refinement.optimize, "Normal-guided depth optimisation (preset)");
+  night_cmd->add_option("--optimize-iterations", night.conversion.refinement.optimization.max_iterations, "Its solver iterations (preset)")
       ->capture_default_str()->check(CLI::Range(1, 100000));
-  night_cmd->add_option("--optimize-tolerance", night.optimize_tolerance,
+  night_cmd->add_option("--optimize-tolerance", night.conversion.refinement.optimization.function_tolerance,
                         "It stops when the objective decreases by less than this, relative (preset)")
       ->capture_default_str()->check(CLI::Range(0.0, 1.0));
-  night_cmd->add_flag("--solids,!--no-solids", night.solids, "Close foreground objects into solids (default on)");
-  night_cmd->add_flag("--backdrops,!--no-backdrops", night.backdrops,
+  night_cmd->add_flag("--solids,!--no-solids", night.conversion.mesh.close_solids, "Close foreground objects into solids (default on)");
+  night_cmd->add_flag("--backdrops,!--no-backdrops", night.conversion.mesh.backdrops,
                       "Close the frame holes nothing else closes with a backdrop behind the occluders (default on)");
-  night_cmd->add_flag("--evaluate-mesh,!--no-evaluate-mesh", night.evaluate_mesh,
+  night_cmd->add_flag("--evaluate-mesh,!--no-evaluate-mesh", night.conversion.mesh.evaluate,
                       "Count self-intersections and non-manifold parts (slow; preset)");
-  night_cmd->add_flag("--ablation", night.ablation, "The paper's ablation: every light on, white, one strength");
-  night_cmd->add_option("--lights", night.lights_record, "Use this (edited) light record instead of a new draw");
-  night_cmd->add_flag("--headlights,!--no-headlights", night.headlights, "Ego-vehicle headlights (default on)");
-  night_cmd->add_option("--headlight-flux", night.headlight_flux_lm, "Flux of each headlight, lm")->capture_default_str();
-  night_cmd->add_option("--light-sampler", night.light_sampler, "uniform, power or hierarchy")->capture_default_str();
-  night_cmd->add_option("--sampler", night.sampler, "Per-sample numbers: sobol (scrambled Sobol points) or independent (PCG32)")
+  night_cmd->add_flag("--ablation", night.conversion.lights.instantiation.ablation, "The paper's ablation: every light on, white, one strength");
+  night_cmd->add_option("--lights", night.conversion.light_record, "Use this (edited) light record instead of a new draw");
+  night_cmd->add_flag("--headlights,!--no-headlights", night.conversion.night_scene.headlights, "Ego-vehicle headlights (default on)");
+  night_cmd->add_option("--headlight-flux", night.conversion.night_scene.headlight_flux_lm, "Flux of each headlight, lm")->capture_default_str();
+}
+
+// The render's flags.
+void addNightRenderFlags(CLI::App* night_cmd, NightOptions& night) {
+  night_cmd->add_option("--light-sampler", night.conversion.render.light_sampler, "uniform, power or hierarchy")
+      ->transform(CLI::CheckedTransformer(kLightSamplers))
+      ->default_str(lightSamplerName(night.conversion.render.light_sampler));
+  night_cmd->add_option("--sampler", night.conversion.render.sampler,
+                        "Per-sample numbers: sobol (scrambled Sobol points) or independent (PCG32)")
+      ->transform(CLI::CheckedTransformer(kSamplers))
+      ->default_str(samplerKindName(night.conversion.render.sampler));
+  night_cmd->add_option("--min-spp", night.conversion.render.min_samples, "Samples per pixel before adaptive stopping")->capture_default_str();
+  night_cmd->add_option("--max-spp", night.conversion.render.max_samples, "Samples per pixel at most")->capture_default_str();
+  night_cmd->add_option("--relative-error", night.conversion.render.relative_error, "Adaptive sampling target (relative standard error)")
       ->capture_default_str();
-  night_cmd->add_option("--min-spp", night.min_samples, "Samples per pixel before adaptive stopping")->capture_default_str();
-  night_cmd->add_option("--max-spp", night.max_samples, "Samples per pixel at most")->capture_default_str();
-  night_cmd->add_option("--relative-error", night.relative_error, "Adaptive sampling target (relative standard error)")
-      ->capture_default_str();
-  night_cmd->add_flag("--noise-target,!--no-noise-target", night.noise_target,
+  night_cmd->add_flag("--noise-target,!--no-noise-target", night.conversion.noise_target,
                       "Adaptive sampling to the sensor noise: stop at noise-factor x its sigma (replaces --relative-error; preset)");
-  night_cmd->add_option("--noise-factor", night.noise_factor, "Render noise allowed, as a fraction of the sensor noise")
+  night_cmd->add_option("--noise-factor", night.conversion.render.noise_factor, "Render noise allowed, as a fraction of the sensor noise")
       ->capture_default_str();
-  night_cmd->add_option("--shadow-roulette", night.shadow_roulette,
+  night_cmd->add_option("--shadow-roulette", night.conversion.render.shadow_roulette,
                         "Shadow rays of contributions below this fraction of the sensor noise at black are cast by "
                         "roulette (unbiased; with --noise-target; 0 = off; preset)")
       ->capture_default_str()->check(CLI::Range(0.0, 1.0));
-  night_cmd->add_option("--max-bounces", night.max_bounces, "Path length limit of the tracer (preset)")
+  night_cmd->add_option("--max-bounces", night.conversion.render.max_bounces, "Path length limit of the tracer (preset)")
       ->capture_default_str()->check(CLI::Range(1, 64));
-  night_cmd->add_option("--indirect-clamp", night.indirect_clamp_cd_m2,
+  night_cmd->add_option("--indirect-clamp", night.conversion.render.indirect_clamp,
                         "Clamp a sample's indirect luminance to this, cd/m2 (biased, removes fireflies); 0 = off")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
-  night_cmd->add_option("--mesh-downsample", night.mesh_downsample,
+  night_cmd->add_option("--mesh-downsample", night.conversion.mesh_downsample,
                         "Make the mesh from the depth downsampled by this factor (preset)")
       ->capture_default_str()->check(CLI::Range(1, 8));
-  night_cmd->add_option("--render-downsample", night.render_downsample,
+  night_cmd->add_option("--render-downsample", night.conversion.render_downsample,
                         "Render at the image size divided by this factor, then upsample (preset)")
       ->capture_default_str()->check(CLI::Range(1, 8));
-  night_cmd->add_flag("--denoise,!--no-denoise", night.denoise,
+  night_cmd->add_flag("--denoise,!--no-denoise", night.conversion.denoise.enabled,
                       "Edge-aware filter of the render's Monte Carlo noise, guided by its AOVs (preset)");
-  night_cmd->add_flag("--glare,!--no-glare", night.glare, "Fog glare (preset)");
-  night_cmd->add_flag("--noise,!--no-noise", night.noise, "Sensor noise (preset)");
-  night_cmd->add_option("--sensor-white", night.sensor_white_cd_m2,
+}
+
+// The night camera's and the post-process's flags.
+void addNightCameraFlags(CLI::App* night_cmd, NightOptions& night) {
+  night_cmd->add_flag("--glare,!--no-glare", night.conversion.post.glare, "Fog glare (preset)");
+  night_cmd->add_flag("--noise,!--no-noise", night.conversion.post.noise, "Sensor noise (preset)");
+  night_cmd->add_option("--sensor-white", night.conversion.sensor_white_cd_m2,
                          "Luminance exposed to sensor white, cd/m2; 0 = the night camera's auto exposure")
       ->capture_default_str();
-  night_cmd->add_option("--camera-f-number", night.camera_f_number, "Night camera: fixed aperture")
+  night_cmd->add_option("--camera-f-number", night.conversion.camera.f_number, "Night camera: fixed aperture")
       ->capture_default_str()->check(CLI::Range(0.5, 64.0));
-  night_cmd->add_option("--camera-max-shutter", night.camera_max_shutter_s,
+  night_cmd->add_option("--camera-max-shutter", night.conversion.camera.max_shutter_s,
                         "Night camera: longest exposure time, s (1/30: one frame of 30 fps video)")
       ->capture_default_str()->check(CLI::Range(1e-4, 30.0));
-  night_cmd->add_option("--camera-max-iso", night.camera_max_iso,
+  night_cmd->add_option("--camera-max-iso", night.conversion.camera.max_iso,
                         "Night camera: highest ISO (100-3200, the sensor noise calibration's range)")
       ->capture_default_str()->check(CLI::Range(100.0, 3200.0));
-  night_cmd->add_option("--camera-compensation", night.camera_compensation_ev,
+  night_cmd->add_option("--camera-compensation", night.conversion.camera.compensation_ev,
                         "Night camera: exposure compensation of its night mode, EV")
       ->capture_default_str()->check(CLI::Range(-6.0, 6.0));
-  night_cmd->add_option("--noise-scale", night.noise_scale, "Sensor noise standard deviation multiplier")
+  night_cmd->add_option("--noise-scale", night.conversion.post.noise_options.std_scale, "Sensor noise standard deviation multiplier")
       ->capture_default_str()->check(CLI::Range(0.0, 10.0));
-  night_cmd->add_option("--white-clip", night.white_clip,
+  night_cmd->add_option("--white-clip", night.conversion.post.encoding_options.white_clip,
                         "Video knee: linear level encoded as full white, in sensor whites (1 = clip at white)")
       ->capture_default_str()->check(CLI::Range(1.0, 64.0));
-  night_cmd->add_option("--knee-point", night.knee_point, "Video knee: encoded luminance where it starts")
+  night_cmd->add_option("--knee-point", night.conversion.post.encoding_options.knee_point, "Video knee: encoded luminance where it starts")
       ->capture_default_str()->check(CLI::Range(0.05, 0.99));
-  night_cmd->add_option("--glare-scatter", night.glare_scatter,
+  night_cmd->add_option("--glare-scatter", night.conversion.post.glare_options.scatter_fraction,
                         "Share of a clipping pixel's excess light the lens scatters into glare (1 = the reference)")
       ->capture_default_str()->check(CLI::Range(1e-6, 1.0));
-  night_cmd->add_option("--glare-threshold", night.glare_threshold,
+  night_cmd->add_option("--glare-threshold", night.conversion.glare_threshold,
                         "Luminance above which pixels glow (render units before exposure); -1 = what clips; "
                         "the reference uses 0")
       ->capture_default_str();
+}
+
+void addNightCommand(CLI::App& app, std::vector<Command>& commands, int argc, char** argv) {
+  auto night_holder = std::make_shared<NightOptions>();
+  NightOptions& night = *night_holder;
+  auto batch_holder = std::make_shared<NightBatchOptions>();
+  NightBatchOptions& night_batch = *batch_holder;
+  CLI::App* night_cmd = app.add_subcommand("night", "Convert a day scene to night (default: the embedded scene)");
+  addNightSceneFlags(night_cmd, night);
+  addNightRenderFlags(night_cmd, night);
+  addNightCameraFlags(night_cmd, night);
   night_cmd->add_option("--preset", night.preset, "Quality: draft, default or final (docs/presets.md); options "
                         "given on the command line or in the config file override it")
       ->capture_default_str()->check(CLI::IsMember(nightPresetNames()));
-  night_cmd->add_option("--contact-sheet", night.contact_sheet,
+  night_cmd->add_option("--contact-sheet", night.job.contact_sheet,
                         "Also write a PNG grid: day, raw and refined depth, removed faces, lights, night");
   night_cmd->add_option("--write-config", night.write_config,
                         "Write the effective configuration (preset applied) to this file, then run")
@@ -121,8 +170,6 @@ int main(int argc, char** argv) {
   night_cmd->footer("Every option can also come from a config file: --config FILE, keys under [night] named like the "
                     "long options without dashes (docs/presets.md). The command line overrides the file, and "
                     "both override the preset.");
-
-  NightBatchOptions night_batch;
   CLI::Option* batch_opt = night_cmd->add_option(
       "--batch", night_batch.list,
       "Convert every scene of a list file (one manifest a line) or a folder; -o is then the output folder "
@@ -134,8 +181,20 @@ int main(int argc, char** argv) {
   night_cmd->add_option("--scene-timeout", night_batch.scene_timeout_s,
                         "With --batch: stop a scene after this many seconds and record it failed (0: no limit)")
       ->capture_default_str()->needs(batch_opt)->configurable(false)->check(CLI::NonNegativeNumber);
+  commands.push_back({night_cmd, [night_holder, batch_holder, night_cmd, argc, argv] {
+    NightOptions& o = *night_holder;
+    // The preset fills every knob the command line and the config file left unset.
+    applyNightPreset(o.conversion, o.preset,
+                     [night_cmd](const std::string& knob) { return night_cmd->count("--" + knob) > 0; });
+    if (!batch_holder->list) return runNight(o);
+    batch_holder->arguments.assign(argv, argv + argc);
+    return runNightBatch(*batch_holder, o);
+  }});
+}
 
-  ConvertOptions convert;
+void addConvertCommand(CLI::App& app, std::vector<Command>& commands) {
+  auto convert_holder = std::make_shared<ConvertOptions>();
+  ConvertOptions& convert = *convert_holder;
   CLI::App* convert_cmd = app.add_subcommand("convert", "Convert a depth or normal map between formats");
   convert_cmd->add_option("kind", convert.kind, "depth or normals")->required()->check(CLI::IsMember({"depth", "normals"}));
   convert_cmd->add_option("input", convert.input, "Input map (PNG, EXR, TIFF, PFM, NPY)")->required();
@@ -143,7 +202,20 @@ int main(int argc, char** argv) {
   convert_cmd->add_option("--input-scale", convert.input_scale_m_per_unit, "Metres per unit of an integer depth input");
   convert_cmd->add_option("--output-scale", convert.output_scale_m_per_unit, "Metres per unit of a 16-bit PNG depth output")
       ->capture_default_str();
+  commands.push_back({convert_cmd, [convert_holder] { return runConvert(*convert_holder); }});
+}
 
+void addEvalCommands(CLI::App& app, std::vector<Command>& commands) {
+  auto eval_depth_holder = std::make_shared<EvalDepthOptions>();
+  EvalDepthOptions& eval_depth = *eval_depth_holder;
+  auto eval_normals_holder = std::make_shared<EvalNormalsOptions>();
+  EvalNormalsOptions& eval_normals = *eval_normals_holder;
+  auto eval_mesh_holder = std::make_shared<EvalMeshOptions>();
+  EvalMeshOptions& eval_mesh = *eval_mesh_holder;
+  auto eval_scene_holder = std::make_shared<EvalSceneOptions>();
+  EvalSceneOptions& eval_scene = *eval_scene_holder;
+  auto eval_night_holder = std::make_shared<EvalNightOptions>();
+  EvalNightOptions& eval_night = *eval_night_holder;
   CLI::App* eval_cmd = app.add_subcommand(
       "eval", "Evaluate depth, normals, a mesh, a synthetic scene or night images (docs/evaluation.md)");
   eval_cmd->require_subcommand(1);
@@ -151,7 +223,6 @@ int main(int argc, char** argv) {
     cmd->add_flag("--json", output.json, "Print the results as JSON on stdout instead of a table");
     cmd->add_option("--csv", output.csv, "Append one row of results to this CSV file (header when the file is new)");
   };
-  EvalDepthOptions eval_depth;
   CLI::App* eval_depth_cmd = eval_cmd->add_subcommand("depth", "AbsRel, SqRel, RMSE, RMSElog, delta < 1.25^k");
   eval_depth_cmd->add_option("--pred", eval_depth.prediction, "Predicted depth map")->required();
   eval_depth_cmd->add_option("--gt", eval_depth.ground_truth, "Ground-truth depth map")->required();
@@ -168,7 +239,6 @@ int main(int argc, char** argv) {
                              "Metres per unit of an integer ground-truth file");
   add_eval_output(eval_depth_cmd, eval_depth.output);
 
-  EvalNormalsOptions eval_normals;
   CLI::App* eval_normals_cmd =
       eval_cmd->add_subcommand("normals", "Angular error of normals: mean, median, RMSE, shares");
   eval_normals_cmd->add_option("--pred", eval_normals.prediction, "Predicted normal map")->required();
@@ -177,7 +247,6 @@ int main(int argc, char** argv) {
                                "Mask (8/16-bit or integer): non-zero pixels are evaluated");
   add_eval_output(eval_normals_cmd, eval_normals.output);
 
-  EvalMeshOptions eval_mesh;
   CLI::App* eval_mesh_cmd =
       eval_cmd->add_subcommand("mesh", "Topology, defects, triangle quality, distance to a reference");
   eval_mesh_cmd->add_option("mesh", eval_mesh.mesh, "Mesh (OFF, OBJ, PLY, STL)")->required();
@@ -188,7 +257,6 @@ int main(int argc, char** argv) {
   eval_mesh_cmd->add_option("--seed", eval_mesh.seed, "Seed of the surface sampling")->capture_default_str();
   add_eval_output(eval_mesh_cmd, eval_mesh.output);
 
-  EvalSceneOptions eval_scene;
   CLI::App* eval_scene_cmd = eval_cmd->add_subcommand(
       "scene", "A synthetic scene's estimated maps and outputs (refined depth, mesh) against its ground truth");
   eval_scene_cmd->add_option("scene_dir", eval_scene.scene_dir, "Scene folder (solo synth -o DIR)")->required();
@@ -201,7 +269,6 @@ int main(int argc, char** argv) {
   eval_scene_cmd->add_option("--seed", eval_scene.seed, "Seed of the surface sampling")->capture_default_str();
   add_eval_output(eval_scene_cmd, eval_scene.output);
 
-  EvalNightOptions eval_night;
   CLI::App* eval_night_cmd = eval_cmd->add_subcommand(
       "night", "Realism statistics of night images: luma, clipping, noise, colour cast, halo radius");
   eval_night_cmd->add_option("images", eval_night.images, "Images (8/16-bit sRGB PNG, JPEG, TIFF)")->required();
@@ -209,9 +276,18 @@ int main(int argc, char** argv) {
                              "Reference set (a folder of images or a list file): its median and range, and what "
                              "falls outside it");
   add_eval_output(eval_night_cmd, eval_night.output);
+  commands.push_back({eval_depth_cmd, [eval_depth_holder] { return runEvalDepth(*eval_depth_holder); }});
+  commands.push_back({eval_normals_cmd, [eval_normals_holder] { return runEvalNormals(*eval_normals_holder); }});
+  commands.push_back({eval_mesh_cmd, [eval_mesh_holder] { return runEvalMesh(*eval_mesh_holder); }});
+  commands.push_back({eval_scene_cmd, [eval_scene_holder] { return runEvalScene(*eval_scene_holder); }});
+  commands.push_back({eval_night_cmd, [eval_night_holder] { return runEvalNight(*eval_night_holder); }});
+}
 
-  SynthOptions synth;
-  std::string synth_size = "960x540";
+void addSynthCommand(CLI::App& app, std::vector<Command>& commands) {
+  auto synth_holder = std::make_shared<SynthOptions>();
+  SynthOptions& synth = *synth_holder;
+  auto synth_size_holder = std::make_shared<std::string>("960x540");
+  std::string& synth_size = *synth_size_holder;
   CLI::App* synth_cmd = app.add_subcommand("synth", "Generate a synthetic street scene with exact ground truth");
   synth_cmd->add_option("-o,--output", synth.output, "Folder to create")->required();
   synth_cmd->add_option("--seed", synth.seed, "Random seed")->capture_default_str();
@@ -221,8 +297,15 @@ int main(int argc, char** argv) {
   synth_cmd->add_flag("--force", synth.force, "Replace the output folder if it exists");
   synth_cmd->add_option("--day-render", synth.day_render, "Day image: raster (fast) or path (path-traced sun and sky)")
       ->capture_default_str();
+  commands.push_back({synth_cmd, [synth_holder, synth_size_holder] {
+    parseSize(*synth_size_holder, "--size", synth_holder->width, synth_holder->height);
+    return runSynth(*synth_holder);
+  }});
+}
 
-  LightsOptions lights;
+void addLightsCommand(CLI::App& app, std::vector<Command>& commands) {
+  auto lights_holder = std::make_shared<LightsOptions>();
+  LightsOptions& lights = *lights_holder;
   CLI::App* lights_cmd = app.add_subcommand("lights", "Group and instantiate the scene's light sources (docs/lighting.md)");
   lights_cmd->add_option("scene", lights.scene, "Scene manifest (JSON); omit for the embedded default scene");
   lights_cmd->add_option("-o,--output", lights.output, "Light record to write (JSON)")->capture_default_str();
@@ -234,10 +317,16 @@ int main(int argc, char** argv) {
   lights_cmd->add_option("--table", lights.table, "Illuminant table CSV (default: the bundled one)");
   lights_cmd->add_option("--from", lights.from_record, "Read an (edited) light record instead of sampling");
   lights_cmd->add_option("--report", lights.report, "Report JSON to write");
+  commands.push_back({lights_cmd, [lights_holder] { return runLights(*lights_holder); }});
+}
 
+void addIlluminantCommands(CLI::App& app, std::vector<Command>& commands) {
+  auto illuminant_add_holder = std::make_shared<IlluminantAddOptions>();
+  IlluminantAddOptions& illuminant_add = *illuminant_add_holder;
+  auto illuminant_regenerate_holder = std::make_shared<IlluminantRegenerateOptions>();
+  IlluminantRegenerateOptions& illuminant_regenerate = *illuminant_regenerate_holder;
   CLI::App* illuminant_cmd = app.add_subcommand("illuminant", "Build or extend a night-illuminant table");
   illuminant_cmd->require_subcommand(1);
-  IlluminantAddOptions illuminant_add;
   CLI::App* illuminant_add_cmd =
       illuminant_cmd->add_subcommand("add", "Add a chromaticity sample from a spectrum, a CCT or a gray-card raw photo");
   illuminant_add_cmd->add_option("table", illuminant_add.table, "Table CSV (created when absent)")->required();
@@ -247,16 +336,23 @@ int main(int argc, char** argv) {
   illuminant_add_cmd->add_option("--raw", illuminant_add.raw, "Raw photo (DNG) of a gray card lit by the light");
   illuminant_add_cmd->add_option("--roi", illuminant_add.roi, "Gray card region X,Y,WIDTH,HEIGHT in the raw photo");
   illuminant_add_cmd->add_option("--source", illuminant_add.source, "Provenance text (lamp, place, date)");
-  IlluminantRegenerateOptions illuminant_regenerate;
   CLI::App* illuminant_regenerate_cmd =
       illuminant_cmd->add_subcommand("regenerate", "Rebuild the bundled table from its recipe (reproducibility)");
   illuminant_regenerate_cmd->add_option("-o,--output", illuminant_regenerate.output, "Table CSV to write")->required();
   illuminant_regenerate_cmd->add_option("--recipe", illuminant_regenerate.recipe, "Recipe CSV (default: bundled)");
   illuminant_regenerate_cmd->add_option("--regions", illuminant_regenerate.regions, "Chromaticity regions CSV");
+  commands.push_back({illuminant_add_cmd, [illuminant_add_holder] { return runIlluminantAdd(*illuminant_add_holder); }});
+  commands.push_back({illuminant_regenerate_cmd,
+                      [illuminant_regenerate_holder] { return runIlluminantRegenerate(*illuminant_regenerate_holder); }});
+}
 
+void addMeshCommands(CLI::App& app, std::vector<Command>& commands) {
+  auto mesh_from_depth_holder = std::make_shared<MeshFromDepthOptions>();
+  MeshFromDepthOptions& mesh_from_depth = *mesh_from_depth_holder;
+  auto mesh_clean_holder = std::make_shared<MeshCleanOptions>();
+  MeshCleanOptions& mesh_clean = *mesh_clean_holder;
   CLI::App* mesh_cmd = app.add_subcommand("mesh", "Mesh from depth, mesh repair and hole filling (docs/mesh.md)");
   mesh_cmd->require_subcommand(1);
-  MeshFromDepthOptions mesh_from_depth;
   CLI::App* mesh_from_depth_cmd = mesh_cmd->add_subcommand(
       "from-depth", "Backproject a scene's depth, remove spurious faces, fill holes, close foreground solids");
   mesh_from_depth_cmd->add_option("scene", mesh_from_depth.scene, "Scene manifest (JSON)")->required();
@@ -265,19 +361,23 @@ int main(int argc, char** argv) {
   mesh_from_depth_cmd->add_option("--uncertain", mesh_from_depth.uncertain, "Uncertain mask (non-zero = uncertain)");
   mesh_from_depth_cmd->add_option("--truth", mesh_from_depth.truth,
                                   "Ground-truth scene (depth and normals): score the spurious-face removal");
-  mesh_from_depth_cmd->add_flag("--no-solids", mesh_from_depth.no_solids, "Leave foreground things as open sheets");
-  mesh_from_depth_cmd->add_flag("--no-backdrops", mesh_from_depth.no_backdrops,
+  mesh_from_depth_cmd->add_flag("!--no-solids", mesh_from_depth.close_solids, "Leave foreground things as open sheets");
+  mesh_from_depth_cmd->add_flag("!--no-backdrops", mesh_from_depth.backdrops,
                                 "Leave open the frame holes only a backdrop behind the occluders closes");
-  mesh_from_depth_cmd->add_flag("--no-evaluation", mesh_from_depth.no_evaluation,
+  mesh_from_depth_cmd->add_flag("!--no-evaluation", mesh_from_depth.evaluate,
                                 "Skip the final topology and self-intersection counts");
-  MeshCleanOptions mesh_clean;
   CLI::App* mesh_clean_cmd =
       mesh_cmd->add_subcommand("clean", "Repair a triangle mesh and fill its holes; report self-intersections");
   mesh_clean_cmd->add_option("input", mesh_clean.input, "Mesh to read (PLY, OBJ, OFF, STL)")->required();
   mesh_clean_cmd->add_option("-o,--output", mesh_clean.output, "Mesh to write")->required();
   mesh_clean_cmd->add_option("--report", mesh_clean.report, "Report JSON to write");
+  commands.push_back({mesh_from_depth_cmd, [mesh_from_depth_holder] { return runMeshFromDepth(*mesh_from_depth_holder); }});
+  commands.push_back({mesh_clean_cmd, [mesh_clean_holder] { return runMeshClean(*mesh_clean_holder); }});
+}
 
-  PostOptions post;
+void addPostCommand(CLI::App& app, std::vector<Command>& commands) {
+  auto post_holder = std::make_shared<PostOptions>();
+  PostOptions& post = *post_holder;
   CLI::App* post_cmd =
       app.add_subcommand("post", "Post-process a linear XYZ render: glare, exposure, noise, colour (docs/post-processing.md)");
   post_cmd->add_option("input", post.input, "Linear XYZ image relative to white E (EXR, TIFF, PFM, NPY)")->required();
@@ -291,14 +391,14 @@ int main(int argc, char** argv) {
   post_cmd->add_option("--f-number", post.f_number, "Camera f-number (with --shutter and --iso)")->excludes(post_stops);
   post_cmd->add_option("--iso", post.iso, "Sensor ISO (noise calibration 100 to 3200; the camera's ISO)")
       ->capture_default_str();
-  post_cmd->add_flag("--no-glare", post.no_glare, "Skip the fog glare");
+  post_cmd->add_flag("!--no-glare", post.glare, "Skip the fog glare");
   post_cmd->add_option("--glare-threshold", post.glare_threshold, "Luminance above which pixels glow (render units)")
       ->capture_default_str();
   post_cmd->add_option("--glare-size", post.glare_size, "Glare kernel size 2^N px")->capture_default_str();
   post_cmd->add_option("--glare-method", post.glare_method, "auto, direct, fft or tiled")->capture_default_str();
-  post_cmd->add_flag("--no-noise", post.no_noise, "Skip the sensor noise");
+  post_cmd->add_flag("!--no-noise", post.noise, "Skip the sensor noise");
   post_cmd->add_option("--noise-scale", post.noise_scale, "Noise standard deviation multiplier")->capture_default_str();
-  post_cmd->add_flag("--no-demosaic", post.no_demosaic, "Noise without the RGGB mosaic: every pixel samples R, G, B");
+  post_cmd->add_flag("!--no-demosaic", post.demosaic, "Noise without the RGGB mosaic: every pixel samples R, G, B");
   post_cmd->add_option("--chroma-denoise", post.chroma_denoise_px,
                        "Chroma noise reduction: Gaussian sigma in px on the noise's colour differences; 0 = off")
       ->capture_default_str();
@@ -306,7 +406,7 @@ int main(int argc, char** argv) {
                        "Share of the chroma noise replaced by its smoothed version, 0 to 1")
       ->capture_default_str();
   post_cmd->add_option("--seed", post.seed, "Noise seed")->capture_default_str();
-  post_cmd->add_flag("--no-adaptation", post.no_adaptation, "Skip the Bradford E to D65 adaptation");
+  post_cmd->add_flag("!--no-adaptation", post.adaptation, "Skip the Bradford E to D65 adaptation");
   post_cmd->add_option("--curve", post.curve, "gamma2.2, srgb or linear")->capture_default_str();
   post_cmd->add_option("--negatives", post.negatives, "Out-of-gamut colours: desaturate or clip")->capture_default_str();
   post_cmd->add_option("--highlights", post.highlights, "Colours above white: desaturate (toward white, hue kept) or clip")
@@ -322,8 +422,12 @@ int main(int argc, char** argv) {
   post_cmd->add_option("--glare-scatter", post.glare_scatter,
                        "Share of a bright pixel's excess the glow carries (1 = the reference)")
       ->capture_default_str();
+  commands.push_back({post_cmd, [post_holder] { return runPost(*post_holder); }});
+}
 
-  FdaCommandOptions fda;
+void addFdaCommand(CLI::App& app, std::vector<Command>& commands) {
+  auto fda_holder = std::make_shared<FdaCommandOptions>();
+  FdaCommandOptions& fda = *fda_holder;
   CLI::App* fda_cmd = app.add_subcommand("fda", "Fourier domain adaptation of a day photo toward a night photo (baseline)");
   fda_cmd->add_option("--source", fda.source, "Day image (its content and phase are kept)")->required();
   fda_cmd->add_option("--target", fda.target, "Night image (its low-frequency amplitudes are taken)")->required();
@@ -331,8 +435,12 @@ int main(int argc, char** argv) {
   fda_cmd->add_option("--beta", fda.beta, "Band half-size as a fraction of min(H, W)")->capture_default_str();
   fda_cmd->add_flag("--16bit", fda.sixteen_bit, "16-bit PNG or TIFF");
   fda_cmd->add_option("--report", fda.report, "Report JSON to write");
+  commands.push_back({fda_cmd, [fda_holder] { return runFda(*fda_holder); }});
+}
 
-  DepthOptions depth;
+void addDepthCommand(CLI::App& app, std::vector<Command>& commands) {
+  auto depth_holder = std::make_shared<DepthOptions>();
+  DepthOptions& depth = *depth_holder;
   CLI::App* depth_cmd = app.add_subcommand("depth", "Refine a scene's depth: upsample, filter, uncertain regions, optimise");
   depth_cmd->add_option("scene", depth.scene, "Scene manifest (JSON)")->required();
   depth_cmd->add_option("-o,--output", depth.output, "Refined depth to write (EXR, TIFF, PFM, NPY, PNG)")->capture_default_str();
@@ -345,9 +453,18 @@ int main(int argc, char** argv) {
   depth_cmd->add_flag("!--no-filter", depth.filter, "Skip the instance-reference cross-bilateral filter");
   depth_cmd->add_flag("!--no-uncertain", depth.uncertain, "Skip the uncertain regions");
   depth_cmd->add_flag("!--no-optimize", depth.optimize, "Skip the normal-guided optimisation");
+  commands.push_back({depth_cmd, [depth_holder] { return runDepth(*depth_holder); }});
+}
 
-  BenchAccuracyOptions bench_accuracy;
-  std::string bench_size = "960x540";
+void addBenchCommands(CLI::App& app, std::vector<Command>& commands) {
+  auto bench_accuracy_holder = std::make_shared<BenchAccuracyOptions>();
+  BenchAccuracyOptions& bench_accuracy = *bench_accuracy_holder;
+  auto bench_size_holder = std::make_shared<std::string>("960x540");
+  std::string& bench_size = *bench_size_holder;
+  auto bench_realism_holder = std::make_shared<BenchRealismOptions>();
+  BenchRealismOptions& bench_realism = *bench_realism_holder;
+  auto realism_size_holder = std::make_shared<std::string>("960x540");
+  std::string& realism_size = *realism_size_holder;
   CLI::App* bench_cmd = app.add_subcommand("bench", "Measurements on synthetic scenes (docs/accuracy.md)");
   bench_cmd->require_subcommand(1);
   CLI::App* bench_accuracy_cmd = bench_cmd->add_subcommand(
@@ -372,8 +489,6 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   bench_accuracy_cmd->add_flag("!--no-plots", bench_accuracy.plots, "Write no gnuplot script and run no gnuplot");
 
-  BenchRealismOptions bench_realism;
-  std::string realism_size = "960x540";
   CLI::App* bench_realism_cmd = bench_cmd->add_subcommand(
       "realism",
       "solo night on the default scene and synthetic streets: realism statistics against the targets, "
@@ -386,6 +501,36 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember(nightPresetNames()));
   bench_realism_cmd->add_option("--size", realism_size, "Size WIDTHxHEIGHT of the streets (one is twice that)")
       ->capture_default_str();
+  commands.push_back({bench_accuracy_cmd, [bench_accuracy_holder, bench_size_holder] {
+    parseSize(*bench_size_holder, "--scene-size", bench_accuracy_holder->width, bench_accuracy_holder->height);
+    return runBenchAccuracy(*bench_accuracy_holder);
+  }});
+  commands.push_back({bench_realism_cmd, [bench_realism_holder, realism_size_holder] {
+    parseSize(*realism_size_holder, "--size", bench_realism_holder->width, bench_realism_holder->height);
+    return runBenchRealism(*bench_realism_holder);
+  }});
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  keepFreedLargeBuffersForReuse();
+  CLI::App app{"solo: turns a daytime street photo into a physically based night image"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", [] { return versionText(); }, "Print solo's version and its libraries' versions");
+  std::vector<Command> commands;
+  addInfoCommand(app, commands);
+  addNightCommand(app, commands, argc, argv);
+  addConvertCommand(app, commands);
+  addEvalCommands(app, commands);
+  addSynthCommand(app, commands);
+  addLightsCommand(app, commands);
+  addIlluminantCommands(app, commands);
+  addMeshCommands(app, commands);
+  addPostCommand(app, commands);
+  addFdaCommand(app, commands);
+  addDepthCommand(app, commands);
+  addBenchCommands(app, commands);
 
   try {
     app.parse(argc, argv);
@@ -407,49 +552,14 @@ int main(int argc, char** argv) {
                 << config->as<std::string>() << ")\n";
       return 2;
     }
-    return app.exit(e);
-  }
-  if (synth_cmd->parsed() && std::sscanf(synth_size.c_str(), "%dx%d", &synth.width, &synth.height) != 2) {
-    std::cerr << "solo: error: --size: expected WIDTHxHEIGHT, got \"" << synth_size << "\"\n";
-    return 2;
-  }
-  if (bench_accuracy_cmd->parsed() &&
-      std::sscanf(bench_size.c_str(), "%dx%d", &bench_accuracy.width, &bench_accuracy.height) != 2) {
-    std::cerr << "solo: error: --scene-size: expected WIDTHxHEIGHT, got \"" << bench_size << "\"\n";
-    return 2;
-  }
-  if (bench_realism_cmd->parsed() &&
-      std::sscanf(realism_size.c_str(), "%dx%d", &bench_realism.width, &bench_realism.height) != 2) {
-    std::cerr << "solo: error: --size: expected WIDTHxHEIGHT, got \"" << realism_size << "\"\n";
-    return 2;
+    // Help and --version exit 0; every other command-line error is bad input, exit 2 like the
+    // errors the commands raise.
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
   }
   try {
-    // The preset fills every knob the command line and the config file left unset.
-    if (night_cmd->parsed())
-      applyNightPreset(night, [night_cmd](const std::string& flag) { return night_cmd->count(flag) > 0; });
-    if (info_cmd->parsed()) return runInfo(info);
-    if (night_cmd->parsed() && night_batch.list) {
-      night_batch.arguments.assign(argv, argv + argc);
-      return runNightBatch(night_batch, night);
-    }
-    if (night_cmd->parsed()) return runNight(night);
-    if (convert_cmd->parsed()) return runConvert(convert);
-    if (eval_depth_cmd->parsed()) return runEvalDepth(eval_depth);
-    if (eval_normals_cmd->parsed()) return runEvalNormals(eval_normals);
-    if (eval_mesh_cmd->parsed()) return runEvalMesh(eval_mesh);
-    if (eval_scene_cmd->parsed()) return runEvalScene(eval_scene);
-    if (eval_night_cmd->parsed()) return runEvalNight(eval_night);
-    if (synth_cmd->parsed()) return runSynth(synth);
-    if (depth_cmd->parsed()) return runDepth(depth);
-    if (mesh_from_depth_cmd->parsed()) return runMeshFromDepth(mesh_from_depth);
-    if (mesh_clean_cmd->parsed()) return runMeshClean(mesh_clean);
-    if (lights_cmd->parsed()) return runLights(lights);
-    if (illuminant_add_cmd->parsed()) return runIlluminantAdd(illuminant_add);
-    if (illuminant_regenerate_cmd->parsed()) return runIlluminantRegenerate(illuminant_regenerate);
-    if (post_cmd->parsed()) return runPost(post);
-    if (fda_cmd->parsed()) return runFda(fda);
-    if (bench_accuracy_cmd->parsed()) return runBenchAccuracy(bench_accuracy);
-    if (bench_realism_cmd->parsed()) return runBenchRealism(bench_realism);
+    for (const Command& command : commands)
+      if (command.cli->parsed()) return command.run();
   } catch (const solo::InputError& e) {
     std::cerr << "solo: error: " << e.what() << "\n";
     return 2;

@@ -1,22 +1,16 @@
 #include "commands.h"
 
 #include <solo/core/version.h>
-#include <solo/render/ray_caster.h>
 
 #include <CLI/Version.hpp>
-#include <nlohmann/json.hpp>
 
 #include <sstream>
 
 namespace solo::tools {
 
 std::vector<std::pair<std::string, std::string>> dependencyVersions() {
-  auto list = geometryDependencyVersions();
-  for (auto& v : renderDependencyVersions()) list.push_back(v);
+  auto list = pipelineDependencyVersions();
   list.push_back({"CLI11", CLI11_VERSION});
-  list.push_back({"nlohmann_json", std::to_string(NLOHMANN_JSON_VERSION_MAJOR) + "." +
-                                       std::to_string(NLOHMANN_JSON_VERSION_MINOR) + "." +
-                                       std::to_string(NLOHMANN_JSON_VERSION_PATCH)});
   return list;
 }
 

@@ -1,6 +1,6 @@
 #include "pipeline_scene.h"
 
-#include "night_pipeline.h"
+#include <solo/pipeline/night_conversion.h>
 
 #include <solo/core/report.h>
 #include <solo/core/scene.h>
@@ -12,12 +12,12 @@ namespace solo::bench {
 RenderScene pipelineScene(const std::filesystem::path& manifest, int width, int height) {
   Stopwatch clock;
   const Scene input = loadScene(manifest);
-  tools::NightOptions options;  // its defaults are the default preset (tools/night_presets.cpp)
+  NightConversionOptions options;  // its defaults are the default preset (night_presets.h)
   options.seed = kPipelineLightSeed;
-  tools::NightPipelineResult stages;
-  tools::NightPipelineExtras extras;
-  extras.progress = false;
-  RenderScene scene = tools::runNightSceneStages(input, options, extras, stages).scene;
+  NightConversionResult stages;
+  NightConversionCallbacks quiet;
+  quiet.render_progress = false;
+  RenderScene scene = runNightSceneStages(input, options, quiet, stages).scene;
   std::printf("pipeline scene from %s: %dx%d mesh, %zu triangles, %zu emitters, %zu rectangle lights, light seed %llu, "
               "camera %dx%d, built in %.1f s\n",
               manifest.string().c_str(), input.width(), input.height(), scene.faces.size(), scene.emitters.size(),

@@ -1,6 +1,6 @@
 #pragma once
 // The render scene `solo night --seed 3` builds from a scene manifest with its default preset,
-// by solo night's own stages (tools/night_pipeline.h, runNightSceneStages): refined depth, the
+// by solo night's own stages (pipeline/night_conversion.h, runNightSceneStages): refined depth, the
 // cleaned mesh at the image resolution with closed solids, the light record's draw (real
 // strengths and chromaticities), the two headlights. Shared by bench_render's efficiency line
 // and the Cycles comparison (blender/export_blender_scene), which adds its simplifications.

@@ -157,9 +157,8 @@ TEST(SpuriousFaces, OcclusionStepIsCutExactlyAlongItsEdge) {
 
 TEST(SpuriousFaces, PrecisionAndRecallOnTheDefaultSyntheticScene) {
   // The embedded scene's exact depth, normals and instances (960x540). Measured: precision
-  // 0.955, recall 0.9505 of the occlusion criteria, 13 987 of the 14 715 found (docs/mesh.md;
-  // before the small jumps and the occluded-line check 0.955 and 0.946, before the block planes
-  // and the line check 0.923 and 0.945 against this ground truth); the target is 0.95.
+  // 0.955, recall 0.9505 of the occlusion criteria, 13 987 of the 14 715 found (docs/mesh.md);
+  // the target is 0.95.
   // 912 faces of the 15 627 the per-pixel planes call spurious are sub-pixel window detail of
   // far side facades (the ground truth's exception, spurious_faces.h).
   const solo::Scene truth = solo::loadScene(std::filesystem::path(SOLO_PROJECT_DATA_DIR) / "default/gt/scene.json");

@@ -1,5 +1,7 @@
-// Hole filling and generic mesh cleanup (solo mesh clean): every hard case of the issue on small
-// hand-built meshes, and the real meshes with holes from ../shared/data/meshes.
+// Hole filling and generic mesh cleanup (solo mesh clean): every hard case (holes sharing a vertex,
+// strongly non-planar and sliver-only boundaries, fillings that would self-intersect,
+// non-manifold parts, NaN coordinates) on small hand-built meshes, and the real meshes with holes
+// from ../shared/data/meshes.
 
 #include <solo/geometry/boundary_loops.h>
 #include <solo/core/error.h>

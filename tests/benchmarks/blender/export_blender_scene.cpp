@@ -20,7 +20,7 @@
 //       exported scene files stay as they are. With `nee` (either command), also the
 //       next-event-estimation A/B at 16 and 64 spp with the first sampler: emitters sampled by
 //       area instead of solid angle, one shadow ray per light instead of one per vertex, and
-//       both (the tracer before these two); with `clamp` the indirect clamp at 30 to 3000 cd/m^2;
+//       both together; with `clamp` the indirect clamp at 30 to 3000 cd/m^2;
 //       with `roulette` Russian roulette from bounce 1, 2 and 4 (the default is 3); with `split`
 //       emission splitting (PathTracerOptions::emission_splits) 4 and 8 within 0.5 and 2 m.
 //       The runs take the seed from the environment variable SOLO_SEED (7 unless set), so that a

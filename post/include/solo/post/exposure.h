@@ -39,8 +39,8 @@ cv::Size meteringPreviewSize(int width, int height, int max_pixels = 10000);
 /// Samples per pixel of that preview, whatever the render's own sample settings. A pixel's mean
 /// of a few heavy-tailed samples is mostly below its expectation, so the 95th percentile of a
 /// few-sample render reads low: on the 1080p synthetic street (120x67 preview) 63 cd/m^2 at 8
-/// spp, 76 at 16, 80 at 32, 81 at 128; at the former 4 spp of a 240x135 preview, 49 against a
-/// converged 78 (docs/rendering.md). Fixed, so every preset meters the same exposure.
+/// spp, 76 at 16, 80 at 32, 81 at 128; at 4 spp of a 240x135 preview, 49 against a converged 78
+/// (docs/rendering.md). Fixed, so every preset meters the same exposure.
 inline constexpr int kMeteringSamplesPerPixel = 32;
 
 /// Auto exposure, metering the street rather than the lamps: the luminance (cd/m^2, the Y of a

@@ -1,4 +1,4 @@
-#include "large_buffer_allocator.h"
+#include <solo/pipeline/large_buffer_allocator.h>
 
 #include <climits>
 
@@ -6,7 +6,7 @@
 #include <malloc.h>
 #endif
 
-namespace solo::tools {
+namespace solo {
 
 bool keepFreedLargeBuffersForReuse() {
 #if defined(__GLIBC__)
@@ -20,4 +20,4 @@ bool keepFreedLargeBuffersForReuse() {
 #endif
 }
 
-}  // namespace solo::tools
+}  // namespace solo

@@ -1,6 +1,6 @@
 #pragma once
 
-namespace solo::tools {
+namespace solo {
 
 // Makes glibc's malloc keep the memory of freed large buffers for reuse instead of handing it
 // back to the kernel: no block is mmapped (every one comes from the heap) and the heap's top is
@@ -18,4 +18,4 @@ namespace solo::tools {
 // C library does not accept the settings (not glibc); nothing else changes then.
 bool keepFreedLargeBuffersForReuse();
 
-}  // namespace solo::tools
+}  // namespace solo

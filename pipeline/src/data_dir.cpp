@@ -1,4 +1,4 @@
-#include "commands.h"
+#include <solo/pipeline/data_dir.h>
 
 #include "solo_config.h"
 
@@ -8,7 +8,7 @@
 
 namespace fs = std::filesystem;
 
-namespace solo::tools {
+namespace solo {
 
 namespace {
 const char* kDefaultSceneManifest = "default/scene.json";
@@ -28,4 +28,4 @@ fs::path dataDirectory() {
 fs::path defaultScene() { return dataDirectory() / kDefaultSceneManifest; }
 fs::path defaultIlluminantTable() { return dataDirectory() / "illuminants" / "night_illuminants.csv"; }
 
-}  // namespace solo::tools
+}  // namespace solo

@@ -1,4 +1,4 @@
-#include "large_buffer_allocator.h"
+#include <solo/pipeline/large_buffer_allocator.h>
 
 #include <gtest/gtest.h>
 
@@ -38,7 +38,7 @@ TEST(LargeBufferAllocator, AFreedLargeBlockStaysInTheHeapForReuse) {
   EXPECT_GE(by_default.mmapped_while_alive, kBlockBytes) << "glibc's default mmaps a 64 MiB block";
   EXPECT_LT(by_default.kept_free_after, kBlockBytes) << "and unmaps it on free";
 
-  ASSERT_TRUE(solo::tools::keepFreedLargeBuffersForReuse());
+  ASSERT_TRUE(solo::keepFreedLargeBuffersForReuse());
   const BlockFootprint kept = allocateAndFree();
   EXPECT_EQ(kept.mmapped_while_alive, 0U);
   EXPECT_GE(kept.kept_free_after, kBlockBytes);

@@ -1,0 +1,354 @@
+// The night conversion's stages after the input (night_conversion.h).
+
+#include <solo/pipeline/night_conversion.h>
+
+#include <solo/core/error.h>
+#include <solo/geometry/downsample_depth.h>
+#include <solo/lighting/street_light_instances.h>
+#include <solo/pipeline/data_dir.h>
+#include <solo/post/sensor_noise.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace solo {
+
+NightConversionOptions::NightConversionOptions() {
+  // Self-intersection and manifoldness counts cost more than the rest of the mesh stage.
+  mesh.evaluate = false;
+  // A night image is judged beside the sensor noise it gets: a few samples per pixel, stopped
+  // at the sensor noise (noise_target), power-proportional light choice (docs/presets.md).
+  render.min_samples = 2;
+  render.max_samples = 8;
+  render.relative_error = 0.1;
+  render.noise_factor = 1;
+  render.shadow_roulette = 0.3;
+  render.light_sampler = LightSamplerKind::Power;
+  render.seed = 0;
+  // The night camera: -2 EV night-mode compensation, sensor noise at 0.6 of the calibration at
+  // the chosen ISO, a video knee up to 8x white, glare only from what clips
+  // (docs/post-processing.md, docs/realism.md).
+  camera.compensation_ev = -2;
+  post.noise_options.std_scale = 0.6;
+  post.glare_options.scatter_fraction = 0.02;
+  post.encoding_options.white_clip = 8;
+  post.encoding_options.knee_point = 0.7;
+}
+
+namespace {
+
+// A render made at a fraction of the image size, upsampled to it: radiance, albedo and normal
+// bilinear, first-hit depth and light ids nearest (they are not averageable across edges).
+RenderOutput upsampleRender(RenderOutput r, cv::Size size) {
+  const auto resize = [&](cv::Mat& m, int interpolation) {
+    if (m.empty() || m.size() == size) return;
+    cv::Mat out;
+    cv::resize(m, out, size, 0, 0, interpolation);
+    m = out;
+  };
+  resize(r.radiance, cv::INTER_LINEAR);
+  resize(r.albedo, cv::INTER_LINEAR);
+  resize(r.normal, cv::INTER_LINEAR);
+  resize(r.depth_m, cv::INTER_NEAREST);
+  resize(r.light_id, cv::INTER_NEAREST);
+  resize(r.emitter_coverage, cv::INTER_NEAREST);
+  resize(r.samples, cv::INTER_NEAREST);
+  resize(r.std_error, cv::INTER_NEAREST);
+  return r;
+}
+
+/// What the night camera chose; `preview` is the metering preview's size (empty: white given).
+std::string exposureNote(const NightCameraExposure& e, cv::Size preview) {
+  char note[400];
+  if (!preview.empty())
+    std::snprintf(note, sizeof note,
+                  "night camera metered a mean %.4g cd/m2 on a %dx%d preview at %d spp (lamps seen directly left "
+                  "out): ISO %.0f, 1/%.0f s, f/%.1f, sensor white %.6g cd/m2%s",
+                  e.metered_cd_m2, preview.width, preview.height, kMeteringSamplesPerPixel, e.camera.iso,
+                  1.0 / e.camera.shutter_s, e.camera.f_number, e.white_cd_m2,
+                  e.at_exposure_limit ? "; at its exposure limit, so the street stays darker than the meter's grey"
+                  : e.at_bright_limit ? "; at its shortest exposure: over-exposed"
+                                      : "");
+  else
+    std::snprintf(note, sizeof note, "sensor white given, %.6g cd/m2 (noise at ISO %.0f)", e.white_cd_m2,
+                  e.camera.iso);
+  return note;
+}
+
+// The camera's limits with the shortest shutter and lowest ISO kept below the longest and highest.
+NightCameraOptions consistentCameraLimits(NightCameraOptions camera) {
+  camera.min_shutter_s = std::min(camera.min_shutter_s, camera.max_shutter_s);
+  camera.min_iso = std::min(camera.min_iso, camera.max_iso);
+  return camera;
+}
+
+struct MeteredCamera {
+  NightCameraExposure exposure;
+  cv::Size preview_size;  ///< empty when the white was given
+  double preview_seconds = 0;
+};
+
+/// The night camera's settings: metered on a preview (meteringPreviewSize at
+/// kMeteringSamplesPerPixel) of `render_camera`'s view, or derived from sensor_white_cd_m2.
+MeteredCamera meterNightCamera(const PreparedRenderScene& prepared, const PinholeCamera& render_camera,
+                               const PathTracerOptions& tracer, const NightConversionOptions& o) {
+  const NightCameraOptions limits = consistentCameraLimits(o.camera);
+  MeteredCamera m;
+  if (o.sensor_white_cd_m2 > 0) {
+    m.exposure = nightCameraForWhite(o.sensor_white_cd_m2, limits);
+    return m;
+  }
+  const Stopwatch clock;
+  m.preview_size = meteringPreviewSize(render_camera.width, render_camera.height);
+  PathTracerOptions preview = tracer;
+  preview.min_samples = preview.max_samples = kMeteringSamplesPerPixel;
+  preview.progress = false;
+  const RenderOutput rendered =
+      renderPathTraced(prepared, render_camera.scaledTo(m.preview_size.width, m.preview_size.height), preview);
+  m.exposure = nightCameraExposure(meteredMeanLuminance(rendered.radiance, rendered.emitter_coverage), limits);
+  m.preview_seconds = clock.seconds();
+  return m;
+}
+
+void announce(const NightConversionCallbacks& callbacks, const std::string& stage) {
+  if (callbacks.stage_started) callbacks.stage_started(stage);
+}
+
+// refine: upsampling always (every later stage works at the image resolution).
+void runRefineStage(const Scene& scene, const NightConversionOptions& o, NightConversionResult& r) {
+  DepthRefinementOptions refine_options = o.refinement;
+  refine_options.filter = o.refine && refine_options.filter;
+  refine_options.uncertain_regions = o.refine && refine_options.uncertain_regions;
+  refine_options.optimize = o.refine && refine_options.optimize;
+  std::int64_t street_light_pixels = 0;
+  r.refined = refineDepth(sceneForRefinement(scene, &street_light_pixels), refine_options);
+  if (!r.refined.steps.empty()) {
+    r.refined.steps.front().add("street_light_pixels_relabelled", street_light_pixels);
+    if (street_light_pixels > 0)
+      r.refined.steps.front().notes.push_back(
+          std::to_string(street_light_pixels) +
+          " street-light pixels given an instance of their own lamp (class 17, pole) for the depth filter and "
+          "the mesh: the light map outlines a lamp better than the instance map");
+  }
+  for (const StageReport& step : r.refined.steps) r.stages.push_back(step);
+  if (!o.refine) r.stages.back().notes.push_back("refinement switched off (--no-refine): upsampling only");
+}
+
+void runMeshStage(const Scene& scene, const NightConversionOptions& o, NightConversionResult& r) {
+  const DepthRefinementResult& refined = r.refined;
+  StageReport mesh_report;
+  const cv::Mat mesh_depth_m =
+      o.mesh_downsample > 1 ? downsampleDepth(refined.depth_m, o.mesh_downsample) : refined.depth_m;
+  r.mesh = meshFromScene(mesh_depth_m, scene.camera, refined.maps.instances, refined.uncertain, o.mesh, mesh_report);
+  if (o.mesh_downsample > 1) {
+    char note[160];
+    std::snprintf(note, sizeof note, "mesh made from the refined depth downsampled %dx (%dx%d): --mesh-downsample",
+                  o.mesh_downsample, mesh_depth_m.cols, mesh_depth_m.rows);
+    mesh_report.notes.push_back(note);
+  }
+  if (!o.mesh.evaluate)
+    mesh_report.notes.push_back("mesh quality counts (self-intersections, manifoldness) not evaluated: they cost more "
+                                "than the rest of the stage; --evaluate-mesh, or solo eval mesh, gives them");
+  r.stages.push_back(mesh_report);
+}
+
+// lights: a new draw, or the user's edited record.
+void runLightsStage(const Scene& scene, const NightConversionOptions& o, NightConversionResult& r) {
+  if (o.light_record) {
+    const Stopwatch clock;
+    r.record = readLightRecord(*o.light_record);
+    StageReport lights_report;
+    lights_report.name = "lights";
+    lights_report.seconds = clock.seconds();
+    lights_report.add("lights", static_cast<std::int64_t>(r.record.tree.lights.size()));
+    lights_report.notes.push_back("light record read from " + o.light_record->string() + " (not drawn)");
+    r.stages.push_back(lights_report);
+    return;
+  }
+  LightStageOptions light_options = o.lights;
+  light_options.instantiation.seed = o.seed;
+  if (light_options.illuminant_table.empty()) light_options.illuminant_table = defaultIlluminantTable();
+  LightStageResult lights = runLightStage(scene, r.refined.depth_m, light_options);
+  r.record = std::move(lights.record);
+  r.stages.push_back(lights.report);
+}
+
+// The render camera: the image's, divided by render_downsample (at least 16 px a side).
+PinholeCamera renderCamera(const PinholeCamera& image_camera, int render_downsample) {
+  if (render_downsample <= 1) return image_camera;
+  return image_camera.scaledTo(std::max(16, image_camera.width / render_downsample),
+                               std::max(16, image_camera.height / render_downsample));
+}
+
+// render: the night camera meters a small preview before the full render, whatever the preset:
+// the exposure does not depend on the render's samples, and noise_target sets its target from it.
+MeteredCamera runRenderStage(const NightScene& night, const PinholeCamera& render_camera,
+                             const NightConversionOptions& o, const NightConversionCallbacks& callbacks,
+                             const PostProcessOptions& post, NightConversionResult& r) {
+  PathTracerOptions tracer = o.render;
+  tracer.seed = o.seed;
+  tracer.progress = callbacks.render_progress;
+  const PreparedRenderScene prepared(night.scene);  // one BVH for the preview and the render
+  const MeteredCamera metered = meterNightCamera(prepared, render_camera, tracer, o);
+  const std::string exposure_note = exposureNote(metered.exposure, metered.preview_size);
+  // noise_target: stop where render noise is below noise_factor x the sensor noise the pixel
+  // will get at that exposure.
+  std::string render_note = exposure_note;
+  const bool noise_target = o.noise_target && o.post.noise;
+  if (noise_target) {
+    PostProcessOptions at_exposure = post;
+    at_exposure.noise_options.iso = metered.exposure.camera.iso;
+    tracer.noise_sigma = renderNoiseSigma(metered.exposure.white_cd_m2, at_exposure);
+    tracer.relative_error = 0;  // the sensor's noise is the target; max_samples still caps
+    char note[128];
+    std::snprintf(note, sizeof note, "noise-matched target: standard error <= %.2f x sensor noise sigma; ",
+                  tracer.noise_factor);
+    render_note = note + exposure_note;
+  } else {
+    tracer.shadow_roulette = 0;  // shadow roulette is relative to the sensor noise
+  }
+  r.rendered = renderPathTraced(prepared, render_camera, tracer);
+  StageReport& report = r.stages.emplace_back(r.rendered.report);
+  report.add("render_width", render_camera.width, "px").add("render_height", render_camera.height, "px");
+  // The BVH and the exposure preview belong to the render's time.
+  report.add("prepare_seconds", prepared.prepareSeconds(), "s");
+  report.seconds += prepared.prepareSeconds();
+  if (metered.preview_seconds > 0) {
+    report.add("preview_seconds", metered.preview_seconds, "s");
+    report.seconds += metered.preview_seconds;
+  }
+  if (!render_note.empty()) report.notes.push_back(render_note);
+  if (o.noise_target && !o.post.noise)
+    report.notes.push_back(
+        "noise-matched target skipped: sensor noise is off (--no-noise), the relative-error target applies");
+  return metered;
+}
+
+// denoise: the render's Monte Carlo noise, edge-aware, at the render's own size (before any
+// upsampling: cheaper, and the upsampled pixels would not be independent) (render_denoise.h);
+// then the upsampling to the image size.
+void runDenoiseStage(const PinholeCamera& image_camera, const PinholeCamera& render_camera,
+                     const NightConversionOptions& o, NightConversionResult& r) {
+  StageReport& render_report = r.stages.back();
+  StageReport denoise_report = denoiseRender(r.rendered, render_camera, o.denoise);
+  if (!o.denoise.enabled) denoise_report.skip_reason = "render denoising switched off (--no-denoise)";
+  if (o.render_downsample > 1) {
+    r.rendered = upsampleRender(std::move(r.rendered), cv::Size(image_camera.width, image_camera.height));
+    char note[160];
+    std::snprintf(note, sizeof note, "rendered at %dx%d and upsampled to %dx%d (bilinear): --render-downsample %d",
+                  render_camera.width, render_camera.height, image_camera.width, image_camera.height,
+                  o.render_downsample);
+    render_report.notes.push_back(note);
+  }
+  r.stages.push_back(std::move(denoise_report));
+}
+
+// post: radiance in cd/m^2 scaled so that the reference exposure (+3.25 stops) puts the sensor
+// white at 1. Only what will clip (above the knee's white clip) glows; the reference lets every
+// pixel glow.
+void runPostStage(const MeteredCamera& metered, const NightConversionOptions& o, PostProcessOptions post,
+                  NightConversionResult& r) {
+  const NightCameraExposure& camera = metered.exposure;
+  const double sensor_white = camera.white_cd_m2;
+  const bool auto_white = !(o.sensor_white_cd_m2 > 0);
+  post.noise_options.iso = camera.camera.iso;
+  const double calibration = 1.0 / (sensor_white * exposureScale(post.exposure_options));
+  post.glare_options.threshold = o.glare_threshold >= 0
+                                     ? o.glare_threshold
+                                     : post.encoding_options.white_clip / exposureScale(post.exposure_options);
+  cv::Mat xyz = r.rendered.radiance * calibration;
+  r.developed = postProcess(xyz, post);
+  r.sensor_white_cd_m2 = sensor_white;
+  StageReport post_report = r.developed.report;
+  post_report.add("sensor_white", sensor_white, "cd/m2").add("sensor_white_auto", auto_white);
+  post_report.add("camera_iso", camera.camera.iso)
+      .add("camera_shutter", camera.camera.shutter_s, "s")
+      .add("camera_f_number", camera.camera.f_number)
+      .add("camera_at_exposure_limit", camera.at_exposure_limit);
+  if (auto_white) post_report.add("metered_mean_luminance", camera.metered_cd_m2, "cd/m2");
+  if (!post.glare) post_report.notes.push_back("glare switched off (--no-glare)");
+  if (!post.noise) post_report.notes.push_back("sensor noise switched off (--no-noise)");
+  for (const StageReport& step : r.developed.steps)
+    if (post.glare && step.name == "glare" && step.skipped)
+      post_report.notes.push_back("no light above glare threshold: glare skipped");
+  r.stages.push_back(post_report);
+}
+
+void requireInRange(double value, double low, double high, const char* setting) {
+  if (!(value >= low && value <= high)) {
+    char range[96];
+    std::snprintf(range, sizeof range, "must be within [%g, %g], got %g", low, high, value);
+    throw InputError(setting, range);
+  }
+}
+
+}  // namespace
+
+void validateNightConversionOptions(const NightConversionOptions& o) {
+  requireInRange(o.mesh_downsample, 1, 8, "--mesh-downsample");
+  requireInRange(o.render_downsample, 1, 8, "--render-downsample");
+  requireInRange(o.render.min_samples, 1, 1 << 20, "--min-spp");
+  requireInRange(o.render.max_samples, 1, 1 << 20, "--max-spp");
+  requireInRange(o.render.relative_error, 0, 1e6, "--relative-error");
+  requireInRange(o.render.noise_factor, 0, 1e6, "--noise-factor");
+  requireInRange(o.render.shadow_roulette, 0, 1, "--shadow-roulette");
+  requireInRange(o.render.max_bounces, 1, 64, "--max-bounces");
+  requireInRange(o.render.indirect_clamp, 0, 1e30, "--indirect-clamp");
+  requireInRange(o.refinement.optimization.max_iterations, 1, 100000, "--optimize-iterations");
+  requireInRange(o.refinement.optimization.function_tolerance, 0, 1, "--optimize-tolerance");
+  requireInRange(o.night_scene.headlight_flux_lm, 0, 1e9, "--headlight-flux");
+  requireInRange(o.sensor_white_cd_m2, -1e30, 1e30, "--sensor-white");
+  requireInRange(o.camera.f_number, 0.5, 64, "--camera-f-number");
+  requireInRange(o.camera.max_shutter_s, 1e-4, 30, "--camera-max-shutter");
+  requireInRange(o.camera.max_iso, 100, 3200, "--camera-max-iso");
+  requireInRange(o.camera.compensation_ev, -6, 6, "--camera-compensation");
+  requireInRange(o.post.noise_options.std_scale, 0, 10, "--noise-scale");
+  requireInRange(o.post.encoding_options.white_clip, 1, 64, "--white-clip");
+  requireInRange(o.post.encoding_options.knee_point, 0.05, 0.99, "--knee-point");
+  requireInRange(o.post.glare_options.scatter_fraction, 1e-6, 1, "--glare-scatter");
+  requireInRange(o.glare_threshold, -1e30, 1e30, "--glare-threshold");
+}
+
+Scene sceneForRefinement(const Scene& scene, std::int64_t* changed) {
+  Scene out = scene;  // cv::Mat copies share their pixels; only the instance map is new
+  out.instances = streetLightsAsPoles(scene.instances, scene.lights, changed);
+  return out;
+}
+
+NightScene runNightSceneStages(const Scene& scene, const NightConversionOptions& o,
+                               const NightConversionCallbacks& callbacks, NightConversionResult& r) {
+  announce(callbacks, "refine");
+  runRefineStage(scene, o, r);
+  announce(callbacks, "mesh");
+  runMeshStage(scene, o, r);
+  announce(callbacks, "lights");
+  runLightsStage(scene, o, r);
+  // scene for the renderer
+  NightScene night =
+      buildNightScene(r.mesh, r.refined.maps.albedo, r.refined.maps.roughness, scene.image, r.record, o.night_scene);
+  r.stages.push_back(night.report);
+  return night;
+}
+
+NightConversionResult runNightConversion(const Scene& scene, const NightConversionOptions& o,
+                                         const NightConversionCallbacks& callbacks) {
+  validateNightConversionOptions(o);
+  NightConversionResult r;
+  const NightScene night = runNightSceneStages(scene, o, callbacks, r);
+  announce(callbacks, "render");
+  PostProcessOptions post = o.post;
+  post.noise_options.seed = o.seed;
+  const PinholeCamera image_camera = night.scene.camera;
+  const PinholeCamera render_camera = renderCamera(image_camera, o.render_downsample);
+  const MeteredCamera metered = runRenderStage(night, render_camera, o, callbacks, post, r);
+  announce(callbacks, "denoise");
+  runDenoiseStage(image_camera, render_camera, o, r);
+  announce(callbacks, "post");
+  runPostStage(metered, o, post, r);
+  return r;
+}
+
+}  // namespace solo
