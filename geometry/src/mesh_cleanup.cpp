@@ -125,6 +125,157 @@ void addHoleCounts(StageReport& report, const HoleClosing& holes) {
   for (const auto& w : holes.warnings) report.notes.push_back(w);
 }
 
+// Deletes the spurious faces, marking the pixels of their corners with the criteria that
+// removed them (m.removed_spurious), and reports how many each criterion found.
+void removeSpuriousFaces(StageReport& report, DepthMesh& m, const SpuriousFaceResult& spurious) {
+  SurfaceMesh& mesh = m.mesh;
+  m.removed_spurious = cv::Mat::zeros(m.height, m.width, CV_8U);
+  for (const auto f : mesh.faces()) {
+    if (!spurious.spurious[f.idx()]) continue;
+    for (const auto v : mesh.fv_range(f)) {
+      const OpenMesh::Vec2i p = mesh.property(m.properties.pixel, v);
+      if (p[0] >= 0 && p[1] >= 0 && p[0] < m.width && p[1] < m.height)
+        m.removed_spurious.at<std::uint8_t>(p[1], p[0]) |= spurious.criteria[f.idx()];
+    }
+    mesh.delete_face(f, true);
+  }
+  report.add("spurious_faces_removed", spurious.removed);
+  report.add("spurious_by_depth_jump", spurious.by_depth_jump);
+  report.add("spurious_by_grazing_angle", spurious.by_grazing);
+  report.add("spurious_by_uncertain_mask", spurious.by_uncertain);
+  report.add("spurious_by_instance_boundary", spurious.by_instance_boundary);
+}
+
+// Scores the removal against the ground truth: the occlusion criteria alone, then every criterion.
+void addSpuriousScores(StageReport& report, const SpuriousFaceResult& spurious,
+                       const std::vector<std::uint8_t>& spurious_truth) {
+  std::vector<std::uint8_t> occlusion(spurious.criteria.size());
+  for (std::size_t i = 0; i < occlusion.size(); ++i) occlusion[i] = (spurious.criteria[i] & kOcclusionCriteria) != 0;
+  const DetectionScore score = scoreDetection(occlusion, spurious_truth);
+  const DetectionScore all = scoreDetection(spurious.spurious, spurious_truth);
+  report.add("spurious_truth_faces", score.true_positives + score.false_negatives);
+  report.add("spurious_true_positives", score.true_positives);
+  report.add("spurious_false_positives", score.false_positives);
+  report.add("spurious_false_negatives", score.false_negatives);
+  report.add("spurious_precision", score.precision);
+  report.add("spurious_recall", score.recall);
+  report.add("removal_precision_with_instance_cut", all.precision);
+  report.add("removal_recall_with_instance_cut", all.recall);
+}
+
+// Removes the small components, resolves pinched vertices, then removes the components that left.
+void removeFragments(StageReport& report, SurfaceMesh& mesh, std::int64_t min_fragment_faces) {
+  const FragmentRemoval fragments = removeSmallComponents(mesh, min_fragment_faces);
+  const PinchResolution pinches = resolvePinchedVertices(mesh);
+  const FragmentRemoval fragments_after_pinches = removeSmallComponents(mesh, min_fragment_faces);
+  report.add("fragments_removed", fragments.components_removed + fragments_after_pinches.components_removed);
+  report.add("fragment_faces_removed", fragments.faces_removed + fragments_after_pinches.faces_removed);
+  report.add("pinched_vertices", pinches.pinched_vertices);
+  report.add("pinch_faces_removed", pinches.faces_removed);
+}
+
+// A frame hole closed along the sky line: its 3D fallbacks close it by its chord, which is
+// hopeless when the chord polygon encloses its own sheet (positive area in the image).
+bool chordEnclosesSheet(const DepthMesh& m, const VertexLoop& run) {
+  double twice = 0;
+  for (std::size_t q = 0; q < run.size(); ++q) {
+    const OpenMesh::Vec2i p0 = m.mesh.property(m.properties.pixel, run[q]);
+    const OpenMesh::Vec2i p1 = m.mesh.property(m.properties.pixel, run[(q + 1) % run.size()]);
+    twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
+  }
+  return twice > 0;
+}
+
+// Whether hole i of `source` gets the image-space fill only. A large frame hole closed by its
+// chord whose image-space patch fails gets no 3D method: its chord crosses the mesh, and every
+// 3D patch failed on such holes (measured on the synthetic 1080p streets: 0 of 11, 506 to 3 689
+// boundary vertices), after seconds of CGAL. Nor does a sky-line hole whose chord encloses its sheet.
+bool imageSpaceOnly(const DepthMesh& m, const DepthMeshCleanupOptions& options, const DepthLoops& source,
+                    std::size_t i) {
+  return ((source.chord_closed[i] || source.sky_line_closed[i]) &&
+          static_cast<int>(source.holes[i].size()) > options.hole_filling.max_cubic_boundary_vertices) ||
+         (source.sky_line_closed[i] && chordEnclosesSheet(m, source.holes[i])) ||
+         source.merged[i];  // its runs belong to several sheets: no chord closes it
+}
+
+// Closes the holes `which` of `source` (backdrops stay behind `farthest` and `observed` when given).
+HoleClosing closeSomeHoles(DepthMesh& m, const DepthMeshCleanupOptions& options, const DepthLoops& source,
+                           const std::vector<std::size_t>& which, const cv::Mat* farthest, const cv::Mat* observed) {
+  DepthLoops subset;
+  std::vector<std::uint8_t> only;
+  for (const std::size_t i : which) {
+    subset.holes.push_back(source.holes[i]);
+    subset.frame_paths.push_back(source.frame_paths[i]);
+    subset.path_after.push_back(source.path_after[i]);
+    subset.backdrop.push_back(source.backdrop[i]);
+    only.push_back(imageSpaceOnly(m, options, source, i));
+  }
+  PixelMapping mapping{m.properties, m.camera, m.width, m.height, &m.vertex_of_pixel};
+  mapping.frame_paths = &subset.frame_paths;
+  mapping.frame_path_after = &subset.path_after;
+  mapping.image_space_only = &only;
+  mapping.backdrop = &subset.backdrop;
+  mapping.farthest_surface_m = farthest;
+  mapping.observed_depth_m = observed;
+  return closeHoles(m.mesh, subset.holes, options.hole_filling, mapping);
+}
+
+// Closes the holes of a depth mesh. Backdrops are filled after every other hole: they lie
+// behind everything in their region, the other holes' patches too (seen through the
+// farthest-surface map).
+HoleClosing closeDepthHoles(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
+                            const DepthMeshCleanupOptions& options, const DepthLoops& loops,
+                            BackdropMode backdrop_mode, StageReport& report) {
+  std::vector<std::size_t> first_pass, backdrop_holes;
+  for (std::size_t i = 0; i < loops.holes.size(); ++i)
+    (loops.backdrop[i] ? backdrop_holes : first_pass).push_back(i);
+  HoleClosing holes = closeSomeHoles(m, options, loops, first_pass, nullptr, nullptr);
+  // A frame hole its own closing left open (its patch met the mesh) is tried again in a
+  // backdrop: the loops are classified again, every frame hole left a backdrop run.
+  std::int64_t retried = 0;
+  for (std::size_t k = 0; k < first_pass.size(); ++k)
+    retried += loops.frame_hole[first_pass[k]] && holes.hole_methods[k] == "open";
+  DepthLoops again;
+  const DepthLoops* backdrop_source = &loops;
+  if (retried > 0 && backdrop_mode != BackdropMode::Off) {
+    again = classifyDepthLoops(m, had_depth, depth_m, BackdropMode::EveryFrameHole);
+    backdrop_source = &again;
+    backdrop_holes.clear();
+    for (std::size_t i = 0; i < again.holes.size(); ++i)
+      if (again.backdrop[i]) backdrop_holes.push_back(i);
+    report.add("frame_holes_retried_as_backdrop", retried);
+    report.add("backdrop_runs_after_retry", again.frame_hole_runs_backdrop);
+  }
+  if (!backdrop_holes.empty()) {
+    const Stopwatch backdrop_clock;
+    cv::Mat farthest, observed;
+    backdropDepthBounds(m, depth_m, had_depth, options, farthest, observed);
+    const HoleClosing more = closeSomeHoles(m, options, *backdrop_source, backdrop_holes, &farthest, &observed);
+    if (backdrop_source == &again && more.left_open == 0) {
+      // The frame holes left open are closed now, inside the backdrops (counted there).
+      holes.holes -= retried;
+      holes.left_open -= retried;
+    }
+    appendHoleClosing(holes, more);
+    report.add("seconds_backdrops", backdrop_clock.seconds(), "s");  // part of seconds_hole_filling
+  }
+  addHoleCounts(report, holes);
+  return holes;
+}
+
+// Closes the foreground solids and floating sheets (without instances: the floating sheets only).
+void closeSolids(StageReport& report, DepthMesh& m, const HoleClosing& holes, const DepthMeshCleanupOptions& options) {
+  const SolidClosing solids = closeForegroundSolids(m, holes.patch_faces, options.solids);
+  report.add("foreground_sheets_considered", solids.sheets);
+  report.add("foreground_solids", solids.solids);
+  report.add("solid_faces_added", solids.faces_added);
+  report.add("solid_back_vertices_clamped", solids.vertices_clamped);
+  report.add("floating_sheets_closed", solids.floating_sheets);
+  std::string classes;
+  for (const auto& c : solids.classes) classes += (classes.empty() ? "" : " ") + c;
+  report.add("foreground_solids_per_class", classes);
+}
+
 }  // namespace
 
 void addMeshCounts(StageReport& report, const std::string& prefix, const MeshMetrics& m) {
@@ -159,45 +310,12 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
 
   Stopwatch step;
   const SpuriousFaceResult spurious = findSpuriousFaces(m, depth_m, instances, uncertain, options.spurious);
-  m.removed_spurious = cv::Mat::zeros(m.height, m.width, CV_8U);
-  for (const auto f : mesh.faces()) {
-    if (!spurious.spurious[f.idx()]) continue;
-    for (const auto v : mesh.fv_range(f)) {
-      const OpenMesh::Vec2i p = mesh.property(m.properties.pixel, v);
-      if (p[0] >= 0 && p[1] >= 0 && p[0] < m.width && p[1] < m.height)
-        m.removed_spurious.at<std::uint8_t>(p[1], p[0]) |= spurious.criteria[f.idx()];
-    }
-    mesh.delete_face(f, true);
-  }
-  report.add("spurious_faces_removed", spurious.removed);
-  report.add("spurious_by_depth_jump", spurious.by_depth_jump);
-  report.add("spurious_by_grazing_angle", spurious.by_grazing);
-  report.add("spurious_by_uncertain_mask", spurious.by_uncertain);
-  report.add("spurious_by_instance_boundary", spurious.by_instance_boundary);
+  removeSpuriousFaces(report, m, spurious);
   report.add("seconds_spurious_faces", step.seconds(), "s");
-  if (spurious_truth) {
-    std::vector<std::uint8_t> occlusion(spurious.criteria.size());
-    for (std::size_t i = 0; i < occlusion.size(); ++i) occlusion[i] = (spurious.criteria[i] & kOcclusionCriteria) != 0;
-    const DetectionScore score = scoreDetection(occlusion, *spurious_truth);
-    const DetectionScore all = scoreDetection(spurious.spurious, *spurious_truth);
-    report.add("spurious_truth_faces", score.true_positives + score.false_negatives);
-    report.add("spurious_true_positives", score.true_positives);
-    report.add("spurious_false_positives", score.false_positives);
-    report.add("spurious_false_negatives", score.false_negatives);
-    report.add("spurious_precision", score.precision);
-    report.add("spurious_recall", score.recall);
-    report.add("removal_precision_with_instance_cut", all.precision);
-    report.add("removal_recall_with_instance_cut", all.recall);
-  }
+  if (spurious_truth) addSpuriousScores(report, spurious, *spurious_truth);
 
   step = Stopwatch();
-  const FragmentRemoval fragments = removeSmallComponents(mesh, options.min_fragment_faces);
-  const PinchResolution pinches = resolvePinchedVertices(mesh);
-  const FragmentRemoval fragments_after_pinches = removeSmallComponents(mesh, options.min_fragment_faces);
-  report.add("fragments_removed", fragments.components_removed + fragments_after_pinches.components_removed);
-  report.add("fragment_faces_removed", fragments.faces_removed + fragments_after_pinches.faces_removed);
-  report.add("pinched_vertices", pinches.pinched_vertices);
-  report.add("pinch_faces_removed", pinches.faces_removed);
+  removeFragments(report, mesh, options.min_fragment_faces);
   report.add("seconds_fragments", step.seconds(), "s");
 
   step = Stopwatch();
@@ -210,100 +328,14 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
 
   HoleClosing holes;
   step = Stopwatch();
-  if (options.fill_holes) {
-    // A large frame hole closed by its chord whose image-space patch fails gets no 3D method:
-    // its chord crosses the mesh, and every 3D patch failed on such holes (measured on the
-    // synthetic 1080p streets: 0 of 11, 506 to 3 689 boundary vertices), after seconds of CGAL.
-    // A frame hole closed along the sky line: its 3D fallbacks close it by its chord, which is
-    // as hopeless when the chord polygon encloses its own sheet (positive area in the image).
-    const auto chordEnclosesSheet = [&](const VertexLoop& run) {
-      double twice = 0;
-      for (std::size_t q = 0; q < run.size(); ++q) {
-        const OpenMesh::Vec2i p0 = mesh.property(m.properties.pixel, run[q]);
-        const OpenMesh::Vec2i p1 = mesh.property(m.properties.pixel, run[(q + 1) % run.size()]);
-        twice += double(p0[0]) * p1[1] - double(p1[0]) * p0[1];
-      }
-      return twice > 0;
-    };
-    const auto imageSpaceOnly = [&](const DepthLoops& source, std::size_t i) {
-      return ((source.chord_closed[i] || source.sky_line_closed[i]) &&
-              static_cast<int>(source.holes[i].size()) > options.hole_filling.max_cubic_boundary_vertices) ||
-             (source.sky_line_closed[i] && chordEnclosesSheet(source.holes[i])) ||
-             source.merged[i];  // its runs belong to several sheets: no chord closes it
-    };
-    const auto pass = [&](const DepthLoops& source, const std::vector<std::size_t>& which, const cv::Mat* farthest,
-                          const cv::Mat* observed) {
-      DepthLoops subset;
-      std::vector<std::uint8_t> only;
-      for (const std::size_t i : which) {
-        subset.holes.push_back(source.holes[i]);
-        subset.frame_paths.push_back(source.frame_paths[i]);
-        subset.path_after.push_back(source.path_after[i]);
-        subset.backdrop.push_back(source.backdrop[i]);
-        only.push_back(imageSpaceOnly(source, i));
-      }
-      PixelMapping mapping{m.properties, m.camera, m.width, m.height, &m.vertex_of_pixel};
-      mapping.frame_paths = &subset.frame_paths;
-      mapping.frame_path_after = &subset.path_after;
-      mapping.image_space_only = &only;
-      mapping.backdrop = &subset.backdrop;
-      mapping.farthest_surface_m = farthest;
-      mapping.observed_depth_m = observed;
-      return closeHoles(mesh, subset.holes, options.hole_filling, mapping);
-    };
-    // Backdrops are filled after every other hole: they lie behind everything in their
-    // region, the other holes' patches too (seen through the farthest-surface map).
-    std::vector<std::size_t> first_pass, backdrop_holes;
-    for (std::size_t i = 0; i < loops.holes.size(); ++i)
-      (loops.backdrop[i] ? backdrop_holes : first_pass).push_back(i);
-    holes = pass(loops, first_pass, nullptr, nullptr);
-    // A frame hole its own closing left open (its patch met the mesh) is tried again in a
-    // backdrop: the loops are classified again, every frame hole left a backdrop run.
-    std::int64_t retried = 0;
-    for (std::size_t k = 0; k < first_pass.size(); ++k)
-      retried += loops.frame_hole[first_pass[k]] && holes.hole_methods[k] == "open";
-    DepthLoops again;
-    const DepthLoops* backdrop_source = &loops;
-    if (retried > 0 && backdrop_mode != BackdropMode::Off) {
-      again = classifyDepthLoops(m, had_depth, depth_m, BackdropMode::EveryFrameHole);
-      backdrop_source = &again;
-      backdrop_holes.clear();
-      for (std::size_t i = 0; i < again.holes.size(); ++i)
-        if (again.backdrop[i]) backdrop_holes.push_back(i);
-      report.add("frame_holes_retried_as_backdrop", retried);
-      report.add("backdrop_runs_after_retry", again.frame_hole_runs_backdrop);
-    }
-    if (!backdrop_holes.empty()) {
-      const Stopwatch backdrop_clock;
-      cv::Mat farthest, observed;
-      backdropDepthBounds(m, depth_m, had_depth, options, farthest, observed);
-      const HoleClosing more = pass(*backdrop_source, backdrop_holes, &farthest, &observed);
-      if (backdrop_source == &again && more.left_open == 0) {
-        // The frame holes left open are closed now, inside the backdrops (counted there).
-        holes.holes -= retried;
-        holes.left_open -= retried;
-      }
-      appendHoleClosing(holes, more);
-      report.add("seconds_backdrops", backdrop_clock.seconds(), "s");  // part of seconds_hole_filling
-    }
-    addHoleCounts(report, holes);
-  } else {
+  if (options.fill_holes)
+    holes = closeDepthHoles(m, depth_m, had_depth, options, loops, backdrop_mode, report);
+  else
     report.notes.push_back("hole filling off: " + std::to_string(loops.holes.size()) + " holes left open");
-  }
   report.add("seconds_hole_filling", step.seconds(), "s");
 
   step = Stopwatch();
-  if (options.close_solids) {  // without instances: the floating sheets only
-    const SolidClosing solids = closeForegroundSolids(m, holes.patch_faces, options.solids);
-    report.add("foreground_sheets_considered", solids.sheets);
-    report.add("foreground_solids", solids.solids);
-    report.add("solid_faces_added", solids.faces_added);
-    report.add("solid_back_vertices_clamped", solids.vertices_clamped);
-    report.add("floating_sheets_closed", solids.floating_sheets);
-    std::string classes;
-    for (const auto& c : solids.classes) classes += (classes.empty() ? "" : " ") + c;
-    report.add("foreground_solids_per_class", classes);
-  }
+  if (options.close_solids) closeSolids(report, m, holes, options);
   report.add("seconds_solids", step.seconds(), "s");
 
   step = Stopwatch();
