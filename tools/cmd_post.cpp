@@ -1,5 +1,4 @@
-// `solo post`: the camera-like post-process applied to a linear XYZ render (white point E),
-// and `solo fda`: the Fourier domain adaptation baseline on two photos.
+// `solo post`: the camera-like post-process applied to a linear XYZ render (white point E).
 
 #include "commands.h"
 
@@ -10,7 +9,6 @@
 #include <solo/core/output_path.h>
 #include <solo/core/report.h>
 #include <solo/post/colour_encoding.h>
-#include <solo/post/fda.h>
 #include <solo/post/post_process.h>
 
 #include <algorithm>
@@ -24,12 +22,6 @@ namespace fs = std::filesystem;
 
 namespace solo::tools {
 namespace {
-
-std::string lowerExtension(const fs::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext;
-}
 
 /// A 3-channel CV_32F image from any file readImageRaw reads: alpha dropped, integer files
 /// divided by their largest code.
@@ -145,40 +137,10 @@ int runPost(const PostOptions& o) {
   write.name = "write";
   write.seconds = clock.seconds();
   write.add("file", o.output.string());
-  write.add("content", std::string(lowerExtension(o.output) == ".exr" ? "linear sRGB, float"
+  write.add("content", std::string(lowercaseExtension(o.output) == ".exr" ? "linear sRGB, float"
                                    : o.sixteen_bit                     ? "encoded sRGB, 16 bit"
                                                                        : "encoded sRGB, 8 bit"));
   report.stages.push_back(write);
-  report.total_seconds = total.seconds();
-  if (o.report) writeReportJson(*o.report, report);
-  std::cout << reportSummary(report) << "wrote " << o.output.string() << "\n";
-  return 0;
-}
-
-int runFda(const FdaCommandOptions& o) {
-  Stopwatch total;
-  if (!(o.beta >= 0 && o.beta <= 1)) throw InputError("--beta", "must be in [0, 1]");
-  refuseOutputThatIsAnInput(o.output, {o.source, o.target}, "-o");
-  if (o.report) refuseOutputThatIsAnInput(*o.report, {o.source, o.target}, "--report");
-  RunReport report;
-  report.command = "fda";
-  report.scene = o.source.string();
-  report.versions = dependencyVersions();
-  const cv::Mat source = readColorImage(o.source);
-  const cv::Mat target = readColorImage(o.target);
-  FdaOptions options;
-  options.beta = o.beta;
-  FdaResult result = fourierDomainAdaptation(source, target, options);
-  const std::string ext = lowerExtension(o.output);
-  if (ext == ".exr") {
-    writeImage(o.output, result.image);  // unclamped, as encoded in the inputs
-  } else {
-    if (ext != ".png" && ext != ".tif" && ext != ".tiff" && ext != ".jpg" && ext != ".jpeg")
-      throw InputError(o.output, "unsupported output format \"" + ext + "\" (use .png, .tif, .jpg or .exr)");
-    cv::Mat clamped = cv::max(cv::min(result.image, 1.0), 0.0);
-    writeImage(o.output, quantiseEncoded(clamped, o.sixteen_bit && ext != ".jpg" && ext != ".jpeg" ? 16 : 8));
-  }
-  report.stages.push_back(std::move(result.report));
   report.total_seconds = total.seconds();
   if (o.report) writeReportJson(*o.report, report);
   std::cout << reportSummary(report) << "wrote " << o.output.string() << "\n";

@@ -11,10 +11,14 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <iostream>
+#include <filesystem>
 #include <map>
+#include <new>
 #include <memory>
 
 namespace {
@@ -25,6 +29,18 @@ const std::map<std::string, solo::LightSamplerKind> kLightSamplers = {{"uniform"
 const std::map<std::string, solo::SamplerKind> kSamplers = {{"sobol", solo::SamplerKind::Sobol},
                                                             {"independent", solo::SamplerKind::Independent}};
 
+// A seed: decimal digits only, at most 2^64 - 1 (CLI11 alone would wrap "-1" and overflow).
+const CLI::Validator kSeed(
+    [](std::string& text) -> std::string {
+      if (text.empty() || text.size() > 20 || text.find_first_not_of("0123456789") != std::string::npos)
+        return "a seed is a whole number from 0 to 18446744073709551615, got \"" + text + "\"";
+      errno = 0;
+      std::strtoull(text.c_str(), nullptr, 10);
+      if (errno == ERANGE) return "a seed is at most 18446744073709551615, got " + text;
+      return "";
+    },
+    "SEED");
+
 // A leaf command of the binary: its CLI11 subcommand and what runs when it was given.
 struct Command {
   CLI::App* cli;
@@ -33,9 +49,15 @@ struct Command {
 
 // "WIDTHxHEIGHT" into its two numbers; InputError naming `option` otherwise.
 void parseSize(const std::string& text, const char* option, int& width, int& height) {
-  char tail = 0;
-  if (std::sscanf(text.c_str(), "%dx%d%c", &width, &height, &tail) != 2)
-    throw solo::InputError(option, "expected WIDTHxHEIGHT, got \"" + text + "\"");
+  const std::size_t x = text.find('x');
+  const auto side = [&](const std::string& digits, int& value) {
+    if (digits.empty() || digits.size() > 6 || digits.find_first_not_of("0123456789") != std::string::npos)
+      throw solo::InputError(option, "expected WIDTHxHEIGHT with each side 1 to 999999 pixels, got \"" + text + "\"");
+    value = std::stoi(digits);
+  };
+  if (x == std::string::npos) throw solo::InputError(option, "expected WIDTHxHEIGHT, got \"" + text + "\"");
+  side(text.substr(0, x), width);
+  side(text.substr(x + 1), height);
 }
 
 using namespace solo;
@@ -55,7 +77,7 @@ void addNightSceneFlags(CLI::App* night_cmd, NightOptions& night) {
   night_cmd->add_option("scene", night.job.scene, "Scene manifest (JSON); omit for the embedded default scene");
   night_cmd->add_option("-o,--output", night.job.output, "Night image to write")->capture_default_str();
   night_cmd->add_option("--report", night.job.report, "Report JSON to write (default: <output>.report.json)");
-  night_cmd->add_option("--seed", night.conversion.seed, "Random seed (lights, render, sensor noise)")->capture_default_str();
+  night_cmd->add_option("--seed", night.conversion.seed, "Random seed (lights, render, sensor noise)")->capture_default_str()->check(kSeed);
   night_cmd->add_option("--render-exr", night.job.render_exr, "Also write the linear XYZ render (and AOVs beside it)");
   night_cmd->add_flag("--16bit", night.job.sixteen_bit, "16-bit PNG/TIFF output");
   night_cmd->add_flag("--refine,!--no-refine", night.conversion.refine, "Depth filter, uncertainty and optimisation (default on)");
@@ -254,7 +276,7 @@ void addEvalCommands(CLI::App& app, std::vector<Command>& commands) {
   eval_mesh_cmd->add_option("--samples", eval_mesh.samples, "Random surface points per direction")
       ->capture_default_str()
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{100000000}));
-  eval_mesh_cmd->add_option("--seed", eval_mesh.seed, "Seed of the surface sampling")->capture_default_str();
+  eval_mesh_cmd->add_option("--seed", eval_mesh.seed, "Seed of the surface sampling")->capture_default_str()->check(kSeed);
   add_eval_output(eval_mesh_cmd, eval_mesh.output);
 
   CLI::App* eval_scene_cmd = eval_cmd->add_subcommand(
@@ -266,7 +288,7 @@ void addEvalCommands(CLI::App& app, std::vector<Command>& commands) {
   eval_scene_cmd->add_option("--samples", eval_scene.samples, "Random surface points per direction (mesh distances)")
       ->capture_default_str()
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{100000000}));
-  eval_scene_cmd->add_option("--seed", eval_scene.seed, "Seed of the surface sampling")->capture_default_str();
+  eval_scene_cmd->add_option("--seed", eval_scene.seed, "Seed of the surface sampling")->capture_default_str()->check(kSeed);
   add_eval_output(eval_scene_cmd, eval_scene.output);
 
   CLI::App* eval_night_cmd = eval_cmd->add_subcommand(
@@ -290,7 +312,7 @@ void addSynthCommand(CLI::App& app, std::vector<Command>& commands) {
   std::string& synth_size = *synth_size_holder;
   CLI::App* synth_cmd = app.add_subcommand("synth", "Generate a synthetic street scene with exact ground truth");
   synth_cmd->add_option("-o,--output", synth.output, "Folder to create")->required();
-  synth_cmd->add_option("--seed", synth.seed, "Random seed")->capture_default_str();
+  synth_cmd->add_option("--seed", synth.seed, "Random seed")->capture_default_str()->check(kSeed);
   synth_cmd->add_option("--size", synth_size, "Image size WIDTHxHEIGHT in pixels")->capture_default_str();
   synth_cmd->add_option("--variant", synth.variant, "default, grazing, thin-pole, near-object, wide-sky, no-lights")
       ->capture_default_str();
@@ -310,7 +332,7 @@ void addLightsCommand(CLI::App& app, std::vector<Command>& commands) {
   lights_cmd->add_option("scene", lights.scene, "Scene manifest (JSON); omit for the embedded default scene");
   lights_cmd->add_option("-o,--output", lights.output, "Light record to write (JSON)")->capture_default_str();
   lights_cmd->add_option("--overlay", lights.overlay, "PNG of the lights drawn on the day image");
-  lights_cmd->add_option("--seed", lights.seed, "Random seed")->capture_default_str();
+  lights_cmd->add_option("--seed", lights.seed, "Random seed")->capture_default_str()->check(kSeed);
   lights_cmd->add_flag("--ablation", lights.ablation, "Every light on, white, one strength (the paper's ablation)");
   lights_cmd->add_option("--ablation-luminance", lights.ablation_luminance_cd_m2, "The ablation's strength, cd/m^2")
       ->capture_default_str();
@@ -405,7 +427,7 @@ void addPostCommand(CLI::App& app, std::vector<Command>& commands) {
   post_cmd->add_option("--chroma-denoise-strength", post.chroma_denoise_strength,
                        "Share of the chroma noise replaced by its smoothed version, 0 to 1")
       ->capture_default_str();
-  post_cmd->add_option("--seed", post.seed, "Noise seed")->capture_default_str();
+  post_cmd->add_option("--seed", post.seed, "Noise seed")->capture_default_str()->check(kSeed);
   post_cmd->add_flag("!--no-adaptation", post.adaptation, "Skip the Bradford E to D65 adaptation");
   post_cmd->add_option("--curve", post.curve, "gamma2.2, srgb or linear")->capture_default_str();
   post_cmd->add_option("--negatives", post.negatives, "Out-of-gamut colours: desaturate or clip")->capture_default_str();
@@ -477,7 +499,7 @@ void addBenchCommands(CLI::App& app, std::vector<Command>& commands) {
       ->capture_default_str()
       ->excludes(bench_scene);
   bench_accuracy_cmd->add_option("--seed", bench_accuracy.seed, "Seed: scene made, lights, renders")
-      ->capture_default_str();
+      ->capture_default_str()->check(kSeed);
   bench_accuracy_cmd->add_flag("--quick", bench_accuracy.quick, "Fewer points, smaller samples");
   bench_accuracy_cmd->add_option("--stages", bench_accuracy.stages, "Sweeps to run: refine,mesh,render,end_to_end")
       ->delimiter(',')
@@ -494,7 +516,7 @@ void addBenchCommands(CLI::App& app, std::vector<Command>& commands) {
       "solo night on the default scene and synthetic streets: realism statistics against the targets, "
       "times, contact sheet (docs/realism.md)");
   bench_realism_cmd->add_option("-o,--output", bench_realism.output, "Folder to write (CSV, README, PNG)")->required();
-  bench_realism_cmd->add_option("--seed", bench_realism.seed, "Seed of every night run")->capture_default_str();
+  bench_realism_cmd->add_option("--seed", bench_realism.seed, "Seed of every night run")->capture_default_str()->check(kSeed);
   bench_realism_cmd->add_flag("--quick", bench_realism.quick, "The default scene and two streets only");
   bench_realism_cmd->add_option("--preset", bench_realism.preset, "solo night preset: draft, default or final")
       ->capture_default_str()
@@ -563,6 +585,14 @@ int main(int argc, char** argv) {
   } catch (const solo::InputError& e) {
     std::cerr << "solo: error: " << e.what() << "\n";
     return 2;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A path the run was given (or derived) cannot be used: bad input, named.
+    std::cerr << "solo: error: " << (e.path1().empty() ? std::string() : e.path1().string() + ": ")
+              << e.code().message() << "\n";
+    return 2;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "solo: error: out of memory (the scene or an option asked for more than this machine has)\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "solo: error: " << e.what() << "\n";
     return 1;

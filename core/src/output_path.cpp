@@ -3,11 +3,18 @@
 #include "solo/core/error.h"
 
 #include <algorithm>
+#include <cctype>
 #include <system_error>
 
 namespace fs = std::filesystem;
 
 namespace solo {
+
+std::string lowercaseExtension(const std::filesystem::path& file) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
 namespace {
 
 fs::path resolved(const fs::path& path) {

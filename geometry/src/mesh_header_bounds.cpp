@@ -1,6 +1,7 @@
 #include "mesh_header_bounds.h"
 
 #include "solo/core/error.h"
+#include <solo/core/output_path.h>
 
 #include <algorithm>
 #include <fstream>
@@ -27,12 +28,6 @@ struct ElementBound {
 std::optional<std::uint64_t> parseCount(const std::string& token) {
   if (token.empty() || token.size() > 19 || !std::all_of(token.begin(), token.end(), ::isdigit)) return std::nullopt;
   return std::stoull(token);
-}
-
-std::string lowerExtension(const fs::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext;
 }
 
 // The first bytes of the file, enough for any header solo reads.
@@ -116,7 +111,7 @@ std::vector<ElementBound> plyBounds(const std::string& header) {
 }  // namespace
 
 void requireMeshHeaderFitsFile(const fs::path& file, std::uintmax_t file_size_bytes) {
-  const std::string ext = lowerExtension(file);
+  const std::string ext = lowercaseExtension(file);
   if (ext != ".off" && ext != ".ply") return;
   const std::string header = headerText(file);
   const std::vector<ElementBound> elements = ext == ".off" ? offBounds(header) : plyBounds(header);

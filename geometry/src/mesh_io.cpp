@@ -1,4 +1,5 @@
 #include "solo/core/atomic_file.h"
+#include <solo/core/output_path.h>
 #include "solo/core/error.h"
 #include "solo/core/input_file.h"
 #include "solo/geometry/triangle_mesh.h"
@@ -18,14 +19,8 @@ namespace {
 using Kernel = CGAL::Simple_cartesian<double>;
 using Point = Kernel::Point_3;
 
-std::string extensionOf(const fs::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext;
-}
-
 void requireMeshExtension(const fs::path& file) {
-  const std::string ext = extensionOf(file);
+  const std::string ext = lowercaseExtension(file);
   if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
     throw InputError(file, "unknown mesh format \"" + ext + "\" (OFF, OBJ, PLY or STL)");
 }
@@ -88,7 +83,7 @@ void writeMesh(const fs::path& file, const TriangleMesh& mesh) {
   writeAtomically(file, [&](const fs::path& temporary) {
     std::ofstream out(temporary, std::ios::binary);
     if (!out) throw InputError(file, "cannot open for writing");
-    const bool ok = writeSoup(out, extensionOf(file), points, polygons);
+    const bool ok = writeSoup(out, lowercaseExtension(file), points, polygons);
     out.close();  // the last buffered bytes are written here: checked too
     if (!ok || !out) throw InputError(file, "write failed");
   });

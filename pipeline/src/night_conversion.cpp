@@ -292,6 +292,9 @@ void validateNightConversionOptions(const NightConversionOptions& o) {
   requireInRange(o.render_downsample, 1, 8, "--render-downsample");
   requireInRange(o.render.min_samples, 1, 1 << 20, "--min-spp");
   requireInRange(o.render.max_samples, 1, 1 << 20, "--max-spp");
+  if (o.render.min_samples > o.render.max_samples)
+    throw InputError("--min-spp", "is " + std::to_string(o.render.min_samples) + ", more than --max-spp " +
+                                      std::to_string(o.render.max_samples) + " (a preset sets both; give both)");
   requireInRange(o.render.relative_error, 0, 1e6, "--relative-error");
   requireInRange(o.render.noise_factor, 0, 1e6, "--noise-factor");
   requireInRange(o.render.shadow_roulette, 0, 1, "--shadow-roulette");

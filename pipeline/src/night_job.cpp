@@ -28,12 +28,6 @@ namespace solo {
 
 namespace {
 
-std::string lowerExtension(const fs::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext;
-}
-
 // The removed-face marks of a mesh made from a downsampled depth map, at the image's size.
 cv::Mat removedAtImageSize(const DepthMesh& mesh, cv::Size image_size) {
   if (mesh.removed_spurious.empty() || mesh.removed_spurious.size() == image_size) return mesh.removed_spurious;
@@ -81,12 +75,12 @@ std::vector<fs::path> renderAovFiles(const fs::path& render_exr) {
 // the day image).
 void checkOutputs(const NightJobOptions& job, const NightConversionOptions& o, const fs::path& scene_file,
                   const fs::path& report_file) {
-  const std::string ext = lowerExtension(job.output);
+  const std::string ext = lowercaseExtension(job.output);
   if (ext != ".png" && ext != ".tif" && ext != ".tiff" && ext != ".jpg" && ext != ".jpeg" && ext != ".exr")
     throw InputError(job.output, "unsupported output format \"" + job.output.extension().string() +
                                      "\" (use .png, .tif, .jpg or .exr)");
   if (job.contact_sheet) {
-    const std::string sheet_ext = lowerExtension(*job.contact_sheet);
+    const std::string sheet_ext = lowercaseExtension(*job.contact_sheet);
     if (sheet_ext != ".png" && sheet_ext != ".jpg" && sheet_ext != ".tif")
       throw InputError(*job.contact_sheet, "unsupported contact sheet format \"" +
                                                job.contact_sheet->extension().string() + "\" (use .png)");
@@ -137,7 +131,7 @@ std::vector<std::pair<std::string, std::string>> pipelineDependencyVersions() {
 }
 
 void writeDevelopedImage(const fs::path& file, const cv::Mat& encoded, const cv::Mat& linear_rgb, bool sixteen_bit) {
-  const std::string ext = lowerExtension(file);
+  const std::string ext = lowercaseExtension(file);
   if (ext == ".exr") {
     writeImage(file, linear_rgb);
   } else if (ext == ".png" || ext == ".tif" || ext == ".tiff") {

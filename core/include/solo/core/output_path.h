@@ -8,6 +8,9 @@
 
 namespace solo {
 
+/// The file's extension with its dot, in lower case: "Night.PNG" gives ".png"; "" for none.
+std::string lowercaseExtension(const std::filesystem::path& file);
+
 /// `path` in lexically normal form without trailing separators: "out/" and "out//" become
 /// "out", "a/b/.." becomes "a"; "/" stays "/".
 std::filesystem::path withoutTrailingSeparators(const std::filesystem::path& path);
