@@ -44,8 +44,9 @@ int runNight(const NightOptions& options);
 /// out. Throws InputError for a path holding both quote characters (TOML strings cannot hold it).
 std::string nightConfigText(const NightOptions& options);
 
-/// `solo night --batch`: every scene of a list or folder, each in a child process (docs/batch.md).
-/// The NightOptions give the output folder (output), the batch seed and a scene (refused).
+/// `solo night --batch`: every scene of a list or folder, each in a child process (docs/batch.md;
+/// the library's solo::runNightBatch, pipeline/night_batch.h). The NightOptions give the output
+/// folder (output), the batch seed, the contact sheet switch and a scene (refused).
 struct NightBatchOptions {
   std::optional<std::filesystem::path> list;  ///< list file of manifests, or a folder searched for them
   std::string shard = "0/1";                  ///< i/N: scenes k with k % N == i
