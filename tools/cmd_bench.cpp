@@ -1,5 +1,5 @@
 // `solo bench accuracy`: what accuracy costs in time. Makes (or takes) a synthetic scene with
-// exact ground truth, runs the sweeps of accuracy_sweep.h, and writes into OUT_DIR one CSV per
+// exact ground truth, runs the sweeps of pipeline/accuracy_sweep.h, and writes into OUT_DIR one CSV per
 // stage (refine, mesh, render, end_to_end), a gnuplot script per plot (run when gnuplot is on
 // PATH, PNG output) and a README with the seed, the machine's load and what each file holds.
 //
@@ -9,8 +9,8 @@
 // road's and the lit windows' luminance and the run's time: realism.csv, README.md and a
 // contact sheet of the night images.
 
-#include "accuracy_sweep.h"
 #include "commands.h"
+#include <solo/pipeline/accuracy_sweep.h>
 #include <solo/pipeline/night_conversion.h>
 #include <solo/pipeline/night_presets.h>
 
@@ -19,12 +19,12 @@
 #include <solo/core/image_io.h>
 #include <solo/core/report.h>
 #include <solo/core/scene.h>
-#include <solo/geometry/triangle_mesh.h>
 #include <solo/core/version.h>
 #include <solo/lighting/light_category.h>
 #include <solo/post/colour_encoding.h>
 #include <solo/render/contact_sheet.h>
 #include <solo/post/night_statistics.h>
+#include <solo/synth/scene_folder.h>
 
 #include <opencv2/imgproc.hpp>
 
@@ -189,10 +189,10 @@ std::string describeFiles(const std::string& stage) {
          "render of the scene made from the exact depth; seconds of every stage";
 }
 
-}  // namespace
+// ---- solo bench accuracy ----------------------------------------------------------------------
 
-int runBenchAccuracy(const BenchAccuracyOptions& o) {
-  Stopwatch total;
+/// Refuses bad options before anything is read or written.
+void checkAccuracyOptions(const BenchAccuracyOptions& o) {
   for (const std::string& s : o.stages)
     if (std::find(kStages.begin(), kStages.end(), s) == kStages.end())
       throw InputError("--stages", "unknown stage \"" + s + "\" (use refine, mesh, render, end_to_end)");
@@ -204,41 +204,35 @@ int runBenchAccuracy(const BenchAccuracyOptions& o) {
   std::error_code ec;
   if (fs::exists(o.output, ec) && !fs::is_directory(o.output, ec))
     throw InputError(o.output, "exists and is not a folder");
+}
 
-  // The scene: checked completely before anything is written.
-  fs::path manifest;
-  if (o.scene) {
-    manifest = fs::is_directory(*o.scene, ec) ? *o.scene / "scene.json" : *o.scene;
-    if (!fs::exists(manifest, ec)) throw InputError(manifest, "not found (a `solo synth` folder or its scene.json)");
-    const fs::path truth_manifest = groundTruthManifest(manifest);
-    if (!fs::exists(truth_manifest, ec)) throw InputError(truth_manifest, "not found (the scene's ground truth)");
-  }
-  fs::create_directories(o.output);
-  const double load_start = loadAverage1Min();
-  if (!o.scene) {
-    SynthOptions synth;
-    synth.output = o.output / "scene";
-    synth.seed = o.seed;
-    synth.width = o.width;
-    synth.height = o.height;
-    synth.force = true;
-    say("solo bench accuracy: making the synthetic scene " + synth.output.string() + " ...");
-    runSynth(synth);
-    manifest = synth.output / "scene.json";
-  }
+/// The manifest of a given scene (a `solo synth` folder or its scene.json), checked to exist
+/// with its ground truth.
+fs::path givenManifest(const fs::path& scene) {
+  std::error_code ec;
+  const fs::path manifest = fs::is_directory(scene, ec) ? scene / "scene.json" : scene;
+  if (!fs::exists(manifest, ec)) throw InputError(manifest, "not found (a `solo synth` folder or its scene.json)");
   const fs::path truth_manifest = groundTruthManifest(manifest);
-  Stopwatch clock;
-  Scene scene = loadScene(manifest);
-  const double input_seconds = clock.seconds();
-  Scene truth = loadScene(truth_manifest);
-  if (truth.depth_m.size() != scene.image.size() || truth.normals.size() != scene.image.size())
-    throw InputError(truth_manifest, "its depth and normals must be of the image's size (" +
-                                         std::to_string(scene.width()) + "x" + std::to_string(scene.height()) + ")");
-  const fs::path truth_mesh_file = truth_manifest.parent_path() / "mesh.ply";
-  TriangleMesh truth_mesh;
-  if (fs::exists(truth_mesh_file, ec)) truth_mesh = readMesh(truth_mesh_file);
-  const int width = scene.width(), height = scene.height();
+  if (!fs::exists(truth_manifest, ec)) throw InputError(truth_manifest, "not found (the scene's ground truth)");
+  return manifest;
+}
 
+/// Makes the synthetic street in output/scene as `solo synth` does (its summary on stdout);
+/// returns its manifest.
+fs::path makeAccuracyScene(const BenchAccuracyOptions& o) {
+  SyntheticSceneOptions synth;
+  synth.seed = o.seed;
+  synth.width = o.width;
+  synth.height = o.height;
+  synth.force = true;
+  const fs::path folder = o.output / "scene";
+  say("solo bench accuracy: making the synthetic scene " + folder.string() + " ...");
+  const SyntheticSceneResult made = writeSyntheticScene(folder, synth);
+  std::cout << reportSummary(made.report) << "scene: " << made.manifest.string() << "\n";
+  return folder / "scene.json";
+}
+
+AccuracySweepOptions sweepOptions(const BenchAccuracyOptions& o, double input_seconds) {
   AccuracySweepOptions options;
   options.seed = o.seed;
   options.quick = o.quick;
@@ -248,85 +242,137 @@ int runBenchAccuracy(const BenchAccuracyOptions& o) {
   options.input_seconds = input_seconds;
   options.illuminant_table = defaultIlluminantTable();
   options.progress = say;
-  AccuracySweep sweep(std::move(scene), std::move(truth), std::move(truth_mesh), options);
+  return options;
+}
 
-  const std::string scene_text = std::to_string(width) + "x" + std::to_string(height) + " synthetic street, seed " +
-                                 std::to_string(o.seed);
-  const bool gnuplot = o.plots && onPath("gnuplot");
-  std::vector<std::string> written, notes;
+/// What the sweeps produced: their tables, the files written (in order) and notes for the README.
+struct AccuracyRun {
   std::vector<SweepTable> tables;
+  std::vector<std::string> written, notes;
+};
+
+SweepTable runSweep(AccuracySweep& sweep, const std::string& stage) {
+  return stage == "refine" ? sweep.refine()
+         : stage == "mesh" ? sweep.mesh()
+         : stage == "render" ? sweep.render()
+                             : sweep.endToEnd();
+}
+
+/// Writes the gnuplot script of `t` and, when `gnuplot`, runs it for the PNG.
+void writePlot(const BenchAccuracyOptions& o, const SweepTable& t, const std::string& scene_text, bool gnuplot,
+               AccuracyRun& run) {
+  const std::string& stage = t.stage;
+  const bool distances = stage != "mesh" || (!t.rows.empty() && !t.rows.front()[t.column("mean_to_ref_m")].empty());
+  const std::string script = stage == "refine" ? refineScript(t, scene_text)
+                             : stage == "mesh" ? meshScript(t, scene_text, distances)
+                             : stage == "render" ? renderScript(t, scene_text)
+                                                 : endToEndScript(t, scene_text);
+  writeTextAtomically(o.output / (stage + ".gp"), script);
+  run.written.push_back(stage + ".gp");
+  if (!gnuplot) return;
+  std::error_code ec;
+  const std::string command =
+      "cd " + shellQuoted(o.output.string()) + " && gnuplot " + shellQuoted(stage + ".gp") + " 2>&1";
+  if (std::system(command.c_str()) == 0 && fs::exists(o.output / (stage + ".png"), ec)) {
+    run.written.push_back(stage + ".png");
+  } else {
+    run.notes.push_back("gnuplot failed on " + stage + ".gp: no " + stage + ".png");
+    say("solo bench accuracy: " + run.notes.back());
+  }
+}
+
+/// Runs the chosen sweeps in kStages' order, writing STAGE.csv (and STAGE.gp, STAGE.png) of each.
+AccuracyRun runSweeps(const BenchAccuracyOptions& o, AccuracySweep& sweep, const std::string& scene_text) {
+  const bool gnuplot = o.plots && onPath("gnuplot");
+  AccuracyRun run;
   for (const std::string& stage : kStages) {
     if (std::find(o.stages.begin(), o.stages.end(), stage) == o.stages.end()) continue;
     say("solo bench accuracy: " + stage + " sweep ...");
-    SweepTable t = stage == "refine" ? sweep.refine()
-                   : stage == "mesh" ? sweep.mesh()
-                   : stage == "render" ? sweep.render()
-                                       : sweep.endToEnd();
+    SweepTable t = runSweep(sweep, stage);
     writeTextAtomically(o.output / (stage + ".csv"), t.csv());
-    written.push_back(stage + ".csv");
-    if (o.plots) {
-      const bool distances =
-          stage != "mesh" || (!t.rows.empty() && !t.rows.front()[t.column("mean_to_ref_m")].empty());
-      const std::string script = stage == "refine" ? refineScript(t, scene_text)
-                                 : stage == "mesh" ? meshScript(t, scene_text, distances)
-                                 : stage == "render" ? renderScript(t, scene_text)
-                                                     : endToEndScript(t, scene_text);
-      writeTextAtomically(o.output / (stage + ".gp"), script);
-      written.push_back(stage + ".gp");
-      if (gnuplot) {
-        const std::string command =
-            "cd " + shellQuoted(o.output.string()) + " && gnuplot " + shellQuoted(stage + ".gp") + " 2>&1";
-        if (std::system(command.c_str()) == 0 && fs::exists(o.output / (stage + ".png"), ec)) {
-          written.push_back(stage + ".png");
-        } else {
-          notes.push_back("gnuplot failed on " + stage + ".gp: no " + stage + ".png");
-          say("solo bench accuracy: " + notes.back());
-        }
-      }
-    }
-    tables.push_back(std::move(t));
+    run.written.push_back(stage + ".csv");
+    if (o.plots) writePlot(o, t, scene_text, gnuplot, run);
+    run.tables.push_back(std::move(t));
   }
   if (o.plots && !gnuplot) {
-    notes.push_back("gnuplot is not on PATH: the .gp scripts are written, no PNG (install gnuplot-nox, then run "
-                    "`gnuplot STAGE.gp` in this folder)");
-    say("solo bench accuracy: " + notes.back());
+    run.notes.push_back("gnuplot is not on PATH: the .gp scripts are written, no PNG (install gnuplot-nox, then run "
+                        "`gnuplot STAGE.gp` in this folder)");
+    say("solo bench accuracy: " + run.notes.back());
   }
+  return run;
+}
 
-  // README: what was run, on what, under which load.
-  const double load_end = loadAverage1Min();
+/// What the README says about the run besides the tables.
+struct AccuracyReadmeFacts {
+  fs::path manifest, truth_manifest;
+  int width = 0, height = 0;
+  double load_start = 0, load_end = 0;
+  double wall_seconds = 0;
+};
+
+/// README: what was run, on what, under which load.
+std::string accuracyReadme(const BenchAccuracyOptions& o, const AccuracySweepOptions& options,
+                           const AccuracyReadmeFacts& f, const AccuracyRun& run) {
   std::ostringstream r;
   const std::time_t now = std::time(nullptr);
   char date[64];
   std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S %Z", std::localtime(&now));
   r << "# solo bench accuracy\n\n"
     << "What accuracy costs in time, stage by stage and end to end (docs/accuracy.md explains the curves).\n\n"
-    << "- scene: `" << manifest.string() << "` (" << width << "x" << height << ", "
+    << "- scene: `" << f.manifest.string() << "` (" << f.width << "x" << f.height << ", "
     << (o.scene ? "given" : "made by `solo synth` with the seed below") << "), ground truth `"
-    << truth_manifest.string() << "`\n"
+    << f.truth_manifest.string() << "`\n"
     << "- seed: " << o.seed << " (also in every CSV row)\n"
     << "- mode: " << (o.quick ? "quick (fewer points)" : "full") << "; reference renders "
     << options.reference_spp << " spp; timing: median of up to " << o.repeats << " runs when one run takes under "
     << options.cheap_seconds << " s, else one run (column `repeats`)\n"
     << "- machine: " << std::thread::hardware_concurrency() << " hardware threads; load average (1 min) "
-    << load_start << " at the start, " << load_end << " at the end (column `load_1min`: at each point's end); "
-    << "wall time of the whole run " << static_cast<int>(total.seconds()) << " s; finished " << date << "\n"
+    << f.load_start << " at the start, " << f.load_end << " at the end (column `load_1min`: at each point's end); "
+    << "wall time of the whole run " << static_cast<int>(f.wall_seconds) << " s; finished " << date << "\n"
     << "- solo " << soloVersion() << ";";
   for (const auto& [library, version] : dependencyVersions()) r << " " << library << " " << version << ";";
   r << "\n\n## Files\n\n";
-  for (const SweepTable& t : tables) {
+  for (const SweepTable& t : run.tables) {
+    const bool png = std::find(run.written.begin(), run.written.end(), t.stage + ".png") != run.written.end();
     r << "- `" << t.stage << ".csv` (" << t.rows.size() << " rows), `" << t.stage << ".gp`"
-      << (std::find(written.begin(), written.end(), t.stage + ".png") != written.end() ? ", `" + t.stage + ".png`" : "")
-      << ": " << describeFiles(t.stage) << ".\n";
+      << (png ? ", `" + t.stage + ".png`" : "") << ": " << describeFiles(t.stage) << ".\n";
     for (const std::string& n : t.notes) r << "  - " << n << "\n";
   }
-  if (!notes.empty()) {
+  if (!run.notes.empty()) {
     r << "\n## Notes\n\n";
-    for (const std::string& n : notes) r << "- " << n << "\n";
+    for (const std::string& n : run.notes) r << "- " << n << "\n";
   }
-  writeTextAtomically(o.output / "README.md", r.str());
-  std::cout << "solo bench accuracy: " << tables.size() << " sweeps in " << static_cast<int>(total.seconds())
+  return r.str();
+}
+
+}  // namespace
+
+int runBenchAccuracy(const BenchAccuracyOptions& o) {
+  Stopwatch total;
+  checkAccuracyOptions(o);
+  // The scene: checked completely before anything is written.
+  const fs::path given = o.scene ? givenManifest(*o.scene) : fs::path();
+  fs::create_directories(o.output);
+  AccuracyReadmeFacts facts;
+  facts.load_start = loadAverage1Min();
+  const fs::path manifest = o.scene ? given : makeAccuracyScene(o);
+  AccuracySweepInput input = readAccuracySweepInput(manifest);
+  facts.manifest = input.manifest;
+  facts.truth_manifest = input.truth_manifest;
+  facts.width = input.scene.width();
+  facts.height = input.scene.height();
+  const AccuracySweepOptions options = sweepOptions(o, input.input_seconds);
+  AccuracySweep sweep(std::move(input.scene), std::move(input.truth), std::move(input.truth_mesh), options);
+
+  const std::string scene_text = std::to_string(facts.width) + "x" + std::to_string(facts.height) +
+                                 " synthetic street, seed " + std::to_string(o.seed);
+  const AccuracyRun run = runSweeps(o, sweep, scene_text);
+  facts.load_end = loadAverage1Min();
+  facts.wall_seconds = total.seconds();
+  writeTextAtomically(o.output / "README.md", accuracyReadme(o, options, facts, run));
+  std::cout << "solo bench accuracy: " << run.tables.size() << " sweeps in " << static_cast<int>(total.seconds())
             << " s, written to " << o.output.string() << ":";
-  for (const std::string& f : written) std::cout << " " << f;
+  for (const std::string& f : run.written) std::cout << " " << f;
   std::cout << " README.md\n";
   return 0;
 }
@@ -420,26 +466,18 @@ double stageSeconds(const NightConversionResult& result, const std::string& name
   return 0;
 }
 
-/// Makes the street of `c` with `solo synth` under out/scenes/<name> (its report kept off the
+/// Makes the street of `c` as `solo synth` does under out/scenes/<name> (no report on the
 /// terminal); returns its manifest.
 fs::path makeStreet(const RealismCase& c, const fs::path& out) {
-  SynthOptions synth;
-  synth.output = out / "scenes" / c.name;
+  SyntheticSceneOptions synth;
   synth.seed = c.street_seed;
   synth.variant = c.variant;
   synth.width = c.width_px;
   synth.height = c.height_px;
   synth.force = true;
-  std::ostringstream quiet;
-  std::streambuf* terminal = std::cout.rdbuf(quiet.rdbuf());
-  try {
-    runSynth(synth);
-  } catch (...) {
-    std::cout.rdbuf(terminal);
-    throw;
-  }
-  std::cout.rdbuf(terminal);
-  return synth.output / "scene.json";
+  const fs::path folder = out / "scenes" / c.name;
+  writeSyntheticScene(folder, synth);
+  return folder / "scene.json";
 }
 
 /// Runs `solo night`'s pipeline (`night`: preset applied) on `scene_file`, writes the night

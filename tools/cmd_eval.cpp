@@ -410,9 +410,9 @@ int runEvalMesh(const EvalMeshOptions& o) {
   return emit(r, o.output);
 }
 
+// ---- eval scene -----------------------------------------------------------------------
 
 namespace {
-
 
 /// <folder>/<stem>.<what><extension>: the files `solo depth` writes beside its output.
 fs::path besideOutput(const fs::path& output, const std::string& what, const std::string& extension) {
@@ -444,76 +444,103 @@ FieldValue reasonValue(const std::string& reason) {
   return reason.empty() ? FieldValue(std::monostate{}) : FieldValue(reason);
 }
 
-}  // namespace
+/// A scene folder's estimated inputs and ground truth, checked: the truth at the image's size.
+struct SceneUnderTest {
+  fs::path manifest, truth_manifest;
+  Scene scene, truth;
+  cv::Size size;                ///< the image's: everything is compared at it
+  std::string no_true_normals;  ///< why no normal can be scored; empty when they can
+};
 
-int runEvalScene(const EvalSceneOptions& o) {
-  Stopwatch clock;
+SceneUnderTest loadSceneUnderTest(const fs::path& scene_dir) {
   std::error_code ec;
-  if (!fs::is_directory(o.scene_dir, ec)) throw InputError(o.scene_dir, "folder not found");
-  const fs::path manifest = o.scene_dir / "scene.json";
-  if (!fs::exists(manifest, ec))
-    throw InputError(manifest, "file not found: not a scene folder (`solo synth -o DIR` writes one)");
-  const Scene scene = loadScene(manifest);
-  const fs::path truth_manifest = groundTruthManifest(manifest);
-  if (!fs::exists(truth_manifest, ec)) throw InputError(truth_manifest, "file not found (the ground truth " + manifest.string() + " names)");
-  const Scene truth = loadScene(truth_manifest);
+  if (!fs::is_directory(scene_dir, ec)) throw InputError(scene_dir, "folder not found");
+  SceneUnderTest t;
+  t.manifest = scene_dir / "scene.json";
+  if (!fs::exists(t.manifest, ec))
+    throw InputError(t.manifest, "file not found: not a scene folder (`solo synth -o DIR` writes one)");
+  t.scene = loadScene(t.manifest);
+  t.truth_manifest = groundTruthManifest(t.manifest);
+  if (!fs::exists(t.truth_manifest, ec))
+    throw InputError(t.truth_manifest, "file not found (the ground truth " + t.manifest.string() + " names)");
+  t.truth = loadScene(t.truth_manifest);
 
   // Everything is compared at the image resolution, the ground truth's.
-  const cv::Size size = scene.image.size();
-  if (truth.depth_m.size() != size)
-    throw InputError(truth.manifest.depth, "ground-truth depth is " + std::to_string(truth.depth_m.cols) + "x" +
-                                               std::to_string(truth.depth_m.rows) + ", the image " +
-                                               std::to_string(size.width) + "x" + std::to_string(size.height));
-  const bool truth_has_normals = !truth.normals.empty();
-  if (truth_has_normals && truth.normals.size() != size)
-    throw InputError(*truth.manifest.normals, "ground-truth normals are not of the image's size");
-  const std::string no_true_normals = truth_has_normals ? "" : "the ground truth has no normals";
+  t.size = t.scene.image.size();
+  if (t.truth.depth_m.size() != t.size)
+    throw InputError(t.truth.manifest.depth, "ground-truth depth is " + std::to_string(t.truth.depth_m.cols) + "x" +
+                                                 std::to_string(t.truth.depth_m.rows) + ", the image " +
+                                                 std::to_string(t.size.width) + "x" + std::to_string(t.size.height));
+  const bool truth_has_normals = !t.truth.normals.empty();
+  if (truth_has_normals && t.truth.normals.size() != t.size)
+    throw InputError(*t.truth.manifest.normals, "ground-truth normals are not of the image's size");
+  t.no_true_normals = truth_has_normals ? "" : "the ground truth has no normals";
+  return t;
+}
 
+/// The outputs written into a scene folder, each with the reason it is missing (empty when found).
+struct SceneOutputs {
+  std::optional<fs::path> refined, refined_normals, uncertain, mesh;
   std::string refined_reason, refined_normals_reason, uncertain_reason, mesh_reason, distance_reason;
-  const std::optional<fs::path> refined =
-      locate(o.refined, o.scene_dir / "refined.exr", "solo depth SCENE_DIR/scene.json -o SCENE_DIR/refined.exr",
-             refined_reason);
-  std::optional<fs::path> refined_normals, uncertain;
-  if (refined) {
-    const fs::path normals_file = besideOutput(*refined, "normals", refined->extension().string());
-    if (fs::exists(normals_file, ec)) refined_normals = normals_file;
-    else refined_normals_reason = normals_file.string() + " not found";
-    const fs::path uncertain_file = besideOutput(*refined, "uncertain", ".png");
-    if (fs::exists(uncertain_file, ec)) uncertain = uncertain_file;
-    else uncertain_reason = uncertain_file.string() + " not found: uncertain criterion not applied";
-  } else {
-    refined_normals_reason = "no refined depth";
-    uncertain_reason = "no refined depth: uncertain criterion not applied";
-  }
-  if (refined_normals_reason.empty() && !no_true_normals.empty()) refined_normals_reason = no_true_normals;
-  const std::optional<fs::path> mesh_file =
-      locate(o.mesh, o.scene_dir / "mesh.ply", "solo mesh from-depth SCENE_DIR/scene.json -o SCENE_DIR/mesh.ply",
-             mesh_reason);
-  const fs::path reference_file = o.scene_dir / "gt" / "mesh.ply";
-  const bool has_reference = fs::exists(reference_file, ec);
-  if (!mesh_file) distance_reason = "no mesh";
-  else if (!has_reference) distance_reason = reference_file.string() + " not found";
+  fs::path reference_mesh;  ///< the scene's exact mesh, gt/mesh.ply
+  bool has_reference = false;
+};
 
+SceneOutputs locateSceneOutputs(const EvalSceneOptions& o, const std::string& no_true_normals) {
+  std::error_code ec;
+  SceneOutputs s;
+  s.refined = locate(o.refined, o.scene_dir / "refined.exr", "solo depth SCENE_DIR/scene.json -o SCENE_DIR/refined.exr",
+                     s.refined_reason);
+  if (s.refined) {
+    const fs::path normals_file = besideOutput(*s.refined, "normals", s.refined->extension().string());
+    if (fs::exists(normals_file, ec)) s.refined_normals = normals_file;
+    else s.refined_normals_reason = normals_file.string() + " not found";
+    const fs::path uncertain_file = besideOutput(*s.refined, "uncertain", ".png");
+    if (fs::exists(uncertain_file, ec)) s.uncertain = uncertain_file;
+    else s.uncertain_reason = uncertain_file.string() + " not found: uncertain criterion not applied";
+  } else {
+    s.refined_normals_reason = "no refined depth";
+    s.uncertain_reason = "no refined depth: uncertain criterion not applied";
+  }
+  if (s.refined_normals_reason.empty() && !no_true_normals.empty()) s.refined_normals_reason = no_true_normals;
+  s.mesh = locate(o.mesh, o.scene_dir / "mesh.ply", "solo mesh from-depth SCENE_DIR/scene.json -o SCENE_DIR/mesh.ply",
+                  s.mesh_reason);
+  s.reference_mesh = o.scene_dir / "gt" / "mesh.ply";
+  s.has_reference = fs::exists(s.reference_mesh, ec);
+  if (!s.mesh) s.distance_reason = "no mesh";
+  else if (!s.has_reference) s.distance_reason = s.reference_mesh.string() + " not found";
+  return s;
+}
+
+/// The record's inputs and options, and its first metrics: the image's size.
+EvalRecord sceneRecord(const EvalSceneOptions& o, const SceneUnderTest& t, const SceneOutputs& s) {
   EvalRecord r;
   r.command = "eval scene";
   r.inputs = {{"scene_dir", "scene folder", o.scene_dir.string(), ""},
-              {"manifest", "estimated inputs", manifest.string(), ""},
-              {"ground_truth", "ground truth", truth_manifest.string(), ""},
-              {"refined", "refined depth", optionalPath(refined), ""},
-              {"refined_normals", "refined normals", optionalPath(refined_normals), ""},
-              {"uncertain", "uncertain mask", optionalPath(uncertain), ""},
-              {"mesh", "mesh", optionalPath(mesh_file), ""},
+              {"manifest", "estimated inputs", t.manifest.string(), ""},
+              {"ground_truth", "ground truth", t.truth_manifest.string(), ""},
+              {"refined", "refined depth", optionalPath(s.refined), ""},
+              {"refined_normals", "refined normals", optionalPath(s.refined_normals), ""},
+              {"uncertain", "uncertain mask", optionalPath(s.uncertain), ""},
+              {"mesh", "mesh", optionalPath(s.mesh), ""},
               {"reference_mesh", "reference mesh",
-               mesh_file && has_reference ? FieldValue(reference_file.string()) : FieldValue(std::monostate{}), ""}};
+               s.mesh && s.has_reference ? FieldValue(s.reference_mesh.string()) : FieldValue(std::monostate{}), ""}};
   r.options = {{"samples", "samples per direction", o.samples, ""},
                {"seed", "seed", static_cast<std::int64_t>(o.seed), ""}};
-  r.metrics = {{"width", "image width", std::int64_t{size.width}, "px"},
-               {"height", "image height", std::int64_t{size.height}, "px"}};
+  r.metrics = {{"width", "image width", std::int64_t{t.size.width}, "px"},
+               {"height", "image height", std::int64_t{t.size.height}, "px"}};
+  return r;
+}
 
-  // (a) the estimated maps, upsampled to the image resolution as depth refinement's first step does.
-  const cv::Mat estimated_depth = resizeValidBilinear(scene.depth_m, size);
-  const auto evaluateDepthPair = [&](const cv::Mat& prediction, const fs::path& prediction_file,
-                                     const std::string& key, const std::string& label) {
+/// Scores depth and normal maps against the ground truth into a record's metrics; a map that
+/// is missing keeps its columns, without values.
+struct MapScorer {
+  const Scene& truth;
+  std::vector<Field>& metrics;
+
+  /// The metrics as given and median-scaled.
+  void depth(const cv::Mat& prediction, const fs::path& prediction_file, const std::string& key,
+             const std::string& label) {
     DepthEvaluationInput input;
     input.prediction_m = prediction;
     input.ground_truth_m = truth.depth_m;
@@ -521,130 +548,163 @@ int runEvalScene(const EvalSceneOptions& o) {
     input.ground_truth_file = truth.manifest.depth;
     DepthMetricsOptions scaled;
     scaled.median_scaling = true;
-    append(r.metrics, depthFields(evaluateDepth(input), key, label, true));
-    append(r.metrics, depthFields(evaluateDepth(input, scaled), key + "median_scaled_", label + "median-scaled ", false));
-  };
-  const auto skipDepth = [&](const std::string& key, const std::string& label) {
-    append(r.metrics, blanked(depthFields(DepthMetrics{}, key, label, true)));
-    append(r.metrics, blanked(depthFields(DepthMetrics{}, key + "median_scaled_", label + "median-scaled ", false)));
-  };
-  const auto evaluateNormalPair = [&](const cv::Mat& prediction, const fs::path& prediction_file,
-                                      const std::string& key, const std::string& label) {
+    append(metrics, depthFields(evaluateDepth(input), key, label, true));
+    append(metrics, depthFields(evaluateDepth(input, scaled), key + "median_scaled_", label + "median-scaled ", false));
+  }
+  void skipDepth(const std::string& key, const std::string& label) {
+    append(metrics, blanked(depthFields(DepthMetrics{}, key, label, true)));
+    append(metrics, blanked(depthFields(DepthMetrics{}, key + "median_scaled_", label + "median-scaled ", false)));
+  }
+  void normals(const cv::Mat& prediction, const fs::path& prediction_file, const std::string& key,
+               const std::string& label) {
     NormalEvaluationInput input;
     input.prediction = prediction;
     input.ground_truth = truth.normals;
     input.prediction_file = prediction_file;
     input.ground_truth_file = *truth.manifest.normals;
-    append(r.metrics, normalFields(evaluateNormals(input), key, label));
-  };
-  const auto skipNormals = [&](const std::string& key, const std::string& label) {
-    append(r.metrics, blanked(normalFields(NormalMetrics{}, key, label)));
-  };
+    append(metrics, normalFields(evaluateNormals(input), key, label));
+  }
+  void skipNormals(const std::string& key, const std::string& label) {
+    append(metrics, blanked(normalFields(NormalMetrics{}, key, label)));
+  }
+};
 
-  evaluateDepthPair(estimated_depth, scene.manifest.depth, "est_depth_", "est. depth ");
-  std::string est_normals_reason = scene.normals.empty() ? "the manifest names no normals" : no_true_normals;
+/// (a) The estimated maps, upsampled to the image resolution as depth refinement's first step
+/// does; returns the upsampled depth.
+cv::Mat appendEstimatedMaps(const SceneUnderTest& t, EvalRecord& r) {
+  MapScorer score{t.truth, r.metrics};
+  const cv::Mat estimated_depth = resizeValidBilinear(t.scene.depth_m, t.size);
+  score.depth(estimated_depth, t.scene.manifest.depth, "est_depth_", "est. depth ");
+  std::string est_normals_reason = t.scene.normals.empty() ? "the manifest names no normals" : t.no_true_normals;
   r.metrics.push_back({"est_normals_skipped", "est. normals skipped", reasonValue(est_normals_reason), ""});
   if (est_normals_reason.empty())
-    evaluateNormalPair(resizeNormalsBilinear(scene.normals, size), *scene.manifest.normals, "est_normals_",
-                       "est. normals ");
+    score.normals(resizeNormalsBilinear(t.scene.normals, t.size), *t.scene.manifest.normals, "est_normals_",
+                  "est. normals ");
   else
-    skipNormals("est_normals_", "est. normals ");
+    score.skipNormals("est_normals_", "est. normals ");
+  return estimated_depth;
+}
 
-  // (b) the refined depth and the normals of it that `solo depth` wrote.
+/// (b) The refined depth and the normals of it that `solo depth` wrote; returns the refined
+/// depth (empty when there is none).
+cv::Mat appendRefinedMaps(const SceneUnderTest& t, const SceneOutputs& s, EvalRecord& r) {
+  MapScorer score{t.truth, r.metrics};
   cv::Mat refined_depth;
-  r.metrics.push_back({"refined_skipped", "refined depth skipped", reasonValue(refined_reason), ""});
-  if (refined) {
-    refined_depth = readDepth(*refined, 0);
-    evaluateDepthPair(refined_depth, *refined, "refined_depth_", "refined depth ");
+  r.metrics.push_back({"refined_skipped", "refined depth skipped", reasonValue(s.refined_reason), ""});
+  if (s.refined) {
+    refined_depth = readDepth(*s.refined, 0);
+    score.depth(refined_depth, *s.refined, "refined_depth_", "refined depth ");
   } else {
-    skipDepth("refined_depth_", "refined depth ");
+    score.skipDepth("refined_depth_", "refined depth ");
   }
   r.metrics.push_back(
-      {"refined_normals_skipped", "refined normals skipped", reasonValue(refined_normals_reason), ""});
-  if (refined_normals_reason.empty())
-    evaluateNormalPair(readNormals(*refined_normals), *refined_normals, "refined_normals_", "refined normals ");
+      {"refined_normals_skipped", "refined normals skipped", reasonValue(s.refined_normals_reason), ""});
+  if (s.refined_normals_reason.empty())
+    score.normals(readNormals(*s.refined_normals), *s.refined_normals, "refined_normals_", "refined normals ");
   else
-    skipNormals("refined_normals_", "refined normals ");
+    score.skipNormals("refined_normals_", "refined normals ");
+  return refined_depth;
+}
 
-  // (c) spurious faces of the depth mesh (refined depth, else the upsampled estimate), scored
-  // against the faces the exact depth and normals call spurious, as `solo mesh from-depth --truth`.
-  const bool spurious_from_refined = !refined_depth.empty();
-  r.metrics.push_back({"spurious_skipped", "spurious faces skipped", reasonValue(no_true_normals), ""});
+/// The spurious-face fields of the mesh of `depth` (at the image's size), scored against the
+/// faces the exact depth and normals call spurious; without true normals, no values.
+std::vector<Field> spuriousFaceFields(const SceneUnderTest& t, const cv::Mat& depth,
+                                      const std::optional<fs::path>& uncertain) {
+  DetectionScore occlusion_score, all_score;
+  SpuriousFaceResult found;
+  std::int64_t truth_faces = 0;
+  if (t.no_true_normals.empty()) {
+    const cv::Mat instances = nearestTo(t.scene.instances, t.size);
+    cv::Mat uncertain_mask;
+    if (uncertain) {
+      readLabels(*uncertain).convertTo(uncertain_mask, CV_8U);
+      uncertain_mask = nearestTo(uncertain_mask, t.size);
+    }
+    const DepthMesh mesh = meshFromDepth(depth, t.scene.camera, instances);
+    found = findSpuriousFaces(mesh, depth, instances, uncertain_mask);
+    const std::vector<std::uint8_t> truth_flags = spuriousFacesFromGroundTruth(mesh, t.truth.depth_m, t.truth.normals);
+    std::vector<std::uint8_t> occlusion(found.criteria.size());
+    for (std::size_t i = 0; i < occlusion.size(); ++i) occlusion[i] = (found.criteria[i] & kOcclusionCriteria) != 0;
+    occlusion_score = scoreDetection(occlusion, truth_flags);
+    all_score = scoreDetection(found.spurious, truth_flags);
+    truth_faces = occlusion_score.true_positives + occlusion_score.false_negatives;
+  }
+  std::vector<Field> fields = {
+      {"spurious_mesh_faces", "  depth-mesh faces", found.faces_checked, ""},
+      {"spurious_truth_faces", "  spurious by ground truth", truth_faces, ""},
+      {"spurious_removed", "  removed (all criteria)", found.removed, ""},
+      {"spurious_by_depth_jump", "    by depth jump", found.by_depth_jump, ""},
+      {"spurious_by_uncertain_mask", "    by uncertain mask", found.by_uncertain, ""},
+      {"spurious_by_instance_boundary", "    by instance boundary", found.by_instance_boundary, ""},
+      {"spurious_true_positives", "  true positives", occlusion_score.true_positives, ""},
+      {"spurious_false_positives", "  false positives", occlusion_score.false_positives, ""},
+      {"spurious_false_negatives", "  false negatives", occlusion_score.false_negatives, ""},
+      {"spurious_precision", "spurious-face precision", occlusion_score.precision, ""},
+      {"spurious_recall", "spurious-face recall", occlusion_score.recall, ""},
+      {"removal_precision_with_instance_cut", "  precision with instance cut", all_score.precision, ""},
+      {"removal_recall_with_instance_cut", "  recall with instance cut", all_score.recall, ""}};
+  return t.no_true_normals.empty() ? fields : blanked(fields);
+}
+
+/// (c) Spurious faces of the depth mesh (refined depth, else the upsampled estimate), scored
+/// against the faces the exact depth and normals call spurious, as `solo mesh from-depth --truth`.
+void appendSpuriousFaces(const SceneUnderTest& t, const SceneOutputs& s, const cv::Mat& estimated_depth,
+                         const cv::Mat& refined_depth, EvalRecord& r) {
+  const bool from_refined = !refined_depth.empty();
+  r.metrics.push_back({"spurious_skipped", "spurious faces skipped", reasonValue(t.no_true_normals), ""});
   r.metrics.push_back({"spurious_depth", "spurious faces: mesh of",
-                       no_true_normals.empty()
-                           ? FieldValue(std::string(spurious_from_refined ? "refined" : "estimated (upsampled)"))
+                       t.no_true_normals.empty()
+                           ? FieldValue(std::string(from_refined ? "refined" : "estimated (upsampled)"))
                            : FieldValue(std::monostate{}),
                        ""});
-  r.metrics.push_back({"spurious_uncertain_skipped", "  uncertain mask skipped", reasonValue(uncertain_reason), ""});
-  std::vector<Field> spurious_fields;
-  {
-    const cv::Mat& depth = spurious_from_refined ? refined_depth : estimated_depth;
-    const fs::path& depth_file = spurious_from_refined ? *refined : scene.manifest.depth;
-    if (depth.size() != size)
-      throw InputError(depth_file, "depth is " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
-                                       ", the image " + std::to_string(size.width) + "x" +
-                                       std::to_string(size.height));
-    DetectionScore occlusion_score, all_score;
-    SpuriousFaceResult found;
-    std::int64_t truth_faces = 0;
-    if (no_true_normals.empty()) {
-      const cv::Mat instances = nearestTo(scene.instances, size);
-      cv::Mat uncertain_mask;
-      if (uncertain) {
-        readLabels(*uncertain).convertTo(uncertain_mask, CV_8U);
-        uncertain_mask = nearestTo(uncertain_mask, size);
-      }
-      const DepthMesh mesh = meshFromDepth(depth, scene.camera, instances);
-      found = findSpuriousFaces(mesh, depth, instances, uncertain_mask);
-      const std::vector<std::uint8_t> truth_flags = spuriousFacesFromGroundTruth(mesh, truth.depth_m, truth.normals);
-      std::vector<std::uint8_t> occlusion(found.criteria.size());
-      for (std::size_t i = 0; i < occlusion.size(); ++i) occlusion[i] = (found.criteria[i] & kOcclusionCriteria) != 0;
-      occlusion_score = scoreDetection(occlusion, truth_flags);
-      all_score = scoreDetection(found.spurious, truth_flags);
-      truth_faces = occlusion_score.true_positives + occlusion_score.false_negatives;
-    }
-    spurious_fields = {
-        {"spurious_mesh_faces", "  depth-mesh faces", found.faces_checked, ""},
-        {"spurious_truth_faces", "  spurious by ground truth", truth_faces, ""},
-        {"spurious_removed", "  removed (all criteria)", found.removed, ""},
-        {"spurious_by_depth_jump", "    by depth jump", found.by_depth_jump, ""},
-        {"spurious_by_uncertain_mask", "    by uncertain mask", found.by_uncertain, ""},
-        {"spurious_by_instance_boundary", "    by instance boundary", found.by_instance_boundary, ""},
-        {"spurious_true_positives", "  true positives", occlusion_score.true_positives, ""},
-        {"spurious_false_positives", "  false positives", occlusion_score.false_positives, ""},
-        {"spurious_false_negatives", "  false negatives", occlusion_score.false_negatives, ""},
-        {"spurious_precision", "spurious-face precision", occlusion_score.precision, ""},
-        {"spurious_recall", "spurious-face recall", occlusion_score.recall, ""},
-        {"removal_precision_with_instance_cut", "  precision with instance cut", all_score.precision, ""},
-        {"removal_recall_with_instance_cut", "  recall with instance cut", all_score.recall, ""}};
-    if (!no_true_normals.empty()) spurious_fields = blanked(spurious_fields);
-  }
-  append(r.metrics, spurious_fields);
+  r.metrics.push_back({"spurious_uncertain_skipped", "  uncertain mask skipped", reasonValue(s.uncertain_reason), ""});
+  const cv::Mat& depth = from_refined ? refined_depth : estimated_depth;
+  const fs::path& depth_file = from_refined ? *s.refined : t.scene.manifest.depth;
+  if (depth.size() != t.size)
+    throw InputError(depth_file, "depth is " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
+                                     ", the image " + std::to_string(t.size.width) + "x" +
+                                     std::to_string(t.size.height));
+  append(r.metrics, spuriousFaceFields(t, depth, s.uncertain));
+}
 
-  // (d) the mesh written into the folder, and its distances to the scene's exact mesh.
-  r.metrics.push_back({"mesh_skipped", "mesh skipped", reasonValue(mesh_reason), ""});
-  r.metrics.push_back({"mesh_distances_skipped", "mesh distances skipped", reasonValue(distance_reason), ""});
+/// (d) The mesh written into the folder, and its distances to the scene's exact mesh.
+void appendMesh(const EvalSceneOptions& o, const SceneUnderTest& t, const SceneOutputs& s, EvalRecord& r) {
+  r.metrics.push_back({"mesh_skipped", "mesh skipped", reasonValue(s.mesh_reason), ""});
+  r.metrics.push_back({"mesh_distances_skipped", "mesh distances skipped", reasonValue(s.distance_reason), ""});
   std::optional<ViewMeshDistances> view;
-  if (mesh_file) {
+  if (s.mesh) {
     MeshReadStats read_stats;
-    const TriangleMesh mesh = readMesh(*mesh_file, &read_stats);
+    const TriangleMesh mesh = readMesh(*s.mesh, &read_stats);
     std::optional<MeshDistances> d;
-    if (has_reference) {
+    if (s.has_reference) {
       MeshDistanceOptions options;
       options.samples = o.samples;
       options.seed = o.seed;
-      const TriangleMesh reference = readMesh(reference_file);
-      d = measureMeshDistances(mesh, reference, options, *mesh_file, reference_file);
+      const TriangleMesh reference = readMesh(s.reference_mesh);
+      d = measureMeshDistances(mesh, reference, options, *s.mesh, s.reference_mesh);
       ViewMeshDistanceOptions view_options;
       view_options.samples = o.samples;
       view_options.seed = o.seed;
-      view = measureViewMeshDistances(mesh, {}, reference, truth.depth_m, truth.camera, view_options);
+      view = measureViewMeshDistances(mesh, {}, reference, t.truth.depth_m, t.truth.camera, view_options);
     }
     append(r.metrics, meshFields(evaluateMesh(mesh), read_stats, d, "mesh_", "mesh "));
   } else {
     append(r.metrics, blanked(meshFields(MeshMetrics{}, MeshReadStats{}, std::nullopt, "mesh_", "mesh ")));
   }
   append(r.metrics, viewMeshFields(view));
+}
+
+}  // namespace
+
+int runEvalScene(const EvalSceneOptions& o) {
+  Stopwatch clock;
+  const SceneUnderTest t = loadSceneUnderTest(o.scene_dir);
+  const SceneOutputs s = locateSceneOutputs(o, t.no_true_normals);
+  EvalRecord r = sceneRecord(o, t, s);
+  const cv::Mat estimated_depth = appendEstimatedMaps(t, r);
+  const cv::Mat refined_depth = appendRefinedMaps(t, s, r);
+  appendSpuriousFaces(t, s, estimated_depth, refined_depth, r);
+  appendMesh(o, t, s, r);
   r.seconds = clock.seconds();
   return emit(r, o.output);
 }

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-namespace solo::tools {
+namespace solo {
 
 /// One CSV file: column names, rows of formatted cells (empty = not applicable), and notes
 /// for the README (what a stage could not measure, and why).
@@ -49,6 +49,18 @@ struct AccuracySweepOptions {
   std::filesystem::path illuminant_table;
   std::function<void(const std::string&)> progress;  ///< one line per point; may be empty
 };
+
+/// A scene with exact ground truth as the sweeps read it.
+struct AccuracySweepInput {
+  std::filesystem::path manifest, truth_manifest;  ///< the scene's and its ground truth's (groundTruthManifest)
+  Scene scene, truth;
+  TriangleMesh truth_mesh;   ///< <truth folder>/mesh.ply; empty when there is none
+  double input_seconds = 0;  ///< reading the scene (its ground truth not counted)
+};
+
+/// Reads `manifest`, its ground truth and the true mesh beside it. Throws InputError when the
+/// ground truth's depth or normals are not of the image's size.
+AccuracySweepInput readAccuracySweepInput(const std::filesystem::path& manifest);
 
 /// Seeds of the reference renders differ from the sweep's so that their noise is independent.
 inline constexpr std::uint64_t kReferenceSeedOffset = 1000003;
@@ -78,4 +90,4 @@ class AccuracySweep {
 /// 1-minute load average of the machine (getloadavg), -1 when unknown.
 double loadAverage1Min();
 
-}  // namespace solo::tools
+}  // namespace solo

@@ -2,24 +2,25 @@
 // the library functions `solo night` runs, with one knob changed, and measures the result
 // against the synthetic scene's exact ground truth.
 
-#include "accuracy_sweep.h"
+#include <solo/pipeline/accuracy_sweep.h>
 #include <solo/pipeline/night_conversion.h>
 #include <solo/pipeline/night_presets.h>
 
+#include <solo/core/error.h>
+#include <solo/core/report.h>
 #include <solo/geometry/depth_metrics.h>
 #include <solo/geometry/depth_refinement.h>
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/mesh_metrics.h>
 #include <solo/geometry/normal_metrics.h>
 #include <solo/geometry/normals_from_depth.h>
-#include <solo/core/report.h>
 #include <solo/geometry/surface_mesh.h>
 #include <solo/geometry/view_mesh_distances.h>
 #include <solo/lighting/light_stage.h>
 #include <solo/post/exposure.h>
+#include <solo/post/post_process.h>
 #include <solo/render/night_scene.h>
 #include <solo/render/path_tracer.h>
-#include <solo/post/post_process.h>
 
 #include <algorithm>
 #include <cmath>
@@ -29,11 +30,29 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace solo::tools {
+namespace solo {
 
 double loadAverage1Min() {
   double load[1] = {-1};
   return ::getloadavg(load, 1) == 1 ? load[0] : -1;
+}
+
+AccuracySweepInput readAccuracySweepInput(const std::filesystem::path& manifest) {
+  AccuracySweepInput in;
+  in.manifest = manifest;
+  in.truth_manifest = groundTruthManifest(manifest);
+  Stopwatch clock;
+  in.scene = loadScene(manifest);
+  in.input_seconds = clock.seconds();
+  in.truth = loadScene(in.truth_manifest);
+  if (in.truth.depth_m.size() != in.scene.image.size() || in.truth.normals.size() != in.scene.image.size())
+    throw InputError(in.truth_manifest, "its depth and normals must be of the image's size (" +
+                                            std::to_string(in.scene.width()) + "x" +
+                                            std::to_string(in.scene.height()) + ")");
+  const std::filesystem::path truth_mesh_file = in.truth_manifest.parent_path() / "mesh.ply";
+  std::error_code ec;
+  if (std::filesystem::exists(truth_mesh_file, ec)) in.truth_mesh = readMesh(truth_mesh_file);
+  return in;
 }
 
 std::size_t SweepTable::column(const std::string& name) const {
@@ -334,6 +353,59 @@ struct AccuracySweep::Impl {
 
   // ---- mesh ---------------------------------------------------------------------------------
 
+  /// One setting of the mesh stage.
+  struct MeshPoint {
+    std::string name;
+    bool fill;
+    int max_fair;
+    bool solids;
+  };
+
+  std::vector<MeshPoint> meshPoints() const {
+    const int fair = HoleFillOptions{}.max_fair_vertices;
+    return o.quick ? std::vector<MeshPoint>{{"default", true, fair, true}, {"no_fairing", true, 0, true},
+                                            {"no_fill_no_solids", false, fair, false}}
+                   : std::vector<MeshPoint>{{"default", true, fair, true},  {"fair_up_to_1000", true, 1000, true},
+                                            {"no_fairing", true, 0, true},  {"no_solids", true, fair, false},
+                                            {"no_fill", false, fair, true}, {"no_fill_no_solids", false, fair, false}};
+  }
+
+  /// The distance cells of a mesh row (mean_to_ref_m to truth_covered) and, in `distance_text`,
+  /// their summary for the progress line; empty cells without a true mesh.
+  std::vector<std::string> meshDistanceCells(const DepthMesh& m, const TriangleMesh& soup,
+                                             std::string& distance_text) const {
+    if (truth_mesh.faces.empty()) return {"", "", "", "", "", "", "", "", "", ""};
+    MeshDistanceOptions distance_options;
+    distance_options.samples = o.distance_samples;
+    distance_options.seed = o.seed;
+    const MeshDistances d = measureMeshDistances(soup, truth_mesh, distance_options);
+    std::vector<std::string> cells = {num(d.mean_to_reference), num(d.hausdorff_to_reference),
+                                      num(d.mean_from_reference), num(d.chamfer)};
+    // Where the mean comes from (docs/accuracy.md): face origin, the far bands, relative
+    // distance and the true pixels the mesh covers.
+    ViewMeshDistanceOptions view_options;
+    view_options.samples = o.distance_samples;
+    view_options.seed = o.seed;
+    const ViewMeshDistances v =
+        measureViewMeshDistances(soup, faceOrigins(m.mesh), truth_mesh, truth.depth_m, truth.camera, view_options);
+    double far_share = 0, far_contribution = 0;
+    for (std::size_t b = 1; b < v.by_depth.size(); ++b)
+      if (view_options.depth_band_edges_m[b - 1] >= 80) {
+        far_share += v.by_depth[b].area_share;
+        far_contribution += v.by_depth[b].contribution_m;
+      }
+    auto originMean = [&](FaceOrigin origin) {
+      const DistancePart& part = v.by_origin[static_cast<std::size_t>(origin)];
+      return part.samples > 0 ? num(part.mean_m) : std::string();
+    };
+    cells.insert(cells.end(), {originMean(FaceOrigin::DepthSurface), originMean(FaceOrigin::HoleFill),
+                               originMean(FaceOrigin::Solid), num(far_share), num(far_contribution),
+                               num(v.mean_relative_to_truth), num(v.truth_covered)});
+    distance_text = ", " + num(d.mean_to_reference) + " m mean to the true surfaces (" + num(far_contribution) +
+                    " m of it beyond 80 m), " + num(v.mean_relative_to_truth) + " of the depth";
+    return cells;
+  }
+
   SweepTable meshSweep() {
     SweepTable t;
     t.stage = "mesh";
@@ -344,23 +416,7 @@ struct AccuracySweep::Impl {
                  "beyond_80m_area_share", "beyond_80m_contribution_m", "mean_relative_to_ref", "truth_covered",
                  "load_1min"};
     const DepthRefinementResult& r = defaultRefinement();
-    struct Point {
-      std::string name;
-      bool fill;
-      int max_fair;
-      bool solids;
-    };
-    const int fair = HoleFillOptions{}.max_fair_vertices;
-    const std::vector<Point> points =
-        o.quick ? std::vector<Point>{{"default", true, fair, true}, {"no_fairing", true, 0, true},
-                                     {"no_fill_no_solids", false, fair, false}}
-                : std::vector<Point>{{"default", true, fair, true},        {"fair_up_to_1000", true, 1000, true},
-                                     {"no_fairing", true, 0, true},        {"no_solids", true, fair, false},
-                                     {"no_fill", false, fair, true},       {"no_fill_no_solids", false, fair, false}};
-    MeshDistanceOptions distance_options;
-    distance_options.samples = o.distance_samples;
-    distance_options.seed = o.seed;
-    for (const Point& pt : points) {
+    for (const MeshPoint& pt : meshPoints()) {
       StageReport report;
       std::optional<DepthMesh> m;
       const auto [s, n] = timed(
@@ -381,35 +437,8 @@ struct AccuracySweep::Impl {
                                                metricInt(report, "found_frame_holes")),
                              integer(metricInt(report, "foreground_solids"))});
       std::string distance_text;
-      if (!truth_mesh.faces.empty()) {
-        const MeshDistances d = measureMeshDistances(soup, truth_mesh, distance_options);
-        row.insert(row.end(), {num(d.mean_to_reference), num(d.hausdorff_to_reference), num(d.mean_from_reference),
-                               num(d.chamfer)});
-        // Where the mean comes from (docs/accuracy.md): face origin, the far bands, relative
-        // distance and the true pixels the mesh covers.
-        ViewMeshDistanceOptions view_options;
-        view_options.samples = o.distance_samples;
-        view_options.seed = o.seed;
-        const ViewMeshDistances v =
-            measureViewMeshDistances(soup, faceOrigins(m->mesh), truth_mesh, truth.depth_m, truth.camera, view_options);
-        double far_share = 0, far_contribution = 0;
-        for (std::size_t b = 1; b < v.by_depth.size(); ++b)
-          if (view_options.depth_band_edges_m[b - 1] >= 80) {
-            far_share += v.by_depth[b].area_share;
-            far_contribution += v.by_depth[b].contribution_m;
-          }
-        auto originMean = [&](FaceOrigin origin) {
-          const DistancePart& part = v.by_origin[static_cast<std::size_t>(origin)];
-          return part.samples > 0 ? num(part.mean_m) : std::string();
-        };
-        row.insert(row.end(), {originMean(FaceOrigin::DepthSurface), originMean(FaceOrigin::HoleFill),
-                               originMean(FaceOrigin::Solid), num(far_share), num(far_contribution),
-                               num(v.mean_relative_to_truth), num(v.truth_covered)});
-        distance_text = ", " + num(d.mean_to_reference) + " m mean to the true surfaces (" + num(far_contribution) +
-                        " m of it beyond 80 m), " + num(v.mean_relative_to_truth) + " of the depth";
-      } else {
-        row.insert(row.end(), {"", "", "", "", "", "", "", "", "", ""});
-      }
+      const std::vector<std::string> distances = meshDistanceCells(*m, soup, distance_text);
+      row.insert(row.end(), distances.begin(), distances.end());
       row.push_back(num(loadAverage1Min()));
       t.rows.push_back(row);
       say("[mesh] " + pt.name + ": " + seconds(s) + " s, " + row[t.column("holes_left_open")] + " holes open" +
@@ -427,7 +456,6 @@ struct AccuracySweep::Impl {
     t.notes.push_back("holes_left_open: holes the filling could not close, or every hole found when filling is off");
     return t;
   }
-
   // ---- render -------------------------------------------------------------------------------
 
   SweepTable renderSweep() {
@@ -514,22 +542,17 @@ struct AccuracySweep::Impl {
 
   // ---- end to end ---------------------------------------------------------------------------
 
-  SweepTable endToEndSweep() {
-    SweepTable t;
-    t.stage = "end_to_end";
-    t.columns = {"seed",           "width",           "height",          "setting",
-                 "refine",         "refine_iterations", "refine_tolerance", "fill_holes",
-                 "max_fair_vertices", "close_solids",  "light_sampler",   "min_spp",
-                 "max_spp",        "relative_error_target", "noise_target", "noise_factor",
-                 "mesh_downsample", "render_downsample", "seconds", "input_seconds",
-                 "refine_seconds", "mesh_seconds",    "lights_seconds",  "scene_seconds",
-                 "render_seconds", "post_seconds",    "mean_spp",        "depth_abs_rel",
-                 "relative_rmse",  "relative_rmse_noise_corrected", "relative_rmse_unclipped", "luminance_ratio",
-                 "white_cd_m2",    "reference_spp",   "reference_relative_noise", "load_1min"};
+  /// The converged render the end-to-end settings are measured against.
+  struct EndToEndReference {
+    RenderOutput image;
+    RadianceError self;  ///< of the image against itself: its clipping white and own noise
+    double seconds = 0;
+  };
 
-    // The reference: the exact depth and instances for the mesh and the lights' geometry, the
-    // same material maps and light draws as the pipeline (so that the error is what geometry and
-    // rendering settings cause), rendered to convergence.
+  /// The reference: the exact depth and instances for the mesh and the lights' geometry, the
+  /// same material maps and light draws as the pipeline (so that the error is what geometry and
+  /// rendering settings cause), rendered to convergence.
+  EndToEndReference endToEndReference() {
     say("[end_to_end] reference from the exact depth ...");
     const DepthRefinementResult& p = refinementPrefix();
     StageReport ignored;
@@ -538,12 +561,15 @@ struct AccuracySweep::Impl {
     const LightStageResult truth_lights = runLightStage(scene, truth.depth_m, lightOptions());
     const NightScene truth_night =
         buildNightScene(truth_depth_mesh, p.maps.albedo, p.maps.roughness, scene.image, truth_lights.record);
-    double reference_s = 0;
-    const RenderOutput ref = reference(truth_night.scene, reference_s);
-    const RadianceError self = radianceError(ref, ref);
-    say("[end_to_end] reference: " + seconds(reference_s) + " s (" + integer(o.reference_spp) + " spp)");
+    EndToEndReference ref;
+    ref.image = reference(truth_night.scene, ref.seconds);
+    ref.self = radianceError(ref.image, ref.image);
+    say("[end_to_end] reference: " + seconds(ref.seconds) + " s (" + integer(o.reference_spp) + " spp)");
+    return ref;
+  }
 
-    // The presets of `solo night` (draft, default, final), then default with one stage off.
+  /// The presets of `solo night` (draft, default, final), then default with one stage off.
+  std::vector<PipelineSetting> endToEndSettings() const {
     std::vector<PipelineSetting> settings;
     for (const std::string& preset : nightPresetNames())
       if (!o.quick || preset != "final") settings.push_back(presetSetting(preset));
@@ -558,60 +584,88 @@ struct AccuracySweep::Impl {
       no_solids.night.mesh.close_solids = false;
       settings.push_back(no_solids);
     }
+    return settings;
+  }
 
-    for (PipelineSetting& s : settings) {
-      say("[end_to_end] " + s.name + " ...");
-      s.night.seed = o.seed;
-      s.night.lights.illuminant_table = o.illuminant_table;
-      Stopwatch clock;
-      NightConversionCallbacks quiet;
-      quiet.render_progress = false;
-      const NightConversionResult r = runNightConversion(scene, s.night, quiet);
-      const double pipeline_s = clock.seconds();
-      double refine_s = 0, mesh_s = 0, lights_s = 0, scene_s = 0, post_s = 0;
-      for (const StageReport& step : r.refined.steps) refine_s += step.seconds;
-      for (const StageReport& stage : r.stages) {
-        if (stage.name == "mesh") mesh_s = stage.seconds;
-        if (stage.name == "lights") lights_s = stage.seconds;
-        if (stage.name == "scene") scene_s = stage.seconds;
-        if (stage.name == "post") post_s = stage.seconds;
-      }
-      // The render's time includes the exposure preview of the noise-matched target.
-      const double render_s = std::max(0.0, pipeline_s - refine_s - mesh_s - lights_s - scene_s - post_s);
-      const double total_s = o.input_seconds + pipeline_s;
-      const RadianceError e = radianceError(r.rendered, ref);
-      DepthEvaluationInput d;
-      d.prediction_m = r.refined.depth_m;
-      d.ground_truth_m = truth.depth_m;
-      const DepthMetrics dm = evaluateDepth(d);
-
-      const NightConversionOptions& n = s.night;
-      const bool optimized = n.refine && n.refinement.optimize;
-      std::vector<std::string> row = head();
-      row.insert(row.end(),
-                 {s.name, boolean(n.refine), integer(optimized ? n.refinement.optimization.max_iterations : 0),
-                  num(n.refinement.optimization.function_tolerance), boolean(n.mesh.fill_holes),
-                  integer(n.mesh.hole_filling.max_fair_vertices), boolean(n.mesh.close_solids),
-                  lightSamplerName(n.render.light_sampler), integer(n.render.min_samples),
-                  integer(n.render.max_samples), num(n.render.relative_error), boolean(n.noise_target),
-                  num(n.render.noise_factor), integer(n.mesh_downsample),
-                  integer(n.render_downsample), seconds(total_s), seconds(o.input_seconds), seconds(refine_s),
-                  seconds(mesh_s), seconds(lights_s), seconds(scene_s), seconds(render_s), seconds(post_s),
-                  num(metricDouble(r.rendered.report, "samples_per_pixel_mean")), num(dm.abs_rel), num(e.relative_rmse),
-                  num(e.noise_corrected), num(e.relative_rmse_unclipped), num(e.luminance_ratio), num(e.white),
-                  integer(o.reference_spp), num(self.reference_noise), num(loadAverage1Min())});
-      t.rows.push_back(row);
-      say("[end_to_end] " + s.name + ": " + seconds(total_s) + " s (refine " + seconds(refine_s) + ", mesh " +
-          seconds(mesh_s) + ", render " + seconds(render_s) + "), relative RMSE " + num(e.relative_rmse));
+  /// Seconds of the stages of one pipeline run; the render's include the exposure preview of
+  /// the noise-matched target.
+  struct StageSeconds {
+    double pipeline = 0, refine = 0, mesh = 0, lights = 0, scene = 0, render = 0, post = 0;
+  };
+  static StageSeconds stageSeconds(const NightConversionResult& r, double pipeline_s) {
+    StageSeconds out;
+    out.pipeline = pipeline_s;
+    for (const StageReport& step : r.refined.steps) out.refine += step.seconds;
+    for (const StageReport& stage : r.stages) {
+      if (stage.name == "mesh") out.mesh = stage.seconds;
+      if (stage.name == "lights") out.lights = stage.seconds;
+      if (stage.name == "scene") out.scene = stage.seconds;
+      if (stage.name == "post") out.post = stage.seconds;
     }
+    out.render = std::max(0.0, pipeline_s - out.refine - out.mesh - out.lights - out.scene - out.post);
+    return out;
+  }
+
+  /// Runs the pipeline at setting `s` (the sweep's seed and illuminant table set): its row.
+  std::vector<std::string> endToEndRow(PipelineSetting& s, const EndToEndReference& ref) {
+    say("[end_to_end] " + s.name + " ...");
+    s.night.seed = o.seed;
+    s.night.lights.illuminant_table = o.illuminant_table;
+    Stopwatch clock;
+    NightConversionCallbacks quiet;
+    quiet.render_progress = false;
+    const NightConversionResult r = runNightConversion(scene, s.night, quiet);
+    const StageSeconds time_s = stageSeconds(r, clock.seconds());
+    const double total_s = o.input_seconds + time_s.pipeline;
+    const RadianceError e = radianceError(r.rendered, ref.image);
+    DepthEvaluationInput d;
+    d.prediction_m = r.refined.depth_m;
+    d.ground_truth_m = truth.depth_m;
+    const DepthMetrics dm = evaluateDepth(d);
+
+    const NightConversionOptions& n = s.night;
+    const bool optimized = n.refine && n.refinement.optimize;
+    std::vector<std::string> row = head();
+    row.insert(row.end(),
+               {s.name, boolean(n.refine), integer(optimized ? n.refinement.optimization.max_iterations : 0),
+                num(n.refinement.optimization.function_tolerance), boolean(n.mesh.fill_holes),
+                integer(n.mesh.hole_filling.max_fair_vertices), boolean(n.mesh.close_solids),
+                lightSamplerName(n.render.light_sampler), integer(n.render.min_samples),
+                integer(n.render.max_samples), num(n.render.relative_error), boolean(n.noise_target),
+                num(n.render.noise_factor), integer(n.mesh_downsample),
+                integer(n.render_downsample), seconds(total_s), seconds(o.input_seconds), seconds(time_s.refine),
+                seconds(time_s.mesh), seconds(time_s.lights), seconds(time_s.scene), seconds(time_s.render),
+                seconds(time_s.post), num(metricDouble(r.rendered.report, "samples_per_pixel_mean")),
+                num(dm.abs_rel), num(e.relative_rmse), num(e.noise_corrected), num(e.relative_rmse_unclipped),
+                num(e.luminance_ratio), num(e.white), integer(o.reference_spp), num(ref.self.reference_noise),
+                num(loadAverage1Min())});
+    say("[end_to_end] " + s.name + ": " + seconds(total_s) + " s (refine " + seconds(time_s.refine) + ", mesh " +
+        seconds(time_s.mesh) + ", render " + seconds(time_s.render) + "), relative RMSE " + num(e.relative_rmse));
+    return row;
+  }
+
+  SweepTable endToEndSweep() {
+    SweepTable t;
+    t.stage = "end_to_end";
+    t.columns = {"seed",           "width",           "height",          "setting",
+                 "refine",         "refine_iterations", "refine_tolerance", "fill_holes",
+                 "max_fair_vertices", "close_solids",  "light_sampler",   "min_spp",
+                 "max_spp",        "relative_error_target", "noise_target", "noise_factor",
+                 "mesh_downsample", "render_downsample", "seconds", "input_seconds",
+                 "refine_seconds", "mesh_seconds",    "lights_seconds",  "scene_seconds",
+                 "render_seconds", "post_seconds",    "mean_spp",        "depth_abs_rel",
+                 "relative_rmse",  "relative_rmse_noise_corrected", "relative_rmse_unclipped", "luminance_ratio",
+                 "white_cd_m2",    "reference_spp",   "reference_relative_noise", "load_1min"};
+    const EndToEndReference ref = endToEndReference();
+    for (PipelineSetting& s : endToEndSettings()) t.rows.push_back(endToEndRow(s, ref));
     t.notes.push_back(
         "each setting runs refine -> mesh -> lights -> night scene -> render -> post once, as solo night does "
         "(the scene read once, its time added as input_seconds); the error is the relative RMSE of the linear render's "
         "luminance over the pixels that show no emitter, against a reference made from the exact depth and instances "
         "(mesh and light geometry) with the same material maps and light draws, rendered at " +
         integer(o.reference_spp) + " spp (power sampler, seed " +
-        integer(static_cast<std::int64_t>(o.seed + kReferenceSeedOffset)) + ", " + seconds(reference_s) +
-        " s, its own relative noise " + num(self.reference_noise) + ")");
+        integer(static_cast<std::int64_t>(o.seed + kReferenceSeedOffset)) + ", " + seconds(ref.seconds) +
+        " s, its own relative noise " + num(ref.self.reference_noise) + ")");
     return t;
   }
 };
@@ -631,4 +685,4 @@ SweepTable AccuracySweep::mesh() { return impl_->meshSweep(); }
 SweepTable AccuracySweep::render() { return impl_->renderSweep(); }
 SweepTable AccuracySweep::endToEnd() { return impl_->endToEndSweep(); }
 
-}  // namespace solo::tools
+}  // namespace solo

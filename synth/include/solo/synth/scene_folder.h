@@ -1,0 +1,38 @@
+#pragma once
+// A synthetic street written as a scene folder (docs/scene-format.md), as `solo synth` writes
+// it: the day image, the light and window-group maps, the exact maps and mesh under gt/, the
+// simulated network predictions under est/, the manifests scene.json (estimated inputs, naming
+// the ground truth) and gt/scene.json, and synth.json recording how the folder was made. The
+// folder is written under a hidden sibling name and renamed into place at the end: a run that
+// fails leaves no folder, and a replaced folder stays as it was until the new one is complete.
+
+#include <solo/core/report.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+namespace solo {
+
+struct SyntheticSceneOptions {
+  std::uint64_t seed = 1;             ///< the street's layout, the day image and the predictions' noise
+  int width = 960, height = 540;      ///< pixels, 16 to 8192 per side
+  std::string variant = "default";    ///< streetVariantName; recorded as given
+  std::string day_render = "raster";  ///< "raster" (1 ray + 1 shadow ray per pixel) or "path" (path traced sun and sky)
+  bool progress = false;              ///< the path-traced day image's progress on stderr
+  /// Replace an existing folder, only one this function wrote that holds nothing else.
+  bool force = false;
+};
+
+struct SyntheticSceneResult {
+  std::filesystem::path folder;    ///< as written: the given folder without trailing separators
+  std::filesystem::path manifest;  ///< folder/scene.json
+  RunReport report;                ///< command "synth": a stage per step (layout, ground truth, day image, predictions, write)
+};
+
+/// Writes the synthetic street of `options` into `folder`. Throws InputError naming the option
+/// (--variant, --size, --day-render, -o) or the folder for a bad option or a folder that exists
+/// and may not be replaced; a run that fails leaves the folder as it was.
+SyntheticSceneResult writeSyntheticScene(const std::filesystem::path& folder, const SyntheticSceneOptions& options);
+
+}  // namespace solo
