@@ -150,11 +150,10 @@ void writeLightRecord(const std::filesystem::path& file, const LightRecord& reco
 
 namespace {
 
-LightRecord recordFromJson(const json& j, const std::filesystem::path& file) {
-  const Reader r(file);
+// The header: format, provenance and the image size the pixel runs refer to.
+void readHeader(const json& j, const Reader& r, LightRecord& record) {
   if (!j.is_object() || !j.contains("format") || j["format"] != kFormat)
     r.fail("", std::string("not a light record (expected \"format\": \"") + kFormat + "\")");
-  LightRecord record;
   record.scene = j.value("scene", "");
   record.seed = j.value("seed", std::uint64_t{0});
   record.ablation = j.value("mode", "sampled") == "ablation";
@@ -163,8 +162,10 @@ LightRecord recordFromJson(const json& j, const std::filesystem::path& file) {
   record.tree.width = static_cast<int>(r.integer(image, "width", "image: "));
   record.tree.height = static_cast<int>(r.integer(image, "height", "image: "));
   if (record.tree.width <= 0 || record.tree.height <= 0) r.fail("image: ", "width and height must be positive");
-  const int width = record.tree.width, height = record.tree.height;
+}
 
+// The groups, ids 0, 1, 2, ... in order, group 0 the root; returns their ids.
+std::set<int> readGroups(const json& j, const Reader& r, LightRecord& record) {
   const json& groups = r.field(j, "groups", "");
   if (!groups.is_array()) r.fail("", "\"groups\" must be an array");
   std::set<int> group_ids;
@@ -187,15 +188,76 @@ LightRecord recordFromJson(const json& j, const std::filesystem::path& file) {
     record.tree.groups.push_back(g);
   }
   if (record.tree.groups.empty()) r.fail("", "\"groups\" must hold at least the root");
+  return group_ids;
+}
 
+// The light's pixel runs, each inside the width x height image; they also give its pixel
+// count and bounding box.
+void readRuns(const json& o, const Reader& r, const std::string& where, int width, int height, Light& l) {
+  const json& runs = r.field(o, "runs", where);
+  if (!runs.is_array() || runs.empty()) r.fail(where, "\"runs\" must be a non-empty array of [row, first, last]");
+  for (const json& run : runs) {
+    if (!run.is_array() || run.size() != 3 || !run[0].is_number_integer() || !run[1].is_number_integer() ||
+        !run[2].is_number_integer())
+      r.fail(where, "a pixel run must be [row, first column, last column]");
+    const PixelRun p{run[0].get<int>(), run[1].get<int>(), run[2].get<int>()};
+    if (p.row < 0 || p.row >= height || p.first_col < 0 || p.last_col >= width || p.first_col > p.last_col)
+      r.fail(where, "pixel run [" + std::to_string(p.row) + ", " + std::to_string(p.first_col) + ", " +
+                        std::to_string(p.last_col) + "] lies outside the " + std::to_string(width) + "x" +
+                        std::to_string(height) + " image");
+    l.runs.push_back(p);
+    l.pixels += p.last_col - p.first_col + 1;
+    const cv::Rect box(p.first_col, p.row, p.last_col - p.first_col + 1, 1);
+    l.bbox = l.bbox.empty() ? box : (l.bbox | box);
+  }
+}
+
+// The light's state: on, colour, strength and its unit.
+LightState readLightState(const json& o, const Reader& r, const std::string& where, const std::filesystem::path& file) {
+  LightState s;
+  s.on = r.boolean(o, "on", where);
+  s.emits = o.value("emits", true);
+  s.activation = o.value("activation", 1.0);
+  s.xy = {r.number(o, "x", where), r.number(o, "y", where)};
+  validateChromaticity(s.xy, file, where);
+  s.strength = r.number(o, "strength", where);
+  if (s.strength < 0) r.fail(where, "negative strength");
+  try {
+    s.unit = strengthUnitFromName(r.text(o, "strength_unit", where));
+  } catch (const std::invalid_argument& e) {
+    r.fail(where, e.what());
+  }
+  s.colour_source = o.value("colour_source", "");
+  return s;
+}
+
+// The light's geometry: pixels with depth, area, centroid and normal.
+LightGeometry readLightGeometry(const json& o, const Reader& r, const std::string& where) {
+  LightGeometry g;
+  g.pixels_with_depth = o.value("pixels_with_depth", std::int64_t{0});
+  g.pixels_off_depth = o.value("pixels_off_depth", std::int64_t{0});
+  g.area_m2 = o.value("area_m2", 0.0);
+  if (!std::isfinite(g.area_m2) || g.area_m2 < 0) r.fail(where, "\"area_m2\" must be a non-negative number");
+  if (o.contains("centroid_m")) g.centroid_m = r.vector(o, "centroid_m", where);
+  if (o.contains("normal")) g.normal = r.vector(o, "normal", where);
+  try {
+    g.normal_source = normalSourceFromName(o.value("normal_source", "facing_camera"));
+  } catch (const std::invalid_argument& e) {
+    r.fail(where, e.what());
+  }
+  return g;
+}
+
+// The lights, each in an existing group that can hold its category, with unique positive ids.
+void readLights(const json& j, const Reader& r, const std::set<int>& group_ids, const std::filesystem::path& file,
+                LightRecord& record) {
+  const int width = record.tree.width, height = record.tree.height;
   const json& lights = r.field(j, "lights", "");
   if (!lights.is_array()) r.fail("", "\"lights\" must be an array");
   std::set<int> light_ids;
   for (std::size_t index = 0; index < lights.size(); ++index) {
     const json& o = lights[index];
     Light l;
-    LightState s;
-    LightGeometry g;
     l.id = static_cast<int>(r.integer(o, "id", "light #" + std::to_string(index) + ": "));
     const std::string where = "light " + std::to_string(l.id) + ": ";
     if (l.id <= 0 || !light_ids.insert(l.id).second) r.fail(where, "light ids must be positive and unique");
@@ -212,67 +274,43 @@ LightRecord recordFromJson(const json& j, const std::filesystem::path& file) {
     if (!activationBounds(kind, l.category))
       r.fail(where, std::string("a ") + lightGroupKindName(kind) + " group cannot hold a " + lightCategoryName(l.category) +
                         " light");
-    s.on = r.boolean(o, "on", where);
-    s.emits = o.value("emits", true);
-    s.activation = o.value("activation", 1.0);
-    s.xy = {r.number(o, "x", where), r.number(o, "y", where)};
-    validateChromaticity(s.xy, file, where);
-    s.strength = r.number(o, "strength", where);
-    if (s.strength < 0) r.fail(where, "negative strength");
-    try {
-      s.unit = strengthUnitFromName(r.text(o, "strength_unit", where));
-    } catch (const std::invalid_argument& e) {
-      r.fail(where, e.what());
-    }
-    s.colour_source = o.value("colour_source", "");
-    const json& runs = r.field(o, "runs", where);
-    if (!runs.is_array() || runs.empty()) r.fail(where, "\"runs\" must be a non-empty array of [row, first, last]");
-    for (const json& run : runs) {
-      if (!run.is_array() || run.size() != 3 || !run[0].is_number_integer() || !run[1].is_number_integer() ||
-          !run[2].is_number_integer())
-        r.fail(where, "a pixel run must be [row, first column, last column]");
-      const PixelRun p{run[0].get<int>(), run[1].get<int>(), run[2].get<int>()};
-      if (p.row < 0 || p.row >= height || p.first_col < 0 || p.last_col >= width || p.first_col > p.last_col)
-        r.fail(where, "pixel run [" + std::to_string(p.row) + ", " + std::to_string(p.first_col) + ", " +
-                          std::to_string(p.last_col) + "] lies outside the " + std::to_string(width) + "x" +
-                          std::to_string(height) + " image");
-      l.runs.push_back(p);
-      l.pixels += p.last_col - p.first_col + 1;
-      const cv::Rect box(p.first_col, p.row, p.last_col - p.first_col + 1, 1);
-      l.bbox = l.bbox.empty() ? box : (l.bbox | box);
-    }
-    g.pixels_with_depth = o.value("pixels_with_depth", std::int64_t{0});
-    g.pixels_off_depth = o.value("pixels_off_depth", std::int64_t{0});
-    g.area_m2 = o.value("area_m2", 0.0);
-    if (!std::isfinite(g.area_m2) || g.area_m2 < 0) r.fail(where, "\"area_m2\" must be a non-negative number");
-    if (o.contains("centroid_m")) g.centroid_m = r.vector(o, "centroid_m", where);
-    if (o.contains("normal")) g.normal = r.vector(o, "normal", where);
-    try {
-      g.normal_source = normalSourceFromName(o.value("normal_source", "facing_camera"));
-    } catch (const std::invalid_argument& e) {
-      r.fail(where, e.what());
-    }
+    const LightState s = readLightState(o, r, where, file);
+    readRuns(o, r, where, width, height, l);
+    const LightGeometry g = readLightGeometry(o, r, where);
     record.tree.groups[l.group].lights.push_back(l.id);
     record.tree.lights.push_back(std::move(l));
     record.instantiation.lights.push_back(s);
     record.geometry.push_back(g);
   }
-  if (j.contains("draws") && j["draws"].is_array())
-    for (const json& o : j["draws"]) {
-      GroupDraw d;
-      d.group = o.value("group", 0);
-      d.light = o.value("light", 0);
-      try {
-        d.category = lightCategoryFromName(o.value("category", ""));
-      } catch (const std::invalid_argument& e) {
-        r.fail("draws: ", e.what());
-      }
-      d.activation = o.value("activation", 0.0);
-      d.sample = o.value("sample", -1);
-      d.xy = {o.value("x", 1.0 / 3.0), o.value("y", 1.0 / 3.0)};
-      d.strength = o.value("strength", 0.0);
-      record.instantiation.draws.push_back(d);
+}
+
+// The group draws, when the record holds them (informative: nothing is checked).
+void readDraws(const json& j, const Reader& r, LightRecord& record) {
+  if (!j.contains("draws") || !j["draws"].is_array()) return;
+  for (const json& o : j["draws"]) {
+    GroupDraw d;
+    d.group = o.value("group", 0);
+    d.light = o.value("light", 0);
+    try {
+      d.category = lightCategoryFromName(o.value("category", ""));
+    } catch (const std::invalid_argument& e) {
+      r.fail("draws: ", e.what());
     }
+    d.activation = o.value("activation", 0.0);
+    d.sample = o.value("sample", -1);
+    d.xy = {o.value("x", 1.0 / 3.0), o.value("y", 1.0 / 3.0)};
+    d.strength = o.value("strength", 0.0);
+    record.instantiation.draws.push_back(d);
+  }
+}
+
+LightRecord recordFromJson(const json& j, const std::filesystem::path& file) {
+  const Reader r(file);
+  LightRecord record;
+  readHeader(j, r, record);
+  const std::set<int> group_ids = readGroups(j, r, record);
+  readLights(j, r, group_ids, file, record);
+  readDraws(j, r, record);
   return record;
 }
 

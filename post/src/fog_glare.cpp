@@ -146,6 +146,127 @@ const char* methodName(GlareMethod m) {
   return "?";
 }
 
+/// The share of a bright pixel that the glare spreads: scatter x its luminance above the
+/// threshold, in the pixel's colour.
+struct Contribution {
+  float threshold, scatter;
+  cv::Vec3f operator()(const cv::Vec3f& p) const { return p * (scatter * (p[1] - threshold) / p[1]); }
+};
+
+/// Where the pixels brighter than the threshold lie: per row their count and luminance above
+/// the threshold, per tile (side = kernel size) and over the whole image their extent.
+struct BrightSurvey {
+  std::vector<int> row_count;
+  std::vector<double> row_energy;
+  std::vector<Box> tiles;  // row-major, tiles_x per row
+  Box all;
+  std::int64_t count = 0;
+  double bright_energy = 0;
+};
+
+BrightSurvey surveyBrightPixels(const cv::Mat& linear_xyz, float threshold, int tile) {
+  BrightSurvey survey;
+  // First pass, parallel over rows: per row the bright pixel count, its luminance above
+  // the threshold, and per tile column the x extent.
+  const int tiles_y = (linear_xyz.rows + tile - 1) / tile, tiles_x = (linear_xyz.cols + tile - 1) / tile;
+  std::vector<int>& row_count = survey.row_count;
+  std::vector<double>& row_energy = survey.row_energy;
+  row_count.assign(linear_xyz.rows, 0);
+  row_energy.assign(linear_xyz.rows, 0.0);
+  std::vector<int> row_tile_x0(static_cast<std::size_t>(linear_xyz.rows) * tiles_x, 1 << 30);
+  std::vector<int> row_tile_x1(static_cast<std::size_t>(linear_xyz.rows) * tiles_x, -1);
+  cv::parallel_for_(cv::Range(0, linear_xyz.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      const cv::Vec3f* src = linear_xyz.ptr<cv::Vec3f>(y);
+      int* x0 = &row_tile_x0[static_cast<std::size_t>(y) * tiles_x];
+      int* x1 = &row_tile_x1[static_cast<std::size_t>(y) * tiles_x];
+      for (int x = 0; x < linear_xyz.cols; ++x) {
+        if (!(src[x][1] > threshold)) continue;
+        ++row_count[y];
+        row_energy[y] += src[x][1] - threshold;
+        const int t = x / tile;
+        x0[t] = std::min(x0[t], x);
+        x1[t] = std::max(x1[t], x);
+      }
+    }
+  });
+  // Second pass: the rows' extents gathered into the tiles' boxes and the whole image's.
+  survey.tiles.resize(static_cast<std::size_t>(tiles_y) * tiles_x);
+  for (int y = 0; y < linear_xyz.rows; ++y) {
+    if (row_count[y] == 0) continue;
+    survey.count += row_count[y];
+    survey.bright_energy += row_energy[y];
+    for (int t = 0; t < tiles_x; ++t) {
+      const std::size_t i = static_cast<std::size_t>(y) * tiles_x + t;
+      if (row_tile_x1[i] < 0) continue;
+      for (const int x : {row_tile_x0[i], row_tile_x1[i]}) {
+        survey.tiles[static_cast<std::size_t>(y / tile) * tiles_x + t].include(y, x);
+        survey.all.include(y, x);
+      }
+    }
+  }
+  return survey;
+}
+
+/// The estimated costs of the three ways, their FFT plans, and the way chosen.
+struct GlarePlan {
+  double direct_ns = 0, fft_ns = 0, tiled_ns = 0;
+  FftPlan whole;
+  std::vector<FftPlan> tiled;
+  GlareMethod method = GlareMethod::Automatic;
+};
+
+/// Costs of the three ways; Automatic takes the cheapest.
+GlarePlan planGlare(const BrightSurvey& survey, const cv::Size& image, int r, GlareMethod requested) {
+  GlarePlan plan;
+  const double taps = static_cast<double>(std::min(2 * r + 1, image.height)) * std::min(2 * r + 1, image.width);
+  plan.direct_ns = kDirectNsPerTap * taps * static_cast<double>(survey.count);
+  plan.whole = planRegion(survey.all, image, r);
+  plan.fft_ns = fftCostNs(plan.whole);
+  for (const Box& b : survey.tiles)
+    if (!b.empty()) {
+      plan.tiled.push_back(planRegion(b, image, r));
+      plan.tiled_ns += fftCostNs(plan.tiled.back());
+    }
+  plan.method = requested;
+  if (plan.method == GlareMethod::Automatic) {
+    plan.method = GlareMethod::Fft;
+    double best = plan.fft_ns;
+    if (plan.tiled.size() > 1 && plan.tiled_ns < best) plan.method = GlareMethod::TiledFft, best = plan.tiled_ns;
+    if (plan.direct_ns < best) plan.method = GlareMethod::Direct;
+  }
+  return plan;
+}
+
+/// The bright pixels' contributions as an image (zero elsewhere), for the FFT ways.
+cv::Mat brightContributions(const cv::Mat& linear_xyz, const BrightSurvey& survey, const Contribution& contribution) {
+  cv::Mat bright = cv::Mat::zeros(linear_xyz.size(), CV_32FC3);
+  cv::parallel_for_(cv::Range(0, linear_xyz.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      if (survey.row_count[y] == 0) continue;
+      const cv::Vec3f* src = linear_xyz.ptr<cv::Vec3f>(y);
+      cv::Vec3f* dst = bright.ptr<cv::Vec3f>(y);
+      for (int x = survey.all.x0; x <= survey.all.x1; ++x)
+        if (src[x][1] > contribution.threshold) dst[x] = contribution(src[x]);
+    }
+  });
+  return bright;
+}
+
+/// The bright pixels' contributions as a list, for the direct way.
+std::vector<BrightPixel> listBrightPixels(const cv::Mat& linear_xyz, const BrightSurvey& survey,
+                                          const Contribution& contribution) {
+  std::vector<BrightPixel> listed;
+  listed.reserve(static_cast<std::size_t>(survey.count));
+  for (int y = survey.all.y0; y <= survey.all.y1; ++y) {
+    if (survey.row_count[y] == 0) continue;
+    const cv::Vec3f* src = linear_xyz.ptr<cv::Vec3f>(y);
+    for (int x = survey.all.x0; x <= survey.all.x1; ++x)
+      if (src[x][1] > contribution.threshold) listed.push_back({y, x, contribution(src[x])});
+  }
+  return listed;
+}
+
 }  // namespace
 
 cv::Mat fogGlowKernel(int size) {
@@ -186,52 +307,11 @@ StageReport applyFogGlare(cv::Mat& linear_xyz, const FogGlareOptions& options) {
       .add("threshold", options.threshold)
       .add("scatter_fraction", options.scatter_fraction);
 
-  // First pass, parallel over rows: per row the bright pixel count, its luminance above
-  // the threshold, and per tile column (tile side = kernel size) the x extent.
-  const int tile = n;
-  const int tiles_y = (linear_xyz.rows + tile - 1) / tile, tiles_x = (linear_xyz.cols + tile - 1) / tile;
-  std::vector<int> row_count(linear_xyz.rows, 0);
-  std::vector<double> row_energy(linear_xyz.rows, 0.0);
-  std::vector<int> row_tile_x0(static_cast<std::size_t>(linear_xyz.rows) * tiles_x, 1 << 30);
-  std::vector<int> row_tile_x1(static_cast<std::size_t>(linear_xyz.rows) * tiles_x, -1);
-  const float scatter = static_cast<float>(options.scatter_fraction);
-  auto contribution = [threshold, scatter](const cv::Vec3f& p) { return p * (scatter * (p[1] - threshold) / p[1]); };
-  cv::parallel_for_(cv::Range(0, linear_xyz.rows), [&](const cv::Range& rows) {
-    for (int y = rows.start; y < rows.end; ++y) {
-      const cv::Vec3f* src = linear_xyz.ptr<cv::Vec3f>(y);
-      int* x0 = &row_tile_x0[static_cast<std::size_t>(y) * tiles_x];
-      int* x1 = &row_tile_x1[static_cast<std::size_t>(y) * tiles_x];
-      for (int x = 0; x < linear_xyz.cols; ++x) {
-        if (!(src[x][1] > threshold)) continue;
-        ++row_count[y];
-        row_energy[y] += src[x][1] - threshold;
-        const int t = x / tile;
-        x0[t] = std::min(x0[t], x);
-        x1[t] = std::max(x1[t], x);
-      }
-    }
-  });
-  std::vector<Box> tiles(static_cast<std::size_t>(tiles_y) * tiles_x);
-  Box all;
-  std::int64_t count = 0;
-  double bright_energy = 0;
-  for (int y = 0; y < linear_xyz.rows; ++y) {
-    if (row_count[y] == 0) continue;
-    count += row_count[y];
-    bright_energy += row_energy[y];
-    for (int t = 0; t < tiles_x; ++t) {
-      const std::size_t i = static_cast<std::size_t>(y) * tiles_x + t;
-      if (row_tile_x1[i] < 0) continue;
-      for (const int x : {row_tile_x0[i], row_tile_x1[i]}) {
-        tiles[static_cast<std::size_t>(y / tile) * tiles_x + t].include(y, x);
-        all.include(y, x);
-      }
-    }
-  }
+  const BrightSurvey survey = surveyBrightPixels(linear_xyz, threshold, n);
   const double pixels = static_cast<double>(linear_xyz.total());
-  report.add("bright_pixels", count);
-  report.add("bright_fraction", pixels > 0 ? static_cast<double>(count) / pixels : 0.0);
-  if (count == 0) {
+  report.add("bright_pixels", survey.count);
+  report.add("bright_fraction", pixels > 0 ? static_cast<double>(survey.count) / pixels : 0.0);
+  if (survey.count == 0) {
     report.skipped = true;
     report.skip_reason = "no pixel brighter than the threshold (luminance Y > " + std::to_string(options.threshold) +
                          "): the image is unchanged";
@@ -239,65 +319,29 @@ StageReport applyFogGlare(cv::Mat& linear_xyz, const FogGlareOptions& options) {
     return report;
   }
 
-  // Costs of the three ways; Automatic takes the cheapest.
-  const double taps = static_cast<double>(std::min(2 * r + 1, linear_xyz.rows)) * std::min(2 * r + 1, linear_xyz.cols);
-  const double direct_ns = kDirectNsPerTap * taps * static_cast<double>(count);
-  const FftPlan whole = planRegion(all, linear_xyz.size(), r);
-  const double fft_ns = fftCostNs(whole);
-  std::vector<FftPlan> tiled;
-  double tiled_ns = 0;
-  for (const Box& b : tiles)
-    if (!b.empty()) {
-      tiled.push_back(planRegion(b, linear_xyz.size(), r));
-      tiled_ns += fftCostNs(tiled.back());
-    }
-  GlareMethod method = options.method;
-  if (method == GlareMethod::Automatic) {
-    method = GlareMethod::Fft;
-    double best = fft_ns;
-    if (tiled.size() > 1 && tiled_ns < best) method = GlareMethod::TiledFft, best = tiled_ns;
-    if (direct_ns < best) method = GlareMethod::Direct;
-  }
-
+  const GlarePlan plan = planGlare(survey, linear_xyz.size(), r, options.method);
   const double energy_before = cv::sum(linear_xyz)[1];
+  const Contribution contribution{threshold, static_cast<float>(options.scatter_fraction)};
   KernelSpectra spectra(kernel);
-  cv::Mat bright;  // the contributions, for the FFT ways (they add into the image region by region)
-  if (method != GlareMethod::Direct) {
-    bright = cv::Mat::zeros(linear_xyz.size(), CV_32FC3);
-    cv::parallel_for_(cv::Range(0, linear_xyz.rows), [&](const cv::Range& rows) {
-      for (int y = rows.start; y < rows.end; ++y) {
-        if (row_count[y] == 0) continue;
-        const cv::Vec3f* src = linear_xyz.ptr<cv::Vec3f>(y);
-        cv::Vec3f* dst = bright.ptr<cv::Vec3f>(y);
-        for (int x = all.x0; x <= all.x1; ++x)
-          if (src[x][1] > threshold) dst[x] = contribution(src[x]);
-      }
-    });
-  }
-  if (method == GlareMethod::Direct) {
-    std::vector<BrightPixel> listed;
-    listed.reserve(static_cast<std::size_t>(count));
-    for (int y = all.y0; y <= all.y1; ++y) {
-      if (row_count[y] == 0) continue;
-      const cv::Vec3f* src = linear_xyz.ptr<cv::Vec3f>(y);
-      for (int x = all.x0; x <= all.x1; ++x)
-        if (src[x][1] > threshold) listed.push_back({y, x, contribution(src[x])});
-    }
-    splatDirect(listed, kernel, linear_xyz);
-  } else if (method == GlareMethod::Fft) {
-    convolveRegion(bright, whole, spectra, linear_xyz);
-    report.add("fft_rows", static_cast<std::int64_t>(whole.rows), "px")
-        .add("fft_cols", static_cast<std::int64_t>(whole.cols), "px");
+  if (plan.method == GlareMethod::Direct) {
+    splatDirect(listBrightPixels(linear_xyz, survey, contribution), kernel, linear_xyz);
+  } else if (plan.method == GlareMethod::Fft) {
+    convolveRegion(brightContributions(linear_xyz, survey, contribution), plan.whole, spectra, linear_xyz);
+    report.add("fft_rows", static_cast<std::int64_t>(plan.whole.rows), "px")
+        .add("fft_cols", static_cast<std::int64_t>(plan.whole.cols), "px");
   } else {
-    for (const FftPlan& plan : tiled) convolveRegion(bright, plan, spectra, linear_xyz);
-    report.add("fft_regions", static_cast<std::int64_t>(tiled.size()));
+    // The contributions add into the image region by region.
+    const cv::Mat bright = brightContributions(linear_xyz, survey, contribution);
+    for (const FftPlan& region : plan.tiled) convolveRegion(bright, region, spectra, linear_xyz);
+    report.add("fft_regions", static_cast<std::int64_t>(plan.tiled.size()));
   }
   const double glow_energy = cv::sum(linear_xyz)[1] - energy_before;
-  report.add("method", std::string(methodName(method)));
-  report.add("estimated_direct_ms", direct_ns * 1e-6, "ms");
-  report.add("estimated_fft_ms", fft_ns * 1e-6, "ms");
-  report.add("estimated_tiled_fft_ms", tiled_ns * 1e-6, "ms");
-  report.add("glow_in_frame_fraction", bright_energy > 0 ? glow_energy / (options.scatter_fraction * bright_energy) : 0.0);
+  report.add("method", std::string(methodName(plan.method)));
+  report.add("estimated_direct_ms", plan.direct_ns * 1e-6, "ms");
+  report.add("estimated_fft_ms", plan.fft_ns * 1e-6, "ms");
+  report.add("estimated_tiled_fft_ms", plan.tiled_ns * 1e-6, "ms");
+  report.add("glow_in_frame_fraction",
+             survey.bright_energy > 0 ? glow_energy / (options.scatter_fraction * survey.bright_energy) : 0.0);
   report.seconds = clock.seconds();
   return report;
 }

@@ -21,16 +21,81 @@ float srgbToLinear(float v) {
 
 }  // namespace
 
-NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, const cv::Mat& roughness,
-                           const cv::Mat& day_image, const LightRecord& record, const NightSceneOptions& options) {
-  Stopwatch clock;
-  NightScene out;
-  RenderScene& scene = out.scene;
-  StageReport& report = out.report;
-  report.name = "scene";
-  // The maps' (and the render's) resolution: the albedo's, else the light record's, else the
-  // mesh's. A mesh made from a downsampled depth map (--mesh-downsample) is coarser than the maps.
-  int width = depth_mesh.width, height = depth_mesh.height;
+namespace {
+
+// A face that shows one of a light's pixels: a candidate to emit the light.
+struct SeenFace {
+  std::size_t face;
+  float depth_m;  // the face's centroid z
+  double area_m2;
+  int pixel;    // y * width + x of the pixel it shows
+  bool filled;   // has a vertex added by hole filling
+  bool edge_on;  // seen within 5 degrees of edge-on
+};
+
+// A mesh face's vertex indices in the scene, and what its vertices say about its pixel.
+struct FaceVertices {
+  std::array<std::uint32_t, 3> face{};
+  double u = 0, v = 0;  // sums of the vertices' pixel coordinates (mesh grid)
+  int with_pixel = 0;   // vertices that have a pixel
+  bool behind = false;  // a closed solid's back or an input vertex: never emits
+  bool filled = false;  // a vertex added by hole filling
+};
+
+// The scene under construction, and what one step of buildNightScene hands to the next.
+struct NightSceneBuilder {
+  NightSceneBuilder(const DepthMesh& depth_mesh_, const cv::Mat& roughness_, const LightRecord& record_,
+                    const NightSceneOptions& options_, NightScene& out)
+      : depth_mesh(depth_mesh_), roughness(roughness_), record(record_), options(options_), scene(out.scene),
+        report(out.report) {}
+
+  const DepthMesh& depth_mesh;
+  const cv::Mat& roughness;
+  const LightRecord& record;
+  const NightSceneOptions& options;
+  RenderScene& scene;
+  StageReport& report;
+
+  int width = 0, height = 0;  // the maps' and the render's resolution
+  cv::Mat reflectance_map;
+  bool lights_match = false;  // the light record is at the maps' resolution
+  cv::Mat light_index;        // per pixel, index into record.tree.lights, -1 = none
+  std::vector<bool> light_on;
+  std::vector<int> light_of_face;  // per scene face, index into record.tree.lights, -1 = none
+  std::vector<std::vector<SeenFace>> seen_faces;  // per light
+  cv::Mat nearest_depth_m;  // per light pixel, the depth of the nearest face that shows it
+  std::vector<double> seen_area_m2;  // per light, the area of the faces that emit it
+  std::vector<int> emitter_of_light;  // per light, index into scene.emitters, -1 = none
+
+  std::int64_t hidden_faces_under_lights = 0, faces_seen_edge_on = 0, emitting_faces = 0, faces_without_pixel = 0,
+               faces_off_light_depth = 0;
+  std::map<std::string, std::int64_t> lights_on_by_category;
+  std::int64_t lights_on_without_faces = 0, light_proxies = 0, light_proxies_for_area = 0;
+  double flux_area_mesh_m2 = 0, flux_area_record_m2 = 0, luminance_area_mesh_m2 = 0, luminance_area_record_m2 = 0;
+  double proxy_area_m2 = 0;
+
+  void chooseResolution(const cv::Mat& albedo);
+  void prepareReflectance(const cv::Mat& albedo, const cv::Mat& day_image);
+  void mapLights();
+  void addMeshFaces();
+  FaceVertices addFaceVertices(SurfaceMesh::FaceHandle f, const std::optional<ImageVertexProperties>& props,
+                               std::vector<int>& index_of_vertex);
+  void noteLightFace(const std::array<std::uint32_t, 3>& face, int light, int x, int y, bool filled);
+  template <typename Drop>
+  void dropFaces(std::vector<SeenFace>& faces, const Drop& drop, std::int64_t& count);
+  void keepFacesAtLightDepth();
+  double addProxy(std::size_t i);
+  void addEmitters();
+  void assignFaceEmitters();
+  void addHeadlightsAndSky();
+  void writeReport();
+};
+
+// The maps' (and the render's) resolution: the albedo's, else the light record's, else the
+// mesh's. A mesh made from a downsampled depth map (--mesh-downsample) is coarser than the maps.
+void NightSceneBuilder::chooseResolution(const cv::Mat& albedo) {
+  width = depth_mesh.width;
+  height = depth_mesh.height;
   if (!albedo.empty()) {
     width = albedo.cols;
     height = albedo.rows;
@@ -40,8 +105,11 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   }
   scene.camera = (width == depth_mesh.width && height == depth_mesh.height) ? depth_mesh.camera
                                                                               : depth_mesh.camera.scaledTo(width, height);
+}
 
-  cv::Mat reflectance_map = albedo;
+// The reflectance map: the albedo, else the linearised day image at the maps' resolution.
+void NightSceneBuilder::prepareReflectance(const cv::Mat& albedo, const cv::Mat& day_image) {
+  reflectance_map = albedo;
   if (reflectance_map.empty() && !day_image.empty()) {
     cv::Mat resized;
     cv::resize(day_image, resized, cv::Size(width, height), 0, 0, cv::INTER_AREA);
@@ -53,10 +121,13 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   }
   CV_Assert(reflectance_map.empty() || reflectance_map.size() == cv::Size(width, height));
   CV_Assert(roughness.empty() || roughness.size() == cv::Size(width, height));
+}
 
-  // Light index per pixel (into record.tree.lights), -1 = none.
-  cv::Mat light_index(height, width, CV_32S, cv::Scalar(-1));
-  const bool lights_match = record.tree.width == width && record.tree.height == height;
+// The light index per pixel, and which lights are on with a usable strength. A flux becomes a
+// luminance once the area of the faces that show the light is known (addEmitters).
+void NightSceneBuilder::mapLights() {
+  light_index = cv::Mat(height, width, CV_32S, cv::Scalar(-1));
+  lights_match = record.tree.width == width && record.tree.height == height;
   if (!record.tree.lights.empty() && !lights_match)
     report.notes.push_back("light record is " + std::to_string(record.tree.width) + "x" +
                            std::to_string(record.tree.height) + ", the mesh " + std::to_string(width) + "x" +
@@ -66,74 +137,88 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
       for (const PixelRun& run : record.tree.lights[i].runs)
         for (int c = run.first_col; c <= run.last_col; ++c) light_index.at<int>(run.row, c) = static_cast<int>(i);
 
-  // Lights that are on, with a usable strength. A flux becomes a luminance once the area
-  // of the faces that show the light is known (below).
-  std::vector<bool> light_on(record.tree.lights.size(), false);
+  light_on.assign(record.tree.lights.size(), false);
   for (std::size_t i = 0; i < record.tree.lights.size(); ++i) {
     const LightState& state = record.instantiation.lights[i];
     light_on[i] = state.on && state.strength > 0 && std::isfinite(state.strength);
   }
-  std::vector<int> light_of_face;  // per scene face, index into record.tree.lights, -1 = none
-  struct SeenFace {
-    std::size_t face;
-    float depth_m;  // the face's centroid z
-    double area_m2;
-    int pixel;    // y * width + x of the pixel it shows
-    bool filled;   // has a vertex added by hole filling
-    bool edge_on;  // seen within 5 degrees of edge-on
-  };
-  std::vector<std::vector<SeenFace>> seen_faces(record.tree.lights.size());
-  // Per light pixel, the depth of the nearest face that shows it.
-  cv::Mat nearest_depth_m(height, width, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
-  std::int64_t hidden_faces_under_lights = 0, faces_seen_edge_on = 0;
-  const double kCosEdgeOn = std::cos(85.0 * 3.14159265358979 / 180.0);
+  seen_faces.resize(record.tree.lights.size());
+  nearest_depth_m = cv::Mat(height, width, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
+}
 
-  // Geometry, and per face the pixel under its vertices' mean pixel position.
+// Adds face f's vertices to the scene (each mesh vertex once) and sums their pixels.
+FaceVertices NightSceneBuilder::addFaceVertices(SurfaceMesh::FaceHandle f,
+                                                const std::optional<ImageVertexProperties>& props,
+                                                std::vector<int>& index_of_vertex) {
+  const SurfaceMesh& mesh = depth_mesh.mesh;
+  FaceVertices out;
+  out.behind = !props.has_value();
+  int k = 0;
+  for (const auto vh : mesh.fv_range(f)) {
+    if (props) {
+      const auto origin = static_cast<VertexOrigin>(mesh.property(props->origin, vh));
+      out.behind |= origin == VertexOrigin::SolidBack || origin == VertexOrigin::Input;
+      out.filled |= origin == VertexOrigin::HoleFill;
+    }
+    int& index = index_of_vertex[static_cast<std::size_t>(vh.idx())];
+    if (index < 0) {
+      const auto p = mesh.point(vh);
+      index = static_cast<int>(scene.vertices.size());
+      scene.vertices.emplace_back(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2]));
+    }
+    out.face[static_cast<std::size_t>(k++)] = static_cast<std::uint32_t>(index);
+    if (props) {
+      const OpenMesh::Vec2i pixel = mesh.property(props->pixel, vh);
+      if (pixel[0] >= 0 && pixel[1] >= 0) {
+        out.u += pixel[0];
+        out.v += pixel[1];
+        ++out.with_pixel;
+      }
+    }
+  }
+  return out;
+}
+
+// Notes the scene's last face, `face`, as showing light `light` at pixel (x, y).
+void NightSceneBuilder::noteLightFace(const std::array<std::uint32_t, 3>& face, int light, int x, int y,
+                                      bool filled) {
+  const double kCosEdgeOn = std::cos(85.0 * 3.14159265358979 / 180.0);
+  const Eigen::Vector3d a = scene.vertices[face[0]].cast<double>();
+  const Eigen::Vector3d ab = scene.vertices[face[1]].cast<double>() - a;
+  const Eigen::Vector3d ac = scene.vertices[face[2]].cast<double>() - a;
+  const Eigen::Vector3d normal = ab.cross(ac);
+  const Eigen::Vector3d centroid = a + (ab + ac) / 3.0;
+  // Seen within 5 degrees of edge-on: stretched across a depth jump (the light's
+  // silhouette toward the background), or a surface at grazing view.
+  const bool edge_on = std::abs(normal.dot(centroid)) < kCosEdgeOn * normal.norm() * centroid.norm();
+  const float depth = (scene.vertices[face[0]].z() + scene.vertices[face[1]].z() + scene.vertices[face[2]].z()) / 3;
+  seen_faces[static_cast<std::size_t>(light)].push_back(
+      {scene.faces.size() - 1, depth, 0.5 * normal.norm(), y * width + x, filled, edge_on});
+  float& nearest = nearest_depth_m.at<float>(y, x);
+  nearest = std::min(nearest, depth);
+}
+
+// Geometry, and per face the material and the light of the pixel under its vertices' mean
+// pixel position.
+void NightSceneBuilder::addMeshFaces() {
   const SurfaceMesh& mesh = depth_mesh.mesh;
   const std::optional<ImageVertexProperties> props = ImageVertexProperties::find(mesh);
   std::vector<int> index_of_vertex(mesh.n_vertices(), -1);
-  std::int64_t emitting_faces = 0, faces_without_pixel = 0;
   // Pixel coordinates on the mesh are of its own grid; pixel centres map by the camera's rule.
   const double scale_x = depth_mesh.width > 0 ? static_cast<double>(width) / depth_mesh.width : 1.0;
   const double scale_y = depth_mesh.height > 0 ? static_cast<double>(height) / depth_mesh.height : 1.0;
   for (const auto f : mesh.faces()) {
     if (mesh.status(f).deleted()) continue;
-    std::array<std::uint32_t, 3> face{};
-    int k = 0;
-    double u = 0, v = 0;
-    int with_pixel = 0;
-    bool behind = !props.has_value(), filled = false;
-    for (const auto vh : mesh.fv_range(f)) {
-      if (props) {
-        const auto origin = static_cast<VertexOrigin>(mesh.property(props->origin, vh));
-        behind |= origin == VertexOrigin::SolidBack || origin == VertexOrigin::Input;
-        filled |= origin == VertexOrigin::HoleFill;
-      }
-      int& index = index_of_vertex[static_cast<std::size_t>(vh.idx())];
-      if (index < 0) {
-        const auto p = mesh.point(vh);
-        index = static_cast<int>(scene.vertices.size());
-        scene.vertices.emplace_back(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2]));
-      }
-      face[static_cast<std::size_t>(k++)] = static_cast<std::uint32_t>(index);
-      if (props) {
-        const OpenMesh::Vec2i pixel = mesh.property(props->pixel, vh);
-        if (pixel[0] >= 0 && pixel[1] >= 0) {
-          u += pixel[0];
-          v += pixel[1];
-          ++with_pixel;
-        }
-      }
-    }
-    scene.faces.push_back(face);
+    const FaceVertices fv = addFaceVertices(f, props, index_of_vertex);
+    scene.faces.push_back(fv.face);
     Eigen::Vector3f rgb = Eigen::Vector3f::Constant(options.default_reflectance);
     float rough = 0.5f;
     int shown_light = -1;  // the light this face shows, if it emits
-    if (with_pixel > 0) {
+    if (fv.with_pixel > 0) {
       const int x =
-          std::clamp(static_cast<int>(std::lround((u / with_pixel + 0.5) * scale_x - 0.5)), 0, width - 1);
+          std::clamp(static_cast<int>(std::lround((fv.u / fv.with_pixel + 0.5) * scale_x - 0.5)), 0, width - 1);
       const int y =
-          std::clamp(static_cast<int>(std::lround((v / with_pixel + 0.5) * scale_y - 0.5)), 0, height - 1);
+          std::clamp(static_cast<int>(std::lround((fv.v / fv.with_pixel + 0.5) * scale_y - 0.5)), 0, height - 1);
       if (!reflectance_map.empty()) {
         const cv::Vec3f a = reflectance_map.at<cv::Vec3f>(y, x);
         rgb = Eigen::Vector3f(a[0], a[1], a[2]).cwiseMax(0.f).cwiseMin(1.f);
@@ -144,22 +229,11 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
         // Only the surface the light's pixels see emits. Closed solids' backs, and hole fills
         // and backdrops behind it, share its pixels: emitting, they would add area (a street
         // lamp's 0.4 m^2 became 10-30 m^2 of backdrop and solid backs) and light where none is.
-        // Solid backs never emit; filled faces only where nothing nearer shows the pixel (below).
-        if (!behind) {
-          const Eigen::Vector3d a = scene.vertices[face[0]].cast<double>();
-          const Eigen::Vector3d ab = scene.vertices[face[1]].cast<double>() - a;
-          const Eigen::Vector3d ac = scene.vertices[face[2]].cast<double>() - a;
-          const Eigen::Vector3d normal = ab.cross(ac);
-          const Eigen::Vector3d centroid = a + (ab + ac) / 3.0;
-          // Seen within 5 degrees of edge-on: stretched across a depth jump (the light's
-          // silhouette toward the background), or a surface at grazing view.
-          const bool edge_on = std::abs(normal.dot(centroid)) < kCosEdgeOn * normal.norm() * centroid.norm();
+        // Solid backs never emit; filled faces only where nothing nearer shows the pixel
+        // (keepFacesAtLightDepth).
+        if (!fv.behind) {
           shown_light = light;
-          const float depth = (scene.vertices[face[0]].z() + scene.vertices[face[1]].z() + scene.vertices[face[2]].z()) / 3;
-          seen_faces[static_cast<std::size_t>(light)].push_back(
-              {scene.faces.size() - 1, depth, 0.5 * normal.norm(), y * width + x, filled, edge_on});
-          float& nearest = nearest_depth_m.at<float>(y, x);
-          nearest = std::min(nearest, depth);
+          noteLightFace(fv.face, light, x, y, fv.filled);
         } else {
           ++hidden_faces_under_lights;
         }
@@ -171,21 +245,24 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     if (!roughness.empty()) scene.face_roughness.push_back(rough);
     light_of_face.push_back(shown_light);
   }
+}
 
-  // A light's pixels also see the faces its silhouette stretches toward the background
-  // (pixels of mixed depth): a street lamp's head 0.5 m deep showed faces over 5 m of depth
-  // behind it. Only faces within a robust band around the light's median depth emit:
-  // median +- max(3 MAD, 0.25 m). A flat light seen at grazing (depth spread evenly over its
-  // width w: MAD = w / 4) keeps all of its faces.
-  std::vector<double> seen_area_m2(record.tree.lights.size(), 0.0);
-  std::int64_t faces_off_light_depth = 0;
-  // Removes the faces for which `drop` holds (they stay dark) and counts them.
-  const auto dropFaces = [&](std::vector<SeenFace>& faces, const auto& drop, std::int64_t& count) {
-    const auto first = std::partition(faces.begin(), faces.end(), [&](const SeenFace& f) { return !drop(f); });
-    for (auto it = first; it != faces.end(); ++it) light_of_face[it->face] = -1;
-    count += std::distance(first, faces.end());
-    faces.erase(first, faces.end());
-  };
+// Removes the faces for which `drop` holds (they stay dark) and counts them.
+template <typename Drop>
+void NightSceneBuilder::dropFaces(std::vector<SeenFace>& faces, const Drop& drop, std::int64_t& count) {
+  const auto first = std::partition(faces.begin(), faces.end(), [&](const SeenFace& f) { return !drop(f); });
+  for (auto it = first; it != faces.end(); ++it) light_of_face[it->face] = -1;
+  count += std::distance(first, faces.end());
+  faces.erase(first, faces.end());
+}
+
+// A light's pixels also see the faces its silhouette stretches toward the background
+// (pixels of mixed depth): a street lamp's head 0.5 m deep showed faces over 5 m of depth
+// behind it. Only faces within a robust band around the light's median depth emit:
+// median +- max(3 MAD, 0.25 m). A flat light seen at grazing (depth spread evenly over its
+// width w: MAD = w / 4) keeps all of its faces.
+void NightSceneBuilder::keepFacesAtLightDepth() {
+  seen_area_m2.assign(record.tree.lights.size(), 0.0);
   for (std::size_t i = 0; i < seen_faces.size(); ++i) {
     std::vector<SeenFace>& faces = seen_faces[i];
     // A filled face behind a nearer face of the same pixel (a backdrop or a hole fill behind
@@ -209,84 +286,84 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     dropFaces(faces, [&](const SeenFace& face) { return !band.contains(face.depth_m); }, faces_off_light_depth);
     for (const SeenFace& face : faces) seen_area_m2[i] += face.area_m2;
   }
+}
 
-  // One emitter per light that is on and shown by some face. A flux (street and front lights)
-  // is spread over the area of those faces, so the rendered light keeps its flux whatever the
-  // mesh made of the light's pixels; a luminance is emitted as it is.
-  //
-  // A light that is on but shows no face would lose its light: the mesh stage removes a lamp
-  // head a few pixels high whole (it lies in the uncertain band of its silhouette). A flux light
-  // whose faces cover more than `max_flux_area_ratio` times the record's area is crumpled or
-  // stretched toward the background, and its faces' normals send its light where the lamp does
-  // not (on the 960x540 street a lamp's flux lit the wall beside it instead of the road). Both
-  // emit from a proxy instead (their faces stay dark): the light's own pixels, each run of them
-  // a quad on the record's plane (its centroid and normal, with the 85 degree incidence limit
-  // the record's area uses; past it the plane faces the camera), moved toward the camera by
-  // 1 cm + 0.2 % of its distance so that it lies in front of the surface behind it. It covers
-  // exactly the light's pixels, so the light-id AOV and the labels still agree.
-  std::vector<int> emitter_of_light(record.tree.lights.size(), -1);
-  std::map<std::string, std::int64_t> lights_on_by_category;
-  std::int64_t lights_on_without_faces = 0, light_proxies = 0, light_proxies_for_area = 0;
-  double flux_area_mesh_m2 = 0, flux_area_record_m2 = 0, luminance_area_mesh_m2 = 0, luminance_area_record_m2 = 0;
-  double proxy_area_m2 = 0;
+// Adds light i's proxy faces (see addEmitters); returns their area, 0 when the record has no
+// usable plane.
+double NightSceneBuilder::addProxy(std::size_t i) {
   const double min_incidence_cosine = std::cos(85.0 * 3.14159265358979 / 180.0);
-  // Adds light i's proxy faces; returns their area, 0 when the record has no usable plane.
-  const auto addProxy = [&](std::size_t i) -> double {
-    if (!lights_match || i >= record.geometry.size()) return 0;  // the runs are pixels of scene.camera's grid
-    const LightGeometry& geometry = record.geometry[i];
-    if (!geometry.valid() || !geometry.centroid_m.allFinite() || !(geometry.centroid_m.z() > 0) ||
-        !geometry.normal.allFinite() || !(geometry.normal.norm() > 0.5))
-      return 0;
-    const PinholeCamera& camera = scene.camera;
-    const double distance = geometry.centroid_m.norm();
-    const Eigen::Vector3d centre = geometry.centroid_m * (1.0 - (0.01 + 0.002 * distance) / distance);
-    const auto corner = [&](const PixelRun& run, bool right, bool below) {
-      const double u = right ? run.last_col + 0.5 : run.first_col - 0.5, v = below ? run.row + 0.5 : run.row - 0.5;
-      return Eigen::Vector3d((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
-    };
-    Eigen::Vector3d normal = geometry.normal.normalized();
-    for (const PixelRun& run : record.tree.lights[i].runs)
-      for (const bool right : {false, true})
-        for (const bool below : {false, true}) {
-          const Eigen::Vector3d ray = corner(run, right, below);
-          if (std::abs(normal.dot(ray)) < min_incidence_cosine * ray.norm()) normal = -centre.normalized();
-        }
-    // The emitting quads, and half way back to the centroid a black plate behind them: emitters
-    // are two-sided, and a lamp's back, unlike a mesh face's (backed by the lamp's solid or the
-    // surface behind), would light the wall behind it.
-    const double plane = normal.dot(centre), plate = normal.dot(0.5 * (centre + geometry.centroid_m));
-    std::vector<std::array<std::uint32_t, 3>> faces;
-    double area = 0;
-    const std::size_t first_vertex = scene.vertices.size();
-    for (const PixelRun& run : record.tree.lights[i].runs) {
-      const auto first = static_cast<std::uint32_t>(scene.vertices.size());
-      std::array<Eigen::Vector3d, 8> q;
-      int k = 0;
-      for (const double offset : {plane, plate})
-        for (const auto& [right, below] : {std::pair{false, false}, {true, false}, {true, true}, {false, true}}) {
-          const Eigen::Vector3d ray = corner(run, right, below);
-          q[static_cast<std::size_t>(k++)] = ray * (offset / normal.dot(ray));
-        }
-      if (!std::all_of(q.begin(), q.end(), [](const Eigen::Vector3d& p) { return p.allFinite(); })) continue;
-      for (const Eigen::Vector3d& p : q) scene.vertices.push_back(p.cast<float>());
-      area += 0.5 * ((q[1] - q[0]).cross(q[2] - q[0]).norm() + (q[2] - q[0]).cross(q[3] - q[0]).norm());
-      for (const std::uint32_t base : {first, first + 4}) {
-        faces.push_back({base, base + 1, base + 2});
-        faces.push_back({base, base + 2, base + 3});
-      }
-    }
-    if (!(area > 0) || !std::isfinite(area)) {
-      scene.vertices.resize(first_vertex);
-      return 0;
-    }
-    for (std::size_t f = 0; f < faces.size(); ++f) {
-      scene.faces.push_back(faces[f]);
-      scene.face_reflectance.push_back(Eigen::Vector3f::Zero());
-      if (!roughness.empty()) scene.face_roughness.push_back(0.5f);
-      light_of_face.push_back(f % 4 < 2 ? static_cast<int>(i) : -1);  // per run: 2 emitting, 2 plate
-    }
-    return area;
+  if (!lights_match || i >= record.geometry.size()) return 0;  // the runs are pixels of scene.camera's grid
+  const LightGeometry& geometry = record.geometry[i];
+  if (!geometry.valid() || !geometry.centroid_m.allFinite() || !(geometry.centroid_m.z() > 0) ||
+      !geometry.normal.allFinite() || !(geometry.normal.norm() > 0.5))
+    return 0;
+  const PinholeCamera& camera = scene.camera;
+  const double distance = geometry.centroid_m.norm();
+  const Eigen::Vector3d centre = geometry.centroid_m * (1.0 - (0.01 + 0.002 * distance) / distance);
+  const auto corner = [&](const PixelRun& run, bool right, bool below) {
+    const double u = right ? run.last_col + 0.5 : run.first_col - 0.5, v = below ? run.row + 0.5 : run.row - 0.5;
+    return Eigen::Vector3d((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
   };
+  Eigen::Vector3d normal = geometry.normal.normalized();
+  for (const PixelRun& run : record.tree.lights[i].runs)
+    for (const bool right : {false, true})
+      for (const bool below : {false, true}) {
+        const Eigen::Vector3d ray = corner(run, right, below);
+        if (std::abs(normal.dot(ray)) < min_incidence_cosine * ray.norm()) normal = -centre.normalized();
+      }
+  // The emitting quads, and half way back to the centroid a black plate behind them: emitters
+  // are two-sided, and a lamp's back, unlike a mesh face's (backed by the lamp's solid or the
+  // surface behind), would light the wall behind it.
+  const double plane = normal.dot(centre), plate = normal.dot(0.5 * (centre + geometry.centroid_m));
+  std::vector<std::array<std::uint32_t, 3>> faces;
+  double area = 0;
+  const std::size_t first_vertex = scene.vertices.size();
+  for (const PixelRun& run : record.tree.lights[i].runs) {
+    const auto first = static_cast<std::uint32_t>(scene.vertices.size());
+    std::array<Eigen::Vector3d, 8> q;
+    int k = 0;
+    for (const double offset : {plane, plate})
+      for (const auto& [right, below] : {std::pair{false, false}, {true, false}, {true, true}, {false, true}}) {
+        const Eigen::Vector3d ray = corner(run, right, below);
+        q[static_cast<std::size_t>(k++)] = ray * (offset / normal.dot(ray));
+      }
+    if (!std::all_of(q.begin(), q.end(), [](const Eigen::Vector3d& p) { return p.allFinite(); })) continue;
+    for (const Eigen::Vector3d& p : q) scene.vertices.push_back(p.cast<float>());
+    area += 0.5 * ((q[1] - q[0]).cross(q[2] - q[0]).norm() + (q[2] - q[0]).cross(q[3] - q[0]).norm());
+    for (const std::uint32_t base : {first, first + 4}) {
+      faces.push_back({base, base + 1, base + 2});
+      faces.push_back({base, base + 2, base + 3});
+    }
+  }
+  if (!(area > 0) || !std::isfinite(area)) {
+    scene.vertices.resize(first_vertex);
+    return 0;
+  }
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    scene.faces.push_back(faces[f]);
+    scene.face_reflectance.push_back(Eigen::Vector3f::Zero());
+    if (!roughness.empty()) scene.face_roughness.push_back(0.5f);
+    light_of_face.push_back(f % 4 < 2 ? static_cast<int>(i) : -1);  // per run: 2 emitting, 2 plate
+  }
+  return area;
+}
+
+// One emitter per light that is on and shown by some face. A flux (street and front lights)
+// is spread over the area of those faces, so the rendered light keeps its flux whatever the
+// mesh made of the light's pixels; a luminance is emitted as it is.
+//
+// A light that is on but shows no face would lose its light: the mesh stage removes a lamp
+// head a few pixels high whole (it lies in the uncertain band of its silhouette). A flux light
+// whose faces cover more than `max_flux_area_ratio` times the record's area is crumpled or
+// stretched toward the background, and its faces' normals send its light where the lamp does
+// not (on the 960x540 street a lamp's flux lit the wall beside it instead of the road). Both
+// emit from a proxy instead (their faces stay dark): the light's own pixels, each run of them
+// a quad on the record's plane (its centroid and normal, with the 85 degree incidence limit
+// the record's area uses; past it the plane faces the camera), moved toward the camera by
+// 1 cm + 0.2 % of its distance so that it lies in front of the surface behind it. It covers
+// exactly the light's pixels, so the light-id AOV and the labels still agree.
+void NightSceneBuilder::addEmitters() {
+  emitter_of_light.assign(record.tree.lights.size(), -1);
   for (std::size_t i = 0; i < record.tree.lights.size(); ++i) {
     if (!light_on[i]) continue;
     const Light& light = record.tree.lights[i];
@@ -320,10 +397,14 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     scene.emitters.push_back(e);
     ++lights_on_by_category[lightCategoryName(light.category)];
   }
-  // An emitting face reflects nothing. A lamp's luminance (10^3-10^5 cd/m^2) dwarfs what it
-  // could reflect, except its own light: a depth mesh crumples a small lamp into creases, and
-  // a path caught in one gathers the lamp's radiance at every bounce (at reflectance 0.8 a
-  // one-in-10^5 sample worth 2.4 times the lamp's luminance: the fireflies of the 1080p street).
+}
+
+// Each face's emitter. An emitting face reflects nothing. A lamp's luminance (10^3-10^5 cd/m^2)
+// dwarfs what it could reflect, except its own light: a depth mesh crumples a small lamp into
+// creases, and a path caught in one gathers the lamp's radiance at every bounce (at reflectance
+// 0.8 a one-in-10^5 sample worth 2.4 times the lamp's luminance: the fireflies of the 1080p
+// street).
+void NightSceneBuilder::assignFaceEmitters() {
   scene.face_emitter.reserve(light_of_face.size());
   for (std::size_t f = 0; f < light_of_face.size(); ++f) {
     const int light = light_of_face[f];
@@ -332,7 +413,10 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
     if (emitter >= 0) scene.face_reflectance[f].setZero();
     emitting_faces += emitter >= 0;
   }
+}
 
+// The ego car's headlights and the night sky, as the options ask.
+void NightSceneBuilder::addHeadlightsAndSky() {
   if (options.headlights) {
     const double area = 0.3 * 0.15;
     scene.rectangle_lights = egoHeadlights(static_cast<float>(options.headlight_flux_lm / (3.14159265358979 * area)));
@@ -342,7 +426,9 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   if (options.sky_luminance_cd_m2 > 0) {
     scene.sky_radiance = xyzFromChromaticity({0.3, 0.3}, options.sky_luminance_cd_m2).cast<float>();
   }
+}
 
+void NightSceneBuilder::writeReport() {
   report.add("faces", static_cast<std::int64_t>(scene.faces.size()));
   report.add("emitting_faces", emitting_faces);
   report.add("emitters", static_cast<std::int64_t>(scene.emitters.size()));
@@ -370,7 +456,26 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   report.add("luminance_lights_area_record", luminance_area_record_m2, "m2");
   for (const auto& [category, count] : lights_on_by_category) report.add("on_" + category, count);
   if (scene.emitters.empty()) report.notes.push_back("no active light in view");
-  report.seconds = clock.seconds();
+}
+
+}  // namespace
+
+NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, const cv::Mat& roughness,
+                           const cv::Mat& day_image, const LightRecord& record, const NightSceneOptions& options) {
+  Stopwatch clock;
+  NightScene out;
+  out.report.name = "scene";
+  NightSceneBuilder builder(depth_mesh, roughness, record, options, out);
+  builder.chooseResolution(albedo);
+  builder.prepareReflectance(albedo, day_image);
+  builder.mapLights();
+  builder.addMeshFaces();
+  builder.keepFacesAtLightDepth();
+  builder.addEmitters();
+  builder.assignFaceEmitters();
+  builder.addHeadlightsAndSky();
+  builder.writeReport();
+  out.report.seconds = clock.seconds();
   return out;
 }
 

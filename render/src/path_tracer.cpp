@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <unistd.h>
@@ -353,77 +354,104 @@ class WaveTracer {
     const Context& c = c_;
     Sampler& rng = *path.rng;
     const SlotHit& hit = path.hit;
+    path.alive = false;  // until a next direction is drawn
+    if (!hit.hit) {
+      addSkyAndSunFound(path);
+      return;
+    }
+    const SlotShading& face = slotShading(c.shading, hit.slot);
+    const Eigen::Vector3f& n = path.normal;
+    const float abs_cos_hit = std::abs(n.dot(path.direction));
+    addEmissionFound(path, face.emitter, face.emissive, abs_cos_hit);
+    if (path.bounce == 1) path.direct = path.radiance;  // light scattered at most once; the rest is indirect
+    const Eigen::Vector3f wo = -path.direction;
+    const SurfaceBsdf bsdf(n, wo, face.reflectance, face.roughness, c.options.diffuse, c.has_roughness);
+    if (path.bounce == 0) recordCameraHit(path, bsdf, face.emitter);
+    if (path.bounce == c.options.max_bounces) return;
+    const Eigen::Vector3f shadow_origin = path.point + n * offsetFor(hit.distance);
+    sampleSceneLights(path, index, bsdf, shadow_origin);
+    sampleSkyAndSun(path, index, bsdf, shadow_origin);
+
+    // BSDF sampling: the lobe mixture (cosine-weighted hemisphere without a specular lobe).
+    const float u_lobe = bsdf.specular() ? rng.get1D() : 0.f;
+    const auto [u1, u2] = rng.get2D();
+    Eigen::Vector3f wi;
+    const bool sampled = bsdf.sample(u_lobe, u1, u2, &wi);
+    const int splits = emissionSplits(path);
+    addSplitEmission(path, bsdf, shadow_origin, splits);
+    path.emission_scale = 1.f / static_cast<float>(splits);
+    if (!sampled) return;
+    continuePath(path, bsdf, shadow_origin, wi);
+  }
+
+  // A ray that left the scene: sky and sun, MIS-weighted against their next-event estimation
+  // after the first bounce.
+  void addSkyAndSunFound(Path& path) const {
+    const Context& c = c_;
     const int bounce = path.bounce;
     const Eigen::Vector3f& direction = path.direction;
     Eigen::Vector3f& radiance = path.radiance;
     const Eigen::Vector3f& throughput = path.throughput;
-    path.alive = false;  // until a next direction is drawn
-    if (!hit.hit) {
-      // Sky and sun: MIS-weighted against their next-event estimation after the first bounce.
-      if (c.sky_on) {
-        const float sky_pdf = std::max(0.f, path.previous_normal.dot(direction)) / kPi;
-        const float weight = bounce == 0 ? 1.f : powerHeuristic(path.previous_bsdf_pdf, sky_pdf);
-        radiance += throughput.cwiseProduct(skyRadiance(c.scene, direction)) * weight;
-      }
-      if (c.sun.on && c.sun.contains(direction)) {
-        const float weight = bounce == 0 ? 1.f : powerHeuristic(path.previous_bsdf_pdf, c.sun.pdf);
-        radiance += throughput.cwiseProduct(c.sun.radiance) * weight;
-      }
-      return;
+    if (c.sky_on) {
+      const float sky_pdf = std::max(0.f, path.previous_normal.dot(direction)) / kPi;
+      const float weight = bounce == 0 ? 1.f : powerHeuristic(path.previous_bsdf_pdf, sky_pdf);
+      radiance += throughput.cwiseProduct(skyRadiance(c.scene, direction)) * weight;
     }
-    const SlotShading& face = slotShading(c.shading, hit.slot);
-    const Eigen::Vector3f& point = path.point;
+    if (c.sun.on && c.sun.contains(direction)) {
+      const float weight = bounce == 0 ? 1.f : powerHeuristic(path.previous_bsdf_pdf, c.sun.pdf);
+      radiance += throughput.cwiseProduct(c.sun.radiance) * weight;
+    }
+  }
+
+  // The emission of the face hit (emitter `emitter_index`, emissive triangle `emissive`, -1:
+  // none), seen at |cosine| `abs_cos_hit`; MIS-weighted after the first bounce.
+  void addEmissionFound(Path& path, int emitter_index, int emissive, float abs_cos_hit) const {
+    if (emitter_index < 0) return;
+    const Context& c = c_;
+    const Emitter& e = c.scene.emitters[static_cast<std::size_t>(emitter_index)];
+    const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, abs_cos_hit);
+    if (path.bounce == 0) {
+      path.radiance += emitted;
+    } else {
+      const float weight = bounceEmissionWeight(c, emissive, path.previous_point, path.previous_normal, path.origin,
+                                                path.direction, path.hit.distance, abs_cos_hit,
+                                                path.previous_bsdf_pdf);
+      path.radiance += path.throughput.cwiseProduct(emitted) * (weight * path.emission_scale);
+    }
+  }
+
+  // The camera ray's hit: whether it sees an emitter, and the AOVs when the path fills them.
+  void recordCameraHit(Path& path, const SurfaceBsdf& bsdf, int emitter_index) const {
+    path.sees_emitter = emitter_index >= 0;
+    if (!path.first) return;
+    path.first->albedo = bsdf.albedo();
+    path.first->normal = path.normal;
+    path.first->depth = path.hit.distance * path.z_per_distance;
+    path.first->light_id = emitter_index >= 0 ? c_.scene.emitters[static_cast<std::size_t>(emitter_index)].light_id : 0;
+  }
+
+  // Next-event estimation toward the scene's lights: one sample on an emissive triangle
+  // (MIS-weighted against BSDF sampling) and one on each rectangle light (the headlights, not
+  // geometry: light sampling only, weight 1). Their unoccluded contributions are computed
+  // first; then one shadow ray goes to a light chosen in proportion to its contribution
+  // (one_shadow_ray) or one to each.
+  void sampleSceneLights(Path& path, std::uint32_t index, const SurfaceBsdf& bsdf, const Eigen::Vector3f& shadow_origin) {
+    const Context& c = c_;
+    Sampler& rng = *path.rng;
     const Eigen::Vector3f& n = path.normal;
-    const float abs_cos_hit = std::abs(n.dot(direction));
+    const Eigen::Vector3f& throughput = path.throughput;
     const int tri = path.picked;
     const float pick_pmf = path.pick_pmf;
-
-    const int emitter_index = face.emitter;
-    if (emitter_index >= 0) {
-      const Emitter& e = c.scene.emitters[static_cast<std::size_t>(emitter_index)];
-      const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, abs_cos_hit);
-      if (bounce == 0) {
-        radiance += emitted;
-      } else {
-        const float weight = bounceEmissionWeight(c, face.emissive, path.previous_point, path.previous_normal,
-                                                  path.origin, direction, hit.distance, abs_cos_hit,
-                                                  path.previous_bsdf_pdf);
-        radiance += throughput.cwiseProduct(emitted) * (weight * path.emission_scale);
-      }
-    }
-    if (bounce == 1) path.direct = radiance;  // light scattered at most once; the rest is indirect
-    const Eigen::Vector3f wo = -direction;
-    const SurfaceBsdf bsdf(n, wo, face.reflectance, face.roughness, c.options.diffuse, c.has_roughness);
-    if (bounce == 0) {
-      path.sees_emitter = emitter_index >= 0;
-      if (path.first) {
-        path.first->albedo = bsdf.albedo();
-        path.first->normal = n;
-        path.first->depth = hit.distance * path.z_per_distance;
-        path.first->light_id = emitter_index >= 0 ? c.scene.emitters[static_cast<std::size_t>(emitter_index)].light_id : 0;
-      }
-    }
-    if (bounce == c.options.max_bounces) return;
-    const Eigen::Vector3f shadow_origin = point + n * offsetFor(hit.distance);
-    const auto queueShadowRay = [&](const Eigen::Vector3f& wi, float t_far, const Eigen::Vector3f& contribution) {
-      shadow_rays_.push_back({shadow_origin, wi, contribution, t_far, index});
-    };
-
-    // Next-event estimation toward the scene's lights: one sample on an emissive triangle
-    // (MIS-weighted against BSDF sampling) and one on each rectangle light (the headlights, not
-    // geometry: light sampling only, weight 1). Their unoccluded contributions are computed
-    // first; then one shadow ray goes to a light chosen in proportion to its contribution
-    // (one_shadow_ray) or one to each.
     OneLightChoice choice(path.u_choice);
     const auto offer = [&](const Eigen::Vector3f& contribution, const Eigen::Vector3f& wi, float distance) {
       if (!contribution.allFinite()) {
-        radiance += contribution;  // the sample is dropped, as any non-finite one
+        path.radiance += contribution;  // the sample is dropped, as any non-finite one
       } else if (!(contribution.maxCoeff() > 0.f)) {
         // nothing a shadow ray could add
       } else if (c.options.one_shadow_ray) {
         choice.offer(contribution, wi, distance);
       } else {
-        queueShadowRay(wi, distance * (1.f - 1e-4f), contribution);
+        shadow_rays_.push_back({shadow_origin, wi, contribution, distance * (1.f - 1e-4f), index});
       }
     };
     const auto [su, sv] = rng.get2D();
@@ -458,22 +486,34 @@ class WaveTracer {
       const float pdf = distance2 / (cos_light * area);
       offer(throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(light.radiance) * (cos_surface / pdf), wi, distance);
     }
-    if (!choice.empty()) {
-      Eigen::Vector3f contribution = choice.contribution();
-      const float largest = contribution.maxCoeff();
-      // Shadow-ray roulette: a contribution far below the noise the sensor will add is traced
-      // with probability largest / threshold and, when traced, divided by it (unbiased; it adds
-      // at most largest x threshold of variance to the sample).
-      bool traced = true;
-      if (largest < c.shadow_roulette_y) {
-        const float keep = largest / c.shadow_roulette_y;
-        traced = choice.leftover() < keep;
-        contribution /= keep;
-        shadow_rays_skipped += !traced;
-      }
-      if (traced) queueShadowRay(choice.wi(), choice.distance() * (1.f - 1e-4f), contribution);
+    if (!choice.empty()) queueChosenLight(choice, shadow_origin, index);
+  }
+
+  // The shadow ray toward the light `choice` kept, unless shadow-ray roulette skips it.
+  void queueChosenLight(const OneLightChoice& choice, const Eigen::Vector3f& shadow_origin, std::uint32_t index) {
+    Eigen::Vector3f contribution = choice.contribution();
+    const float largest = contribution.maxCoeff();
+    // Shadow-ray roulette: a contribution far below the noise the sensor will add is traced
+    // with probability largest / threshold and, when traced, divided by it (unbiased; it adds
+    // at most largest x threshold of variance to the sample).
+    bool traced = true;
+    if (largest < c_.shadow_roulette_y) {
+      const float keep = largest / c_.shadow_roulette_y;
+      traced = choice.leftover() < keep;
+      contribution /= keep;
+      shadow_rays_skipped += !traced;
     }
-    // Sky: a cosine-weighted direction, MIS-weighted against BSDF sampling.
+    if (traced)
+      shadow_rays_.push_back({shadow_origin, choice.wi(), contribution, choice.distance() * (1.f - 1e-4f), index});
+  }
+
+  // Next-event estimation toward the sky (a cosine-weighted direction) and the sun (a direction
+  // in its disc), each MIS-weighted against BSDF sampling.
+  void sampleSkyAndSun(Path& path, std::uint32_t index, const SurfaceBsdf& bsdf, const Eigen::Vector3f& shadow_origin) {
+    const Context& c = c_;
+    Sampler& rng = *path.rng;
+    const Eigen::Vector3f& n = path.normal;
+    const Eigen::Vector3f& throughput = path.throughput;
     constexpr float kInfinity = std::numeric_limits<float>::infinity();
     if (c.sky_on) {
       const auto [u1, u2] = rng.get2D();
@@ -484,11 +524,12 @@ class WaveTracer {
         float bsdf_pdf = 0.f;
         const Eigen::Vector3f f = bsdf.evalAndPdf(wi, &bsdf_pdf);
         const float weight = powerHeuristic(sky_pdf, bsdf_pdf);
-        queueShadowRay(wi, kInfinity,
-                       throughput.cwiseProduct(f).cwiseProduct(skyRadiance(c.scene, wi)) * (cos_surface * weight / sky_pdf));
+        shadow_rays_.push_back({shadow_origin, wi,
+                                throughput.cwiseProduct(f).cwiseProduct(skyRadiance(c.scene, wi)) *
+                                    (cos_surface * weight / sky_pdf),
+                                kInfinity, index});
       }
     }
-    // Sun: a direction in its disc, MIS-weighted against BSDF sampling.
     if (c.sun.on) {
       const auto [u1, u2] = rng.get2D();
       const Eigen::Vector3f wi = c.sun.sample(u1, u2);
@@ -497,29 +538,37 @@ class WaveTracer {
         float bsdf_pdf = 0.f;
         const Eigen::Vector3f f = bsdf.evalAndPdf(wi, &bsdf_pdf);
         const float weight = powerHeuristic(c.sun.pdf, bsdf_pdf);
-        queueShadowRay(wi, kInfinity,
-                       throughput.cwiseProduct(f).cwiseProduct(c.sun.radiance) * (cos_surface * weight / c.sun.pdf));
+        shadow_rays_.push_back({shadow_origin, wi,
+                                throughput.cwiseProduct(f).cwiseProduct(c.sun.radiance) *
+                                    (cos_surface * weight / c.sun.pdf),
+                                kInfinity, index});
       }
     }
+  }
 
-    // BSDF sampling: the lobe mixture (cosine-weighted hemisphere without a specular lobe).
-    const float u_lobe = bsdf.specular() ? rng.get1D() : 0.f;
-    const auto [u1, u2] = rng.get2D();
-    Eigen::Vector3f wi;
-    const bool sampled = bsdf.sample(u_lobe, u1, u2, &wi);
-    // Emission splitting (PathTracerOptions::emission_splits): beside a large emitter the
-    // bounce's emission term is a rare, bright hit; it is averaged over `splits` directions, the
-    // extra ones here (traced at once, outside the wave: they are rare), the path's own at the
-    // next vertex scaled by emission_scale. The choice depends only on this vertex, so the
-    // estimate stays unbiased.
-    int splits = 1;
-    if (c.options.emission_splits > 1 && tri >= 0) {
-      const EmissiveTriangle& t = c.emissive[static_cast<std::size_t>(tri)];
-      if (((t.p0 + t.p1 + t.p2) / 3.f - point).squaredNorm() < c.options.split_distance_m * c.options.split_distance_m) {
-        splits = c.options.emission_splits;
-        ++split_vertices;
-      }
-    }
+  // Emission splitting (PathTracerOptions::emission_splits): beside a large emitter the
+  // bounce's emission term is a rare, bright hit; it is averaged over `splits` directions, the
+  // extra ones here (traced at once, outside the wave: they are rare), the path's own at the
+  // next vertex scaled by emission_scale. The choice depends only on this vertex, so the
+  // estimate stays unbiased. Returns the vertex's split count (1: none).
+  int emissionSplits(const Path& path) {
+    const Context& c = c_;
+    if (!(c.options.emission_splits > 1 && path.picked >= 0)) return 1;
+    const EmissiveTriangle& t = c.emissive[static_cast<std::size_t>(path.picked)];
+    if (!(((t.p0 + t.p1 + t.p2) / 3.f - path.point).squaredNorm() <
+          c.options.split_distance_m * c.options.split_distance_m))
+      return 1;
+    ++split_vertices;
+    return c.options.emission_splits;
+  }
+
+  // The emission found along the vertex's `splits` - 1 extra BSDF directions, each weighted
+  // 1 / splits.
+  void addSplitEmission(Path& path, const SurfaceBsdf& bsdf, const Eigen::Vector3f& shadow_origin, int splits) {
+    const Context& c = c_;
+    Sampler& rng = *path.rng;
+    const Eigen::Vector3f& point = path.point;
+    const Eigen::Vector3f& n = path.normal;
     for (int extra = 1; extra < splits; ++extra) {
       const float v_lobe = bsdf.specular() ? rng.get1D() : 0.f;
       const auto [v1, v2] = rng.get2D();
@@ -535,28 +584,35 @@ class WaveTracer {
       const Emitter& e = c.scene.emitters[static_cast<std::size_t>(hit_face.emitter)];
       const float abs_cos = std::abs(decodeOctahedral(hit_face.normal).dot(w));
       const float weight = bounceEmissionWeight(c, hit_face.emissive, point, n, shadow_origin, w, h.distance, abs_cos, p);
-      radiance += throughput.cwiseProduct(f).cwiseProduct(e.radiance * profile(e.directional_profile, abs_cos)) *
-                  (n.dot(w) / p * weight / static_cast<float>(splits));
+      path.radiance += path.throughput.cwiseProduct(f).cwiseProduct(e.radiance * profile(e.directional_profile, abs_cos)) *
+                       (n.dot(w) / p * weight / static_cast<float>(splits));
     }
-    path.emission_scale = 1.f / static_cast<float>(splits);
-    if (!sampled) return;
+  }
+
+  // The path's next ray along the sampled direction `wi`, with Russian roulette; `alive` stays
+  // false when the path ends here.
+  void continuePath(Path& path, const SurfaceBsdf& bsdf, const Eigen::Vector3f& shadow_origin,
+                    const Eigen::Vector3f& wi) const {
+    const Context& c = c_;
+    const Eigen::Vector3f& n = path.normal;
+    const Eigen::Vector3f& throughput = path.throughput;
     const float cos_surface = n.dot(wi);
     float bsdf_pdf = 0.f;
     const Eigen::Vector3f f = bsdf.evalAndPdf(wi, &bsdf_pdf);
     if (!(bsdf_pdf > 0.f)) return;
     path.throughput = throughput.cwiseProduct(f) * (cos_surface / bsdf_pdf);
-    if (bounce + 1 >= c.options.russian_roulette_after) {
+    if (path.bounce + 1 >= c.options.russian_roulette_after) {
       const float survive = std::clamp(path.throughput.maxCoeff(), 0.05f, 1.f);
-      if (rng.get1D() >= survive) return;
+      if (path.rng->get1D() >= survive) return;
       path.throughput /= survive;
     }
     if (!(path.throughput.maxCoeff() > 0.f)) return;
     path.previous_bsdf_pdf = bsdf_pdf;
-    path.previous_point = point;
+    path.previous_point = path.point;
     path.previous_normal = n;
     path.origin = shadow_origin;
     path.direction = wi;
-    path.bounce = bounce + 1;
+    path.bounce = path.bounce + 1;
     path.alive = true;
   }
 
@@ -659,24 +715,16 @@ RenderOutput renderPathTraced(const RenderScene& scene, const PathTracerOptions&
   return out;
 }
 
-RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const PinholeCamera& camera,
-                              const PathTracerOptions& options) {
-  Stopwatch clock;
-  const RenderScene& scene = prepared.scene();
-  const PreparedRenderScene::Impl& p = prepared.impl();
-  const int width = camera.width, height = camera.height;
-  CV_Assert(width > 0 && height > 0);
-  CV_Assert(options.absolute_error.empty() || (options.absolute_error.type() == CV_32F &&
-                                                options.absolute_error.size() == cv::Size(width, height)));
-  const double build_seconds = p.build_seconds;
-  const RayCaster& caster = *p.caster;
-  const std::vector<EmissiveTriangle>& emissive = p.emissive;
-  const LightSampler& sampler = p.lightSampler(options.light_sampler);
+namespace {
 
-  if (!scene.face_roughness.empty()) ggxAverageAlbedo(0.5f);  // builds the albedo table before the tiles start
+constexpr int kTile = 16;  // tile side, pixels
+
+// The render's shared state: the scene, its lights and the per-render constants.
+Context makeContext(const RenderScene& scene, const PinholeCamera& camera, const PathTracerOptions& options,
+                    const PreparedRenderScene::Impl& p, const LightSampler& sampler) {
   const bool sky_on = scene.sky_radiance.maxCoeff() > 0.f ||
                       (scene.sky_zenith_radiance && scene.sky_zenith_radiance->maxCoeff() > 0.f);
-  Context context{scene, camera, options, caster, emissive, sampler, p.shading, SunDisc(scene.sun),
+  Context context{scene, camera, options, *p.caster, p.emissive, sampler, p.shading, SunDisc(scene.sun),
                   sky_on, !scene.face_roughness.empty(), {}, {}};
   for (const RectangleLight& light : scene.rectangle_lights) {
     context.rectangle_area.push_back(light.edge_u.cross(light.edge_v).norm());
@@ -688,7 +736,10 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     const float threshold = static_cast<float>(options.shadow_roulette * options.noise_sigma(0.0));
     if (std::isfinite(threshold) && threshold > 0.f) context.shadow_roulette_y = threshold;
   }
+  return context;
+}
 
+RenderOutput allocateOutput(int width, int height) {
   RenderOutput out;
   out.radiance.create(height, width, CV_32FC3);
   out.albedo.create(height, width, CV_32FC3);
@@ -698,13 +749,18 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   out.emitter_coverage.create(height, width, CV_32F);
   out.samples.create(height, width, CV_32S);
   out.std_error.create(height, width, CV_32F);
+  return out;
+}
 
-  constexpr int kTile = 16;
-  const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
-  ProgressBar progress(options.progress, tiles_x * tiles_y);
-  std::mutex ray_log_mutex;
-  std::atomic<std::int64_t> total_rays{0}, total_samples{0}, dropped{0}, total_clamped{0}, stopped_by_target{0},
-      total_split_vertices{0}, total_shadow_skipped{0};
+// How many samples a pixel takes, and how its error is estimated.
+struct SampleBudget {
+  int replicates = 1;  // independent replicates of the point set (sampler.h)
+  int min_samples = 2, max_samples = 2;
+  bool pooled = false;  // replicate variances pooled over the tile (pool_error_gain)
+};
+
+SampleBudget sampleBudget(const PathTracerOptions& options) {
+  SampleBudget budget;
   const bool adaptive = std::max(2, options.min_samples) < options.max_samples;
   // Replicates (sampler.h) only where stopping decisions are made: a fixed sample count keeps
   // the single, best stratified point set.
@@ -712,168 +768,94 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   if (replicates != 1 && replicates != 2 && replicates != 4 && replicates != 8)
     throw std::invalid_argument("renderPathTraced: error_replicates must be 1, 2, 4 or 8, got " +
                                 std::to_string(options.error_replicates));
+  budget.replicates = replicates;
   // Checks fall on multiples of the replicate count, where every replicate has as many samples.
-  const int min_samples = (std::max(2, options.min_samples) + replicates - 1) / replicates * replicates;
-  const int max_samples = std::max(min_samples, options.max_samples);
+  budget.min_samples = (std::max(2, options.min_samples) + replicates - 1) / replicates * replicates;
+  budget.max_samples = std::max(budget.min_samples, options.max_samples);
+  budget.pooled = replicates > 1 && options.pool_error_gain;
+  return budget;
+}
 
-  const bool pooled = replicates > 1 && options.pool_error_gain;
-
-  // A pixel's running state; a tile's pixels advance in rounds of 8 samples so that the pooled
-  // error estimate (below) can use the whole tile before each round's stopping decisions.
-  struct PixelState {
-    int x, y;
-    Sampler rng;
-    FirstHit first;
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    double mean_y = 0, m2_y = 0;  // running mean and squared deviations of Y (Welford)
-    std::array<double, kMaxReplicates> replicate_sum{};
-    std::array<int, kMaxReplicates> replicate_count{};
-    int n = 0, taken = 0;  // finite samples, samples taken
-    int emitter_hits = 0;  // samples whose camera ray hit an emitter
-    bool done = false;
-    double stopped_variance = -1;  // variance of the mean when the target stopped it
-    // Variance of the mean as if the samples were independent: sample variance / n.
-    double independentVariance() const { return n > 1 ? m2_y / (n - 1) / n : 0.0; }
-    // Variance of the mean from the spread of the replicate means (unbiased for any sampler).
-    double replicateVariance(int replicates) const {
-      double means[kMaxReplicates], grand = 0;
-      for (int r = 0; r < replicates; ++r) {
-        if (replicate_count[static_cast<std::size_t>(r)] == 0) return std::numeric_limits<double>::infinity();
-        means[r] = replicate_sum[static_cast<std::size_t>(r)] / replicate_count[static_cast<std::size_t>(r)];
-        grand += means[r] / replicates;
-      }
-      double squares = 0;
-      for (int r = 0; r < replicates; ++r) squares += (means[r] - grand) * (means[r] - grand);
-      return squares / (replicates * (replicates - 1));
+// A pixel's running state; a tile's pixels advance in rounds of 8 samples so that the pooled
+// error estimate (TileRenderer::tileGain) can use the whole tile before each round's stopping
+// decisions.
+struct PixelState {
+  int x, y;
+  Sampler rng;
+  FirstHit first;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double mean_y = 0, m2_y = 0;  // running mean and squared deviations of Y (Welford)
+  std::array<double, kMaxReplicates> replicate_sum{};
+  std::array<int, kMaxReplicates> replicate_count{};
+  int n = 0, taken = 0;  // finite samples, samples taken
+  int emitter_hits = 0;  // samples whose camera ray hit an emitter
+  bool done = false;
+  double stopped_variance = -1;  // variance of the mean when the target stopped it
+  // Variance of the mean as if the samples were independent: sample variance / n.
+  double independentVariance() const { return n > 1 ? m2_y / (n - 1) / n : 0.0; }
+  // Variance of the mean from the spread of the replicate means (unbiased for any sampler).
+  double replicateVariance(int replicates) const {
+    double means[kMaxReplicates], grand = 0;
+    for (int r = 0; r < replicates; ++r) {
+      if (replicate_count[static_cast<std::size_t>(r)] == 0) return std::numeric_limits<double>::infinity();
+      means[r] = replicate_sum[static_cast<std::size_t>(r)] / replicate_count[static_cast<std::size_t>(r)];
+      grand += means[r] / replicates;
     }
-  };
+    double squares = 0;
+    for (int r = 0; r < replicates; ++r) squares += (means[r] - grand) * (means[r] - grand);
+    return squares / (replicates * (replicates - 1));
+  }
+};
 
-  tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
-    std::int64_t samples_taken = 0, nonfinite = 0;
-    std::vector<RecordedRay> tile_rays;
-    std::vector<RecordedRay>* log = options.ray_log ? &tile_rays : nullptr;
-    const int x0 = (tile % tiles_x) * kTile, y0 = (tile / tiles_x) * kTile;
-    std::vector<PixelState> pixels;
-    pixels.reserve(kTile * kTile);
+// What the tiles add up for the report.
+struct RenderTotals {
+  std::atomic<std::int64_t> rays{0}, samples{0}, dropped{0}, clamped{0}, stopped_by_target{0}, split_vertices{0},
+      shadow_skipped{0};
+};
+
+// Renders one tile: every pixel's first samples, then rounds of more for the pixels short of
+// their error target, then the pixels' values into the output.
+class TileRenderer {
+ public:
+  TileRenderer(const Context& c, const SampleBudget& budget, int x0, int y0, std::vector<RecordedRay>* log)
+      : c_(c), options_(c.options), budget_(budget), tracer_(c, log) {
+    const int width = c.camera.width, height = c.camera.height;
+    pixels_.reserve(kTile * kTile);
     for (int y = y0; y < std::min(y0 + kTile, height); ++y)
       for (int x = x0; x < std::min(x0 + kTile, width); ++x)
-        pixels.push_back({x, y,
-                          Sampler(options.sampler, options.seed,
-                                  static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(width) + static_cast<std::uint64_t>(x), replicates),
-                          {}});
-    // One more sample for each of `wave` (distinct pixels), traced together (WaveTracer).
-    WaveTracer tracer(context, log);
-    std::vector<Path> paths;
-    const auto takeSamples = [&](const std::vector<PixelState*>& wave) {
-      paths.clear();
-      for (PixelState* p : wave) {
-        p->rng.startSample(static_cast<std::uint32_t>(p->taken));
-        const auto [jx, jy] = p->rng.get2D();
-        paths.push_back(WaveTracer::cameraPath(context, static_cast<float>(p->x) + jx - 0.5f,
-                                               static_cast<float>(p->y) + jy - 0.5f, p->rng,
-                                               p->taken == 0 ? &p->first : nullptr));
-      }
-      tracer.trace(paths);
-      for (std::size_t k = 0; k < wave.size(); ++k) {
-        PixelState& p = *wave[k];
-        const Eigen::Vector3f& value = paths[k].radiance;
-        p.emitter_hits += paths[k].sees_emitter;
-        const int replicate = p.taken % replicates;
-        ++p.taken;
-        if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
-          ++nonfinite;  // never reaches the image
-          continue;
-        }
-        ++p.n;
-        p.sum += value.cast<double>();
-        const double delta = luminance(value) - p.mean_y;
-        p.mean_y += delta / p.n;
-        p.m2_y += delta * (luminance(value) - p.mean_y);
-        p.replicate_sum[static_cast<std::size_t>(replicate)] += luminance(value);
-        ++p.replicate_count[static_cast<std::size_t>(replicate)];
-      }
-    };
-    std::vector<PixelState*> wave;
-    // The tile's stratification gain: summed replicate variances over summed independent-sample
-    // variances. Its numerator and denominator pool every pixel of the tile, so it is steady
-    // where one pixel's replicate spread (R - 1 degrees of freedom) is not; pixels with larger
-    // variance weigh more, so it leans toward the gain of the tile's noisiest pixels.
-    const auto tileGain = [&]() {
-      double replicate = 0, independent = 0;
-      for (const PixelState& p : pixels) {
-        const double v = p.replicateVariance(replicates);
-        if (!std::isfinite(v)) continue;
-        replicate += v;
-        independent += p.independentVariance();
-      }
-      return independent > 0 ? replicate / independent : 1.0;
-    };
-    const auto variance = [&](const PixelState& p, double gain) {
-      if (replicates == 1) return p.independentVariance();
-      return pooled ? gain * p.independentVariance() : p.replicateVariance(replicates);
-    };
-    // stop_on_neighbours: the mean and per-sample variance of Y over the pixel's neighbours in
-    // the tile (3x3, itself excluded), so that whether a pixel stops does not depend on its own
-    // samples; false when it has no neighbour with two samples.
-    const int tile_width = std::min(x0 + kTile, width) - x0;
-    const int tile_rows = static_cast<int>(pixels.size()) / tile_width;
-    const auto neighbours = [&](std::size_t k, double* mean_y, double* sample_variance) {
-      const int i = static_cast<int>(k) % tile_width, j = static_cast<int>(k) / tile_width;
-      double sum_mean = 0, sum_variance = 0;
-      int count = 0;
-      for (int jj = std::max(0, j - 1); jj <= std::min(tile_rows - 1, j + 1); ++jj)
-        for (int ii = std::max(0, i - 1); ii <= std::min(tile_width - 1, i + 1); ++ii) {
-          const PixelState& q = pixels[static_cast<std::size_t>(jj * tile_width + ii)];
-          if ((ii == i && jj == j) || q.n < 2) continue;
-          sum_mean += q.mean_y;
-          sum_variance += q.m2_y / (q.n - 1);
-          ++count;
-        }
-      if (count == 0) return false;
-      *mean_y = sum_mean / count;
-      *sample_variance = sum_variance / count;
-      return true;
-    };
-    // Every pixel's first samples, one wave per sample index; then rounds of up to 8 more for
-    // the pixels still short of their target. A pixel's samples stay in order, so its state
-    // evolves as if it were sampled alone.
-    for (PixelState& p : pixels) wave.push_back(&p);
-    for (int k = 0; k < min_samples; ++k) takeSamples(wave);
-    double gain = 1.0;
+        pixels_.push_back({x, y,
+                           Sampler(options_.sampler, options_.seed,
+                                   static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(width) + static_cast<std::uint64_t>(x), budget_.replicates),
+                           {}});
+    tile_width_ = std::min(x0 + kTile, width) - x0;
+    tile_rows_ = static_cast<int>(pixels_.size()) / tile_width_;
+  }
+
+  // Every pixel's first samples, one wave per sample index; then rounds of up to 8 more for
+  // the pixels still short of their target. A pixel's samples stay in order, so its state
+  // evolves as if it were sampled alone.
+  void render() {
+    for (PixelState& p : pixels_) wave_.push_back(&p);
+    for (int k = 0; k < budget_.min_samples; ++k) takeSamples();
     for (;;) {
-      if (pooled) gain = tileGain();
-      bool active = false;
-      for (PixelState& p : pixels) {
-        if (p.done) continue;
-        double mean_y = p.mean_y, neighbour_variance = 0;
-        const bool from_neighbours = options.stop_on_neighbours && p.n > 0 &&
-                                     neighbours(static_cast<std::size_t>(&p - pixels.data()), &mean_y, &neighbour_variance);
-        const double v = from_neighbours ? (replicates > 1 && pooled ? gain : 1.0) * neighbour_variance / p.n
-                                         : variance(p, gain);
-        const float absolute = options.absolute_error.empty() ? 0.f : options.absolute_error.at<float>(p.y, p.x);
-        double target = std::max(options.relative_error * std::abs(mean_y), static_cast<double>(absolute));
-        if (options.noise_sigma) target = std::max(target, options.noise_factor * options.noise_sigma(mean_y));
-        if (std::sqrt(v) <= target) {
-          p.done = true;
-          p.stopped_variance = v;  // the estimate it stopped on; the tile's gain moves on later
-        } else if (p.taken >= max_samples) {
-          p.done = true;
-        } else {
-          active = true;
-        }
-      }
-      if (!active) break;
+      if (budget_.pooled) gain_ = tileGain();
+      if (!decideStops()) break;
       for (int k = 0; k < 8; ++k) {
-        wave.clear();
-        for (PixelState& p : pixels)
-          if (!p.done && p.taken < max_samples) wave.push_back(&p);
-        if (wave.empty()) break;
-        takeSamples(wave);
+        wave_.clear();
+        for (PixelState& p : pixels_)
+          if (!p.done && p.taken < budget_.max_samples) wave_.push_back(&p);
+        if (wave_.empty()) break;
+        takeSamples();
       }
     }
-    for (const PixelState& p : pixels) {
-      if (p.stopped_variance >= 0) ++stopped_by_target;
-      double standard_error = std::sqrt(p.stopped_variance >= 0 ? p.stopped_variance : variance(p, gain));
+  }
+
+  // The pixels' values and AOVs into `out`, the tile's counts into `totals`.
+  void write(RenderOutput& out, RenderTotals& totals) const {
+    std::int64_t samples_taken = 0;
+    for (const PixelState& p : pixels_) {
+      if (p.stopped_variance >= 0) ++totals.stopped_by_target;
+      double standard_error = std::sqrt(p.stopped_variance >= 0 ? p.stopped_variance : variance(p));
       if (!std::isfinite(standard_error)) standard_error = std::sqrt(p.independentVariance());
       samples_taken += p.taken;
       const Eigen::Vector3d mean = p.n > 0 ? Eigen::Vector3d(p.sum / p.n) : Eigen::Vector3d::Zero();
@@ -887,52 +869,160 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
       out.samples.at<int>(y, x) = p.taken;
       out.std_error.at<float>(y, x) = static_cast<float>(standard_error);
     }
-    total_rays += tracer.rays;
-    if (log) {
-      const std::lock_guard<std::mutex> lock(ray_log_mutex);
-      options.ray_log->insert(options.ray_log->end(), tile_rays.begin(), tile_rays.end());
-    }
-    total_samples += samples_taken;
-    dropped += nonfinite;
-    total_clamped += tracer.clamped;
-    total_split_vertices += tracer.split_vertices;
-    total_shadow_skipped += tracer.shadow_rays_skipped;
-    progress.tick();
-  });
+    totals.rays += tracer_.rays;
+    totals.samples += samples_taken;
+    totals.dropped += nonfinite_;
+    totals.clamped += tracer_.clamped;
+    totals.split_vertices += tracer_.split_vertices;
+    totals.shadow_skipped += tracer_.shadow_rays_skipped;
+  }
 
-  const double seconds = clock.seconds();
-  StageReport& r = out.report;
-  r.name = "render";
-  r.seconds = seconds;
-  const double pixels = static_cast<double>(width) * height;
-  r.add("samples_per_pixel_mean", static_cast<double>(total_samples.load()) / pixels);
-  double max_spp = 0;
-  cv::minMaxLoc(out.samples, nullptr, &max_spp);
-  r.add("samples_per_pixel_max", static_cast<std::int64_t>(max_spp));
-  const std::int64_t rays_cast = total_rays.load();
-  r.add("rays", rays_cast);
-  r.add("rays_per_second", static_cast<double>(rays_cast) / seconds);
-  r.add("bvh_build", build_seconds, "s");
-  r.add("bvh_primitives", static_cast<std::int64_t>(p.caster->primitiveCount()));
-  r.add("emissive_triangles", static_cast<std::int64_t>(emissive.size()));
-  r.add("light_sampler", std::string(lightSamplerName(options.light_sampler)));
-  r.add("sampler", std::string(samplerKindName(options.sampler)));
-  r.add("nonfinite_samples_dropped", dropped.load());
+ private:
+  // One more sample for each pixel of wave_ (distinct pixels), traced together (WaveTracer).
+  void takeSamples() {
+    const int replicates = budget_.replicates;
+    paths_.clear();
+    for (PixelState* p : wave_) {
+      p->rng.startSample(static_cast<std::uint32_t>(p->taken));
+      const auto [jx, jy] = p->rng.get2D();
+      paths_.push_back(WaveTracer::cameraPath(c_, static_cast<float>(p->x) + jx - 0.5f,
+                                              static_cast<float>(p->y) + jy - 0.5f, p->rng,
+                                              p->taken == 0 ? &p->first : nullptr));
+    }
+    tracer_.trace(paths_);
+    for (std::size_t k = 0; k < wave_.size(); ++k) {
+      PixelState& p = *wave_[k];
+      const Eigen::Vector3f& value = paths_[k].radiance;
+      p.emitter_hits += paths_[k].sees_emitter;
+      const int replicate = p.taken % replicates;
+      ++p.taken;
+      if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
+        ++nonfinite_;  // never reaches the image
+        continue;
+      }
+      ++p.n;
+      p.sum += value.cast<double>();
+      const double delta = luminance(value) - p.mean_y;
+      p.mean_y += delta / p.n;
+      p.m2_y += delta * (luminance(value) - p.mean_y);
+      p.replicate_sum[static_cast<std::size_t>(replicate)] += luminance(value);
+      ++p.replicate_count[static_cast<std::size_t>(replicate)];
+    }
+  }
+
+  // The tile's stratification gain: summed replicate variances over summed independent-sample
+  // variances. Its numerator and denominator pool every pixel of the tile, so it is steady
+  // where one pixel's replicate spread (R - 1 degrees of freedom) is not; pixels with larger
+  // variance weigh more, so it leans toward the gain of the tile's noisiest pixels.
+  double tileGain() const {
+    double replicate = 0, independent = 0;
+    for (const PixelState& p : pixels_) {
+      const double v = p.replicateVariance(budget_.replicates);
+      if (!std::isfinite(v)) continue;
+      replicate += v;
+      independent += p.independentVariance();
+    }
+    return independent > 0 ? replicate / independent : 1.0;
+  }
+
+  // The variance of the pixel's mean, by the budget's estimate (with the tile's current gain).
+  double variance(const PixelState& p) const {
+    if (budget_.replicates == 1) return p.independentVariance();
+    return budget_.pooled ? gain_ * p.independentVariance() : p.replicateVariance(budget_.replicates);
+  }
+
+  // stop_on_neighbours: the mean and per-sample variance of Y over the pixel's neighbours in
+  // the tile (3x3, itself excluded), so that whether a pixel stops does not depend on its own
+  // samples; false when it has no neighbour with two samples.
+  bool neighbours(std::size_t k, double* mean_y, double* sample_variance) const {
+    const int i = static_cast<int>(k) % tile_width_, j = static_cast<int>(k) / tile_width_;
+    double sum_mean = 0, sum_variance = 0;
+    int count = 0;
+    for (int jj = std::max(0, j - 1); jj <= std::min(tile_rows_ - 1, j + 1); ++jj)
+      for (int ii = std::max(0, i - 1); ii <= std::min(tile_width_ - 1, i + 1); ++ii) {
+        const PixelState& q = pixels_[static_cast<std::size_t>(jj * tile_width_ + ii)];
+        if ((ii == i && jj == j) || q.n < 2) continue;
+        sum_mean += q.mean_y;
+        sum_variance += q.m2_y / (q.n - 1);
+        ++count;
+      }
+    if (count == 0) return false;
+    *mean_y = sum_mean / count;
+    *sample_variance = sum_variance / count;
+    return true;
+  }
+
+  // Stops the pixels that reached their error target or max_samples; returns whether any is
+  // left to sample.
+  bool decideStops() {
+    bool active = false;
+    for (PixelState& p : pixels_) {
+      if (p.done) continue;
+      double mean_y = p.mean_y, neighbour_variance = 0;
+      const bool from_neighbours = options_.stop_on_neighbours && p.n > 0 &&
+                                   neighbours(static_cast<std::size_t>(&p - pixels_.data()), &mean_y, &neighbour_variance);
+      const double v = from_neighbours ? (budget_.replicates > 1 && budget_.pooled ? gain_ : 1.0) * neighbour_variance / p.n
+                                       : variance(p);
+      const float absolute = options_.absolute_error.empty() ? 0.f : options_.absolute_error.at<float>(p.y, p.x);
+      double target = std::max(options_.relative_error * std::abs(mean_y), static_cast<double>(absolute));
+      if (options_.noise_sigma) target = std::max(target, options_.noise_factor * options_.noise_sigma(mean_y));
+      if (std::sqrt(v) <= target) {
+        p.done = true;
+        p.stopped_variance = v;  // the estimate it stopped on; the tile's gain moves on later
+      } else if (p.taken >= budget_.max_samples) {
+        p.done = true;
+      } else {
+        active = true;
+      }
+    }
+    return active;
+  }
+
+  const Context& c_;
+  const PathTracerOptions& options_;
+  const SampleBudget budget_;
+  std::vector<PixelState> pixels_;
+  int tile_width_ = 0, tile_rows_ = 0;
+  WaveTracer tracer_;
+  std::vector<Path> paths_;
+  std::vector<PixelState*> wave_;
+  std::int64_t nonfinite_ = 0;
+  double gain_ = 1.0;  // the tile's stratification gain (tileGain), when pooled
+};
+
+// Noise estimate: median relative standard error over pixels that received light; none when
+// none did.
+std::optional<double> relativeStdErrorMedian(const RenderOutput& out) {
+  std::vector<float> relative;
+  for (int y = 0; y < out.radiance.rows; ++y)
+    for (int x = 0; x < out.radiance.cols; ++x) {
+      const float v = out.radiance.at<cv::Vec3f>(y, x)[1];
+      if (v > 0.f) relative.push_back(out.std_error.at<float>(y, x) / v);
+    }
+  if (relative.empty()) return std::nullopt;
+  std::nth_element(relative.begin(), relative.begin() + static_cast<std::ptrdiff_t>(relative.size() / 2), relative.end());
+  return static_cast<double>(relative[relative.size() / 2]);
+}
+
+// The report's entries for the variance reductions that are on: indirect clamp, emission
+// splitting, shadow-ray roulette.
+void reportVarianceReduction(StageReport& r, const Context& context, const RenderTotals& totals) {
+  const PathTracerOptions& options = context.options;
   if (options.indirect_clamp > 0.f) {
     r.add("indirect_clamp", static_cast<double>(options.indirect_clamp), "cd/m2");
-    r.add("indirect_samples_clamped", static_cast<double>(total_clamped.load()) / static_cast<double>(std::max<std::int64_t>(1, total_samples.load())));
+    r.add("indirect_samples_clamped", static_cast<double>(totals.clamped.load()) / static_cast<double>(std::max<std::int64_t>(1, totals.samples.load())));
     r.notes.push_back("indirect light clamped at " + std::to_string(options.indirect_clamp) +
                       " cd/m2 per sample: fewer fireflies, biased darker");
   }
   if (options.emission_splits > 1) {
     r.add("emission_splits", static_cast<std::int64_t>(options.emission_splits));
     r.add("split_distance", static_cast<double>(options.split_distance_m), "m");
-    r.add("vertices_split_per_sample", static_cast<double>(total_split_vertices.load()) /
-                                           static_cast<double>(std::max<std::int64_t>(1, total_samples.load())));
+    r.add("vertices_split_per_sample", static_cast<double>(totals.split_vertices.load()) /
+                                           static_cast<double>(std::max<std::int64_t>(1, totals.samples.load())));
   }
   if (context.shadow_roulette_y > 0.f) {
     r.add("shadow_roulette_threshold_y", static_cast<double>(context.shadow_roulette_y));
-    r.add("shadow_rays_skipped", total_shadow_skipped.load());
+    r.add("shadow_rays_skipped", totals.shadow_skipped.load());
     char note[200];
     std::snprintf(note, sizeof note,
                   "shadow-ray roulette: next-event contributions below %.3g cd/m2 (%.2f x the sensor noise at black) "
@@ -940,32 +1030,83 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
                   static_cast<double>(context.shadow_roulette_y), options.shadow_roulette);
     r.notes.push_back(note);
   }
-  // Noise estimate: median relative standard error over pixels that received light.
-  std::vector<float> relative;
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const float v = out.radiance.at<cv::Vec3f>(y, x)[1];
-      if (v > 0.f) relative.push_back(out.std_error.at<float>(y, x) / v);
-    }
-  if (!relative.empty()) {
-    std::nth_element(relative.begin(), relative.begin() + static_cast<std::ptrdiff_t>(relative.size() / 2), relative.end());
-    r.add("relative_std_error_median", static_cast<double>(relative[relative.size() / 2]));
-  }
+}
+
+// The render's report: sampling, rays, BVH, lights and the techniques used.
+void reportRender(RenderOutput& out, double seconds, const Context& context, const PreparedRenderScene::Impl& p,
+                  const RenderTotals& totals) {
+  const PathTracerOptions& options = context.options;
+  const RenderScene& scene = context.scene;
+  StageReport& r = out.report;
+  r.name = "render";
+  r.seconds = seconds;
+  const double pixels = static_cast<double>(context.camera.width) * context.camera.height;
+  r.add("samples_per_pixel_mean", static_cast<double>(totals.samples.load()) / pixels);
+  double max_spp = 0;
+  cv::minMaxLoc(out.samples, nullptr, &max_spp);
+  r.add("samples_per_pixel_max", static_cast<std::int64_t>(max_spp));
+  const std::int64_t rays_cast = totals.rays.load();
+  r.add("rays", rays_cast);
+  r.add("rays_per_second", static_cast<double>(rays_cast) / seconds);
+  r.add("bvh_build", p.build_seconds, "s");
+  r.add("bvh_primitives", static_cast<std::int64_t>(p.caster->primitiveCount()));
+  r.add("emissive_triangles", static_cast<std::int64_t>(context.emissive.size()));
+  r.add("light_sampler", std::string(lightSamplerName(options.light_sampler)));
+  r.add("sampler", std::string(samplerKindName(options.sampler)));
+  r.add("nonfinite_samples_dropped", totals.dropped.load());
+  reportVarianceReduction(r, context, totals);
+  if (const std::optional<double> median = relativeStdErrorMedian(out)) r.add("relative_std_error_median", *median);
   if (options.noise_sigma) {
     // The promise of the noise-matched target: the share of pixels it stopped, their estimated
     // render noise below noise_factor x the sensor noise they will get (the rest hit max_samples).
     r.add("noise_factor", options.noise_factor);
-    r.add("pixels_below_noise_target", static_cast<double>(stopped_by_target.load()) / pixels);
+    r.add("pixels_below_noise_target", static_cast<double>(totals.stopped_by_target.load()) / pixels);
   }
   if (context.sun.on) {
     r.add("sun_illuminance_y", static_cast<double>(scene.sun.illuminance.y()));
     r.add("sun_angular_radius", static_cast<double>(scene.sun.angular_radius_rad), "rad");
   }
   r.add("seed", static_cast<std::int64_t>(options.seed));
-  if (emissive.empty()) r.notes.push_back("no emitting triangle: no next-event estimation toward scene lights");
+  if (context.emissive.empty()) r.notes.push_back("no emitting triangle: no next-event estimation toward scene lights");
   if (scene.face_roughness.empty()) r.notes.push_back("no roughness map: diffuse only");
   else if (options.diffuse == DiffuseModel::Disney) r.notes.push_back("roughness map given: Disney diffuse + GGX specular");
   else r.notes.push_back("roughness map given: Lambert diffuse + GGX specular");
+}
+
+}  // namespace
+
+RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const PinholeCamera& camera,
+                              const PathTracerOptions& options) {
+  Stopwatch clock;
+  const RenderScene& scene = prepared.scene();
+  const PreparedRenderScene::Impl& p = prepared.impl();
+  const int width = camera.width, height = camera.height;
+  CV_Assert(width > 0 && height > 0);
+  CV_Assert(options.absolute_error.empty() || (options.absolute_error.type() == CV_32F &&
+                                                options.absolute_error.size() == cv::Size(width, height)));
+  const LightSampler& sampler = p.lightSampler(options.light_sampler);
+  if (!scene.face_roughness.empty()) ggxAverageAlbedo(0.5f);  // builds the albedo table before the tiles start
+  const Context context = makeContext(scene, camera, options, p, sampler);
+  RenderOutput out = allocateOutput(width, height);
+  const SampleBudget budget = sampleBudget(options);
+
+  const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
+  ProgressBar progress(options.progress, tiles_x * tiles_y);
+  std::mutex ray_log_mutex;
+  RenderTotals totals;
+  tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
+    std::vector<RecordedRay> tile_rays;
+    std::vector<RecordedRay>* log = options.ray_log ? &tile_rays : nullptr;
+    TileRenderer renderer(context, budget, (tile % tiles_x) * kTile, (tile / tiles_x) * kTile, log);
+    renderer.render();
+    renderer.write(out, totals);
+    if (log) {
+      const std::lock_guard<std::mutex> lock(ray_log_mutex);
+      options.ray_log->insert(options.ray_log->end(), tile_rays.begin(), tile_rays.end());
+    }
+    progress.tick();
+  });
+  reportRender(out, clock.seconds(), context, p, totals);
   return out;
 }
 
