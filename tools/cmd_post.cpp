@@ -62,7 +62,7 @@ int runPost(const PostOptions& o) {
   else if (o.glare_method == "fft") options.glare_options.method = GlareMethod::Fft;
   else if (o.glare_method == "tiled") options.glare_options.method = GlareMethod::TiledFft;
   else throw InputError("--glare-method", "expected auto, direct, fft or tiled, got \"" + o.glare_method + "\"");
-  if (!(o.glare_threshold >= 0)) throw InputError("--glare-threshold", "must be 0 or more");
+  if (!std::isfinite(o.glare_threshold)) throw InputError("--glare-threshold", "must be a number (-1: what clips)");
   if (!(o.glare_scatter > 0 && o.glare_scatter <= 1)) throw InputError("--glare-scatter", "must be in (0, 1]");
   options.glare_options.scatter_fraction = o.glare_scatter;
   if (o.glare_size < 2 || o.glare_size > 11) throw InputError("--glare-size", "must be between 2 and 11");

@@ -202,7 +202,7 @@ struct PostOptions {
   std::optional<double> f_number;         ///< physical camera (with iso and shutter_s)
   double iso = 3200;                      ///< sensor ISO: noise calibration, and the camera's ISO
   bool glare = true;
-  double glare_threshold = 0;             ///< luminance in render units
+  double glare_threshold = -1;            ///< luminance in render units; < 0: what clips (the reference: 0)
   int glare_size = 9;                     ///< kernel 2^size px
   std::string glare_method = "auto";      ///< auto, direct, fft, tiled
   bool noise = true;

@@ -162,7 +162,7 @@ void addNightCameraFlags(CLI::App* night_cmd, NightOptions& night) {
   night_cmd->add_option("--glare-scatter", night.conversion.post.glare_options.scatter_fraction,
                         "Share of a clipping pixel's excess light the lens scatters into glare (1 = the reference)")
       ->capture_default_str()->check(CLI::Range(1e-6, 1.0));
-  night_cmd->add_option("--glare-threshold", night.conversion.glare_threshold,
+  night_cmd->add_option("--glare-threshold", night.conversion.post.glare_options.threshold,
                         "Luminance above which pixels glow (render units before exposure); -1 = what clips; "
                         "the reference uses 0")
       ->capture_default_str();
@@ -414,7 +414,9 @@ void addPostCommand(CLI::App& app, std::vector<Command>& commands) {
   post_cmd->add_option("--iso", post.iso, "Sensor ISO (noise calibration 100 to 3200; the camera's ISO)")
       ->capture_default_str();
   post_cmd->add_flag("!--no-glare", post.glare, "Skip the fog glare");
-  post_cmd->add_option("--glare-threshold", post.glare_threshold, "Luminance above which pixels glow (render units)")
+  post_cmd->add_option("--glare-threshold", post.glare_threshold,
+                       "Luminance above which pixels glow (render units before exposure); -1 = what clips; the "
+                       "reference uses 0")
       ->capture_default_str();
   post_cmd->add_option("--glare-size", post.glare_size, "Glare kernel size 2^N px")->capture_default_str();
   post_cmd->add_option("--glare-method", post.glare_method, "auto, direct, fft or tiled")->capture_default_str();

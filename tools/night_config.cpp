@@ -83,7 +83,7 @@ std::string nightConfigText(const NightOptions& options) {
   line("glare-scatter", number(o.post.glare_options.scatter_fraction));
   line("white-clip", number(o.post.encoding_options.white_clip));
   line("knee-point", number(o.post.encoding_options.knee_point));
-  line("glare-threshold", number(o.glare_threshold));
+  line("glare-threshold", number(o.post.glare_options.threshold));
   return out.str();
 }
 

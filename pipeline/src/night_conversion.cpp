@@ -36,6 +36,7 @@ NightConversionOptions::NightConversionOptions() {
   post.glare_options.scatter_fraction = 0.02;
   post.encoding_options.white_clip = 8;
   post.encoding_options.knee_point = 0.7;
+  post.glare_options.threshold = -1;
 }
 
 namespace {
@@ -256,9 +257,6 @@ void runPostStage(const MeteredCamera& metered, const NightConversionOptions& o,
   const bool auto_white = !(o.sensor_white_cd_m2 > 0);
   post.noise_options.iso = camera.camera.iso;
   const double calibration = 1.0 / (sensor_white * exposureScale(post.exposure_options));
-  post.glare_options.threshold = o.glare_threshold >= 0
-                                     ? o.glare_threshold
-                                     : post.encoding_options.white_clip / exposureScale(post.exposure_options);
   cv::Mat xyz = r.rendered.radiance * calibration;
   r.developed = postProcess(xyz, post);
   r.sensor_white_cd_m2 = sensor_white;
@@ -312,7 +310,7 @@ void validateNightConversionOptions(const NightConversionOptions& o) {
   requireInRange(o.post.encoding_options.white_clip, 1, 64, "--white-clip");
   requireInRange(o.post.encoding_options.knee_point, 0.05, 0.99, "--knee-point");
   requireInRange(o.post.glare_options.scatter_fraction, 1e-6, 1, "--glare-scatter");
-  requireInRange(o.glare_threshold, -1e30, 1e30, "--glare-threshold");
+  requireInRange(o.post.glare_options.threshold, -1e30, 1e30, "--glare-threshold");
 }
 
 Scene sceneForRefinement(const Scene& scene, std::int64_t* changed) {

@@ -51,6 +51,14 @@ StageReport switchedOff(const std::string& name, const std::string& flag) {
   return report;
 }
 
+// The glare options with a negative threshold made what will clip: the luminance the encoding's
+// white clip stands for before exposure.
+FogGlareOptions resolvedGlare(const PostProcessOptions& options) {
+  FogGlareOptions glare = options.glare_options;
+  if (glare.threshold < 0) glare.threshold = options.encoding_options.white_clip / exposureScale(options.exposure_options);
+  return glare;
+}
+
 }  // namespace
 
 PostProcessResult postProcess(const cv::Mat& xyz_e, const PostProcessOptions& options) {
@@ -62,14 +70,14 @@ PostProcessResult postProcess(const cv::Mat& xyz_e, const PostProcessOptions& op
   if (options.noise) noiseVarianceCounts(0, options.noise_options);
   if (options.glare) {
     fogGlowKernel(options.glare_options.size);
-    if (!(options.glare_options.threshold >= 0 && std::isfinite(options.glare_options.threshold)))
-      throw std::invalid_argument("glare threshold must be a finite luminance >= 0");
+    if (!std::isfinite(options.glare_options.threshold))
+      throw std::invalid_argument("glare threshold must be a finite luminance (or negative: what clips)");
   }
   PostProcessResult result;
   cv::Mat image = xyz_e.clone();
   result.steps.push_back(sanitise(image));
 
-  result.steps.push_back(options.glare ? applyFogGlare(image, options.glare_options) : switchedOff("glare", "no glare"));
+  result.steps.push_back(options.glare ? applyFogGlare(image, resolvedGlare(options)) : switchedOff("glare", "no glare"));
   result.steps.push_back(options.exposure ? applyExposure(image, options.exposure_options)
                                           : switchedOff("exposure", "no exposure"));
   result.steps.push_back(options.noise ? applySensorNoise(image, options.noise_options)

@@ -154,3 +154,27 @@ TEST(PostProcess, SaturatedRedLampKeepsItsHueWithSensorNoiseOn) {
   EXPECT_GT(rim_pixel[0], rim_pixel[2] + 0.2f);
   EXPECT_GT(std::get<std::int64_t>(*step(r, "colour").find("desaturated_highlight_pixels")), 32 * 32 - 1);
 }
+
+TEST(PostProcess, ANegativeGlareThresholdIsWhatWillClip) {
+  // 64x64 black with a 4x4 lamp at 20x the white clip's luminance and a facade patch at half of it.
+  solo::PostProcessOptions options = noiseless();
+  options.glare = true;
+  options.glare_options.size = 5;
+  options.encoding_options.white_clip = 8;
+  const double clip_y = 8 / kReferenceScale;  // what the encoding's white clip stands for before exposure
+  cv::Mat xyz(64, 64, CV_32FC3, cv::Scalar::all(0));
+  xyz(cv::Rect(30, 30, 4, 4)).setTo(cv::Scalar::all(20 * clip_y));
+  xyz(cv::Rect(4, 4, 8, 8)).setTo(cv::Scalar::all(0.5 * clip_y));
+
+  options.glare_options.threshold = -1;
+  const solo::PostProcessResult what_clips = solo::postProcess(xyz, options);
+  options.glare_options.threshold = clip_y;
+  const solo::PostProcessResult explicit_clip = solo::postProcess(xyz, options);
+  EXPECT_EQ(cv::norm(what_clips.encoded, explicit_clip.encoded, cv::NORM_INF), 0) << "-1 is the white clip's level";
+  // The lamp glows onto its black surroundings; the facade below the clip does not glow at all.
+  EXPECT_GT(what_clips.linear_rgb.at<cv::Vec3f>(31, 37)[1], 0.f);
+  EXPECT_EQ(what_clips.linear_rgb.at<cv::Vec3f>(13, 13)[1], 0.f) << "next to the facade, which is below the clip";
+
+  options.glare_options.threshold = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(solo::postProcess(xyz, options), std::invalid_argument);
+}

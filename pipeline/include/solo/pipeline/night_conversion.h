@@ -68,9 +68,6 @@ struct NightConversionOptions {
   NightCameraOptions camera;
   /// Glare, sensor noise (its ISO comes from the camera), adaptation and colour encoding.
   PostProcessOptions post;
-  /// Luminance above which pixels glow, render units before exposure; < 0: what will clip
-  /// (above the encoding's white clip). The reference uses 0.
-  double glare_threshold = -1;
 };
 
 /// What a caller hears while the conversion runs; every member may be empty.

@@ -29,6 +29,9 @@ struct RecordedRay {
   bool shadow = false;
 };
 
+/// The path tracer's settings. Its defaults are the renderer's on its own (converged reference
+/// renders, benchmarks, tests); the night conversion's are set once in NightConversionOptions
+/// (pipeline/night_conversion.h: 2 to 8 spp to the sensor noise, power light sampling, seed 0).
 struct PathTracerOptions {
   int min_samples = 16;   ///< per pixel before the error estimate is trusted; at least 2 are taken
   int max_samples = 256;  ///< per pixel
