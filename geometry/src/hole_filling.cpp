@@ -33,9 +33,9 @@ namespace {
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
+using PatchMesh = CGAL::Surface_mesh<Point>;
 using Triangle = Kernel::Triangle_3;
 using Segment = Kernel::Segment_3;
-using PatchMesh = CGAL::Surface_mesh<Point>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
 // Image-space hole filling: vertex info = index into the patch's points (boundary first), face
@@ -182,7 +182,6 @@ bool facesIntersect(const std::vector<Point>& points, const std::array<int, 3>& 
   return CGAL::coplanar(p, q, ra, rb) && CGAL::coplanar_orientation(p, q, ra, rb) == CGAL::POSITIVE;
 }
 
-
 /// Pixel centres inside the polygon and about 2 pixels or more from its edges (a band of width
 /// 2 along the edges is cleared), every `step`-th in both axes (step grows until at most
 /// max_points are left). For a backdrop: every centre inside within about 1.5 pixels of an edge
@@ -245,6 +244,332 @@ std::vector<Point2> interiorPixelCentres(const std::vector<Point2>& uv, const Cd
     }
   }
   return points;
+}
+
+// The polygon's order of the points (index i < n: boundary point i; n + k: closing-path point
+// k), each closing-path point after the boundary index `after[k]` (all after the last when
+// `after` is empty). False with the reason when `after` does not fit the path.
+bool polygonOrder(int n, int f, const std::vector<int>& after, std::vector<int>& order, std::string& failure) {
+  order.reserve(n + f);
+  if (after.empty()) {
+    for (int i = 0; i < n + f; ++i) order.push_back(i);
+    return true;
+  }
+  if (static_cast<int>(after.size()) != f) {
+    failure = "closing path positions do not match the closing path";
+    return false;
+  }
+  int k = 0;
+  for (int i = 0; i < n; ++i) {
+    order.push_back(i);
+    for (; k < f && after[k] == i; ++k) order.push_back(n + k);
+  }
+  if (k != f) {
+    failure = "closing path positions are not increasing boundary indices";
+    return false;
+  }
+  return true;
+}
+
+// The image positions of the boundary points (projected) and of the closing path's points, in
+// that index order. False with the reason for a point behind the camera or not finite.
+bool imagePositions(const std::vector<Eigen::Vector3d>& boundary, const PinholeCamera& camera,
+                    const std::vector<Eigen::Vector2d>& closing_path_px, std::vector<Point2>& uv, std::string& failure) {
+  uv.reserve(boundary.size() + closing_path_px.size());
+  for (const auto& p : boundary) {
+    if (!p.allFinite() || !(p.z() > 0)) {
+      failure = "a boundary point is not in front of the camera";
+      return false;
+    }
+    const Eigen::Vector2d q = camera.project(p);
+    uv.emplace_back(q.x(), q.y());
+  }
+  for (const auto& q : closing_path_px) {
+    if (!q.allFinite()) {
+      failure = "a closing-path point is not finite";
+      return false;
+    }
+    uv.emplace_back(q.x(), q.y());
+  }
+  return true;
+}
+
+// Every pixel centre inside is a vertex of a backdrop, so the triangulation splits whole pixel
+// quads; where the mesh has the other diagonal of a quad, the patch takes it: two halves split
+// differently overlap, and a patch face beside a run vertex in front of a farther mesh face
+// would cross it.
+void takeMeshDiagonals(Cdt& cdt, const ImageBackdrop& backdrop) {
+  const auto pixel = [](const Cdt::Vertex_handle& v) {
+    return std::pair<long, long>(std::lround(v->point().x()), std::lround(v->point().y()));
+  };
+  std::vector<std::pair<Cdt::Vertex_handle, Cdt::Vertex_handle>> to_flip;
+  for (const auto& e : cdt.finite_edges()) {
+    if (cdt.is_constrained(e)) continue;
+    const Cdt::Face_handle g = e.first, h = g->neighbor(e.second);
+    if (cdt.is_infinite(g) || cdt.is_infinite(h)) continue;
+    const auto a = pixel(g->vertex(Cdt::cw(e.second))), b = pixel(g->vertex(Cdt::ccw(e.second)));
+    if (std::abs(a.first - b.first) != 1 || std::abs(a.second - b.second) != 1) continue;
+    const auto c = pixel(g->vertex(e.second)), d = pixel(h->vertex(h->index(g)));
+    const std::pair<long, long> corner1(a.first, b.second), corner2(b.first, a.second);
+    if (!((c == corner1 && d == corner2) || (c == corner2 && d == corner1))) continue;
+    if (backdrop.mesh_has_edge(int(c.first), int(c.second), int(d.first), int(d.second)) &&
+        !backdrop.mesh_has_edge(int(a.first), int(a.second), int(b.first), int(b.second)))
+      to_flip.emplace_back(g->vertex(Cdt::cw(e.second)), g->vertex(Cdt::ccw(e.second)));
+  }
+  for (const auto& [va, vb] : to_flip) {
+    Cdt::Face_handle g;
+    int i = 0;
+    if (cdt.is_edge(va, vb, g, i) && !cdt.is_constrained(Cdt::Edge(g, i))) cdt.flip(g, i);
+  }
+}
+
+// The polygon `uv` (in `order`) triangulated with the interior pixel centres as vertices
+// (returned; vertex info: index into uv, then polygon_size + k for interior[k]), the faces
+// inside marked by markNesting.
+std::vector<Point2> triangulateImagePolygon(const std::vector<Point2>& uv, const std::vector<int>& order,
+                                            const std::vector<Point2>& polygon_uv,
+                                            const std::vector<std::uint8_t>& polygon_known,
+                                            const HoleFillOptions& options, const ImageBackdrop* backdrop, Cdt& cdt) {
+  const int polygon_size = static_cast<int>(uv.size());
+  std::vector<Cdt::Vertex_handle> handles(polygon_size);
+  for (int i = 0; i < polygon_size; ++i) {
+    handles[i] = cdt.insert(uv[i], i == 0 ? Cdt::Face_handle() : handles[i - 1]->face());
+    handles[i]->info() = i;
+  }
+  for (int i = 0; i < polygon_size; ++i)
+    cdt.insert_constraint(handles[order[i]], handles[order[(i + 1) % polygon_size]]);
+  markNesting(cdt);
+  const std::vector<Point2> interior =
+      interiorPixelCentres(polygon_uv, cdt, options.max_image_interior_vertices, backdrop, polygon_known);
+  Cdt::Vertex_handle last = handles[polygon_size - 1];
+  for (int k = 0; k < static_cast<int>(interior.size()); ++k) {
+    last = cdt.insert(interior[k], last->face());
+    last->info() = polygon_size + k;
+  }
+  if (backdrop && backdrop->mesh_has_edge) takeMeshDiagonals(cdt, *backdrop);
+  return interior;
+}
+
+// The faces inside the polygon, as vertex infos, turning the polygon's way (`orientation`).
+std::vector<std::array<int, 3>> insideFaces(const Cdt& cdt, CGAL::Orientation orientation) {
+  std::vector<std::array<int, 3>> faces;
+  for (const auto f : cdt.finite_face_handles()) {
+    if (f->info() % 2 != 1) continue;
+    std::array<int, 3> t{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
+    if (orientation == CGAL::RIGHT_TURN) std::swap(t[1], t[2]);  // CGAL's faces turn left
+    faces.push_back(t);
+  }
+  return faces;
+}
+
+// The boundary's least-squares affine inverse depth in the image (inverse depth is affine in
+// the image on a plane); zero everywhere for a backdrop.
+struct AffineInverseDepth {
+  bool zero = false;
+  double c = 0, gu = 0, gv = 0, centre_u = 0, centre_v = 0;
+
+  double operator()(const Point2& p) const {
+    if (zero) return 0.0;
+    return c + gu * (p.x() - centre_u) + gv * (p.y() - centre_v);
+  }
+};
+
+// Fits the affine inverse depth to the boundary points (positions uv[0..n-1]).
+AffineInverseDepth fitAffineInverseDepth(const std::vector<Point2>& uv, const std::vector<Eigen::Vector3d>& boundary) {
+  const int n = static_cast<int>(boundary.size());
+  AffineInverseDepth affine;
+  for (int i = 0; i < n; ++i) affine.centre_u += uv[i].x() / n, affine.centre_v += uv[i].y() / n;
+  double suu = 0, suv = 0, svv = 0, sy = 0, suy = 0, svy = 0;
+  for (int i = 0; i < n; ++i) {
+    const double du = uv[i].x() - affine.centre_u, dv = uv[i].y() - affine.centre_v, y = 1.0 / boundary[i].z();
+    suu += du * du, suv += du * dv, svv += dv * dv, sy += y, suy += du * y, svy += dv * y;
+  }
+  // A tiny ridge keeps the fit defined when the boundary is a straight line in the image
+  // (no gradient across it is then extrapolated); it is far below any real spread.
+  suu += 1e-6 * n, svv += 1e-6 * n;
+  const double det = suu * svv - suv * suv;
+  affine.c = sy / n;
+  affine.gu = (svv * suy - suv * svy) / det;
+  affine.gv = (suu * svy - suv * suy) / det;
+  return affine;
+}
+
+// Per edge with an unknown end (key: lower index << 32 | higher index), in key order: its
+// cotangent weight, its faces' halves summed (sorted by edge, not hashed: a backdrop has
+// hundreds of thousands of edges, and a hash map cost a quarter of its fill).
+using EdgeWeights = std::vector<std::pair<std::uint64_t, double>>;
+EdgeWeights cotangentWeights(const std::vector<std::array<int, 3>>& faces, const std::vector<Point2>& position, int n) {
+  EdgeWeights weight;
+  weight.reserve(3 * faces.size());
+  for (const auto& t : faces)
+    for (int k = 0; k < 3; ++k) {
+      const int i = t[(k + 1) % 3], j = t[(k + 2) % 3];
+      if (i < n && j < n) continue;
+      const auto e1 = position[i] - position[t[k]], e2 = position[j] - position[t[k]];
+      const double cross = std::abs(e1.x() * e2.y() - e1.y() * e2.x());
+      const std::uint64_t key = (std::uint64_t(std::min(i, j)) << 32) | std::uint32_t(std::max(i, j));
+      weight.emplace_back(key, 0.5 * (e1 * e2) / std::max(cross, 1e-300));
+    }
+  std::sort(weight.begin(), weight.end());
+  std::size_t edge_count = 0;
+  for (std::size_t q = 0; q < weight.size(); ++q)
+    if (edge_count > 0 && weight[edge_count - 1].first == weight[q].first) weight[edge_count - 1].second += weight[q].second;
+    else weight[edge_count++] = weight[q];
+  weight.resize(edge_count);
+  return weight;
+}
+
+// The depth each unknown stays behind (0: none). A backdrop's vertex: every surface within the
+// reach of its faces (its longest edge, plus a pixel for the mesh faces' own extent).
+std::vector<double> obstacleDepths(const std::vector<std::array<int, 3>>& faces, const std::vector<Point2>& position,
+                                   const std::vector<Point2>& unknown_uv, int n, const ImageBackdrop* backdrop,
+                                   const std::function<double(int, int)>& obstacle_depth_m) {
+  const int m = static_cast<int>(unknown_uv.size());
+  std::vector<double> obstacle(m, 0.0);
+  if (backdrop && backdrop->obstacle_within_m) {
+    std::vector<double> reach(m, 0.0);
+    for (const auto& t : faces)
+      for (int k = 0; k < 3; ++k) {
+        const int i = t[k], j = t[(k + 1) % 3];
+        const double length = std::sqrt(CGAL::squared_distance(position[i], position[j]));
+        if (i >= n) reach[i - n] = std::max(reach[i - n], length);
+        if (j >= n) reach[j - n] = std::max(reach[j - n], length);
+      }
+    for (int k = 0; k < m; ++k)
+      obstacle[k] = backdrop->obstacle_within_m(static_cast<int>(std::lround(unknown_uv[k].x())),
+                                                static_cast<int>(std::lround(unknown_uv[k].y())),
+                                                static_cast<int>(std::ceil(reach[k])) + 1);
+  } else if (obstacle_depth_m) {
+    for (int k = 0; k < m; ++k)
+      obstacle[k] = obstacle_depth_m(static_cast<int>(std::lround(unknown_uv[k].x())),
+                                     static_cast<int>(std::lround(unknown_uv[k].y())));
+  }
+  return obstacle;
+}
+
+// Inverse depth of the unknown vertices: harmonic in the image (cotangent weights, which are
+// non-negative across the unconstrained edges of a constrained Delaunay triangulation). The
+// closing path's points are free (a natural boundary: no flux across the frame); so that a
+// plane is still reproduced exactly there, the harmonic part extends the residual of the
+// boundary's inverse depth from its affine fit (an affine function is harmonic).
+struct HarmonicInverseDepth {
+  const std::vector<Eigen::Vector3d>& boundary;  // points 0..n-1, known depth
+  const std::vector<Point2>& position;           // every vertex's image position
+  const std::vector<Point2>& unknown_uv;         // unknown k's position (vertex n + k)
+  const EdgeWeights& weight;
+  const AffineInverseDepth& affine;
+  bool extended;  // a closing path: the unknowns extend the boundary's affine part
+  bool backdrop;
+
+  // One solve of the free unknowns (`unknown[k]`: k's index among them, -1 for a pinned one,
+  // whose inverse depth is pinned[k]). False with the reason when it has no solution in front
+  // of the camera.
+  bool solveFree(const std::vector<double>& pinned, const std::vector<int>& unknown, int free_count,
+                 Eigen::VectorXd& solved, std::string& failure) const {
+    const int n = static_cast<int>(boundary.size());
+    const int m = static_cast<int>(unknown_uv.size());
+    // The harmonic unknowns are residuals from the affine part (zero without a closing path).
+    const auto known = [&](int i) {
+      return (i < n ? 1.0 / boundary[i].z() : pinned[i - n]) - (extended ? affine(position[i]) : 0.0);
+    };
+    std::vector<Eigen::Triplet<double>> entries;
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(free_count);
+    for (const auto& [key, w_raw] : weight) {
+      const int i = static_cast<int>(key >> 32), j = static_cast<int>(key & 0xffffffffu);
+      const double w = std::max(w_raw, 0.0) + 1e-6;  // keeps the system definite on flat fans
+      for (const auto& [a, b] : {std::pair(i, j), std::pair(j, i)}) {
+        if (a < n || unknown[a - n] < 0) continue;
+        entries.emplace_back(unknown[a - n], unknown[a - n], w);
+        if (b >= n && unknown[b - n] >= 0) entries.emplace_back(unknown[a - n], unknown[b - n], -w);
+        else rhs[unknown[a - n]] += w * known(b);
+      }
+    }
+    if (free_count > 0) {
+      Eigen::SparseMatrix<double> laplacian(free_count, free_count);
+      laplacian.setFromTriplets(entries.begin(), entries.end());
+      Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(laplacian);
+      solved = solver.solve(rhs);
+      if (solver.info() != Eigen::Success || !solved.allFinite() ||
+          (!extended && solved.size() > 0 && solved.minCoeff() <= 0)) {
+        failure = "harmonic inverse depth could not be solved";
+        return false;
+      }
+    }
+    if (extended) {
+      for (int k = 0; k < m; ++k)
+        if (unknown[k] >= 0) solved[unknown[k]] += affine(unknown_uv[k]);
+      if (solved.size() > 0 && !(solved.minCoeff() > 0)) {
+        failure = "the inverse depth extended to the frame is not positive (the surface would pass behind the camera)";
+        return false;
+      }
+    }
+    return true;
+  }
+
+  // Where an obstacle (a nearer surface of the mesh, `obstacle[k]` > 0) covers a vertex's pixel
+  // and the harmonic surface comes in front of it, that vertex is pinned behind the obstacle
+  // and the others are solved again (a few rounds: pinning can push neighbours forward).
+  bool solve(const std::vector<double>& obstacle, Eigen::VectorXd& inverse_depth, std::string& failure) const {
+    const int m = static_cast<int>(unknown_uv.size());
+    std::vector<double> pinned(m, 0.0);  // inverse depth, 0: free
+    inverse_depth.resize(m);
+    const int rounds = backdrop ? 1 : 4;
+    for (int round = 0; round < rounds; ++round) {
+      std::vector<int> unknown(m, -1);
+      int free_count = 0;
+      for (int k = 0; k < m; ++k)
+        if (pinned[k] == 0) unknown[k] = free_count++;
+      Eigen::VectorXd solved;
+      if (!solveFree(pinned, unknown, free_count, solved, failure)) return false;
+      bool changed = false;
+      std::int64_t covered = 0, hidden = 0;
+      for (int k = 0; k < m; ++k) {
+        inverse_depth[k] = unknown[k] >= 0 ? solved[unknown[k]] : pinned[k];
+        if (unknown[k] < 0) continue;
+        const double z = obstacle[k];
+        if (z > 0) {
+          ++covered;
+          hidden += z > kHiddenDepthRatio / inverse_depth[k];
+        }
+        if (z > 0 && 1.0 / inverse_depth[k] < z) {
+          pinned[k] = 1.0 / z;
+          changed = true;
+        }
+      }
+      // A frame hole's region reaches the frame: it is the part behind an occluder only when
+      // the surfaces seen inside it are nearer than the extension. Surfaces farther away are
+      // seen there: the region is not behind the occluder (the run outlines a sheet standing
+      // against other surfaces), and a patch pinned behind them would be a wall of nothing.
+      if (extended && !backdrop && round == 0 && hidden > kMaxHiddenFraction * covered) {
+        failure = "frame hole region shows " + std::to_string(hidden) + " of " + std::to_string(covered) +
+                  " covered vertices farther than the extension (not behind an occluder)";
+        return false;
+      }
+      if (!changed) break;
+    }
+    // A backdrop is clamped behind its obstacles after its last solve (the solves only
+    // smooth it around the pins).
+    if (backdrop)
+      for (int k = 0; k < m; ++k)
+        if (obstacle[k] > 0 && 1.0 / inverse_depth[k] < obstacle[k]) inverse_depth[k] = 1.0 / obstacle[k];
+    return true;
+  }
+};
+
+// The faces in rows, as the depth mesh was built: OpenMesh attaches a face next to faces
+// already there cheaply, and one in the middle of nowhere (a new boundary fan) dearly.
+void sortFacesInRows(std::vector<std::array<int, 3>>& faces, const std::vector<Point2>& position) {
+  std::vector<std::pair<double, std::size_t>> row_order(faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const auto& t = faces[i];
+    const double v = std::min({position[t[0]].y(), position[t[1]].y(), position[t[2]].y()});
+    const double u = std::min({position[t[0]].x(), position[t[1]].x(), position[t[2]].x()});
+    row_order[i] = {v * 1e6 + u, i};
+  }
+  std::sort(row_order.begin(), row_order.end());
+  std::vector<std::array<int, 3>> sorted(faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) sorted[i] = faces[row_order[i].second];
+  faces = std::move(sorted);
 }
 
 }  // namespace
@@ -340,43 +665,11 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
     patch.failure = "boundary has fewer than 3 vertices";
     return patch;
   }
-  // The polygon's order of the points (index i < n: boundary[i]; n + k: closing_path_px[k]).
   std::vector<int> order;
-  order.reserve(polygon_size);
-  if (closing_path_after.empty()) {
-    for (int i = 0; i < polygon_size; ++i) order.push_back(i);
-  } else {
-    if (static_cast<int>(closing_path_after.size()) != f) {
-      patch.failure = "closing path positions do not match the closing path";
-      return patch;
-    }
-    int k = 0;
-    for (int i = 0; i < n; ++i) {
-      order.push_back(i);
-      for (; k < f && closing_path_after[k] == i; ++k) order.push_back(n + k);
-    }
-    if (k != f) {
-      patch.failure = "closing path positions are not increasing boundary indices";
-      return patch;
-    }
-  }
   std::vector<Point2> uv;
-  uv.reserve(polygon_size);
-  for (const auto& p : boundary) {
-    if (!p.allFinite() || !(p.z() > 0)) {
-      patch.failure = "a boundary point is not in front of the camera";
-      return patch;
-    }
-    const Eigen::Vector2d q = camera.project(p);
-    uv.emplace_back(q.x(), q.y());
-  }
-  for (const auto& q : closing_path_px) {
-    if (!q.allFinite()) {
-      patch.failure = "a closing-path point is not finite";
-      return patch;
-    }
-    uv.emplace_back(q.x(), q.y());
-  }
+  if (!polygonOrder(n, f, closing_path_after, order, patch.failure) ||
+      !imagePositions(boundary, camera, closing_path_px, uv, patch.failure))
+    return patch;
   std::vector<Point2> polygon_uv;
   std::vector<std::uint8_t> polygon_known;  // a boundary point (known depth), not a path point
   for (const int i : order) polygon_uv.push_back(uv[i]), polygon_known.push_back(i < n);
@@ -399,67 +692,20 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
       return patch;
     }
     Cdt cdt;
-    std::vector<Cdt::Vertex_handle> handles(polygon_size);
-    for (int i = 0; i < polygon_size; ++i) {
-      handles[i] = cdt.insert(uv[i], i == 0 ? Cdt::Face_handle() : handles[i - 1]->face());
-      handles[i]->info() = i;
-    }
-    for (int i = 0; i < polygon_size; ++i)
-      cdt.insert_constraint(handles[order[i]], handles[order[(i + 1) % polygon_size]]);
-    markNesting(cdt);
     // The unknowns: the closing path's points (free: their depth comes from the extension too),
     // then the interior pixel centres; index polygon_size + k is interior[k].
     const std::vector<Point2> interior =
-        interiorPixelCentres(polygon_uv, cdt, options.max_image_interior_vertices, backdrop_mode, polygon_known);
+        triangulateImagePolygon(uv, order, polygon_uv, polygon_known, options, backdrop_mode, cdt);
     const int m_interior = static_cast<int>(interior.size());
-    Cdt::Vertex_handle last = handles[polygon_size - 1];
-    for (int k = 0; k < m_interior; ++k) {
-      last = cdt.insert(interior[k], last->face());
-      last->info() = polygon_size + k;
-    }
     const int m = f + m_interior;
     std::vector<Point2> unknown_uv(uv.begin() + n, uv.end());
     unknown_uv.insert(unknown_uv.end(), interior.begin(), interior.end());
-    if (backdrop && backdrop_mode->mesh_has_edge) {
-      // Every pixel centre inside is a vertex, so the triangulation splits whole pixel quads;
-      // where the mesh has the other diagonal of a quad, the patch takes it: two halves split
-      // differently overlap, and a patch face beside a run vertex in front of a farther mesh
-      // face would cross it.
-      const auto pixel = [](const Cdt::Vertex_handle& v) {
-        return std::pair<long, long>(std::lround(v->point().x()), std::lround(v->point().y()));
-      };
-      std::vector<std::pair<Cdt::Vertex_handle, Cdt::Vertex_handle>> to_flip;
-      for (const auto& e : cdt.finite_edges()) {
-        if (cdt.is_constrained(e)) continue;
-        const Cdt::Face_handle g = e.first, h = g->neighbor(e.second);
-        if (cdt.is_infinite(g) || cdt.is_infinite(h)) continue;
-        const auto a = pixel(g->vertex(Cdt::cw(e.second))), b = pixel(g->vertex(Cdt::ccw(e.second)));
-        if (std::abs(a.first - b.first) != 1 || std::abs(a.second - b.second) != 1) continue;
-        const auto c = pixel(g->vertex(e.second)), d = pixel(h->vertex(h->index(g)));
-        const std::pair<long, long> corner1(a.first, b.second), corner2(b.first, a.second);
-        if (!((c == corner1 && d == corner2) || (c == corner2 && d == corner1))) continue;
-        if (backdrop_mode->mesh_has_edge(int(c.first), int(c.second), int(d.first), int(d.second)) &&
-            !backdrop_mode->mesh_has_edge(int(a.first), int(a.second), int(b.first), int(b.second)))
-          to_flip.emplace_back(g->vertex(Cdt::cw(e.second)), g->vertex(Cdt::ccw(e.second)));
-      }
-      for (const auto& [va, vb] : to_flip) {
-        Cdt::Face_handle g;
-        int i = 0;
-        if (cdt.is_edge(va, vb, g, i) && !cdt.is_constrained(Cdt::Edge(g, i))) cdt.flip(g, i);
-      }
-    }
     if (m > 0 || backdrop) markNesting(cdt);
     if (clock.seconds() > options.time_limit_s) {
       patch.failure = "image-space triangulation exceeded its time limit";
       return patch;
     }
-    std::vector<std::array<int, 3>> faces;
-    for (const auto f : cdt.finite_face_handles()) {
-      if (f->info() % 2 != 1) continue;
-      std::array<int, 3> t{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
-      if (orientation == CGAL::RIGHT_TURN) std::swap(t[1], t[2]);  // CGAL's faces turn left
-      faces.push_back(t);
-    }
+    std::vector<std::array<int, 3>> faces = insideFaces(cdt, orientation);
     if (static_cast<int>(cdt.number_of_vertices()) != polygon_size + m_interior ||
         static_cast<int>(faces.size()) != polygon_size - 2 + 2 * m_interior) {
       patch.failure = "image-space triangulation is incomplete (" + std::to_string(faces.size()) + " of " +
@@ -467,171 +713,22 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
       return patch;
     }
 
-    // Inverse depth of the interior vertices: harmonic in the image (cotangent weights, which
-    // are non-negative across the unconstrained edges of a constrained Delaunay triangulation).
-    // The closing path's points are free (a natural boundary: no flux across the frame); so
-    // that a plane is still reproduced exactly there, the harmonic part extends the residual
-    // of the boundary's inverse depth from its least-squares affine fit in the image (inverse
-    // depth is affine in the image on a plane; an affine function is harmonic).
     std::vector<Point2> position(uv);
     position.insert(position.end(), interior.begin(), interior.end());
-    double affine_c = 0, affine_gu = 0, affine_gv = 0, centre_u = 0, centre_v = 0;
-    if (f > 0 && !backdrop) {
-      for (int i = 0; i < n; ++i) centre_u += uv[i].x() / n, centre_v += uv[i].y() / n;
-      double suu = 0, suv = 0, svv = 0, sy = 0, suy = 0, svy = 0;
-      for (int i = 0; i < n; ++i) {
-        const double du = uv[i].x() - centre_u, dv = uv[i].y() - centre_v, y = 1.0 / boundary[i].z();
-        suu += du * du, suv += du * dv, svv += dv * dv, sy += y, suy += du * y, svy += dv * y;
-      }
-      // A tiny ridge keeps the fit defined when the boundary is a straight line in the image
-      // (no gradient across it is then extrapolated); it is far below any real spread.
-      suu += 1e-6 * n, svv += 1e-6 * n;
-      const double det = suu * svv - suv * suv;
-      affine_c = sy / n;
-      affine_gu = (svv * suy - suv * svy) / det;
-      affine_gv = (suu * svy - suv * suy) / det;
-    }
-    const auto affine = [&](const Point2& p) {
-      if (backdrop) return 0.0;
-      return affine_c + affine_gu * (p.x() - centre_u) + affine_gv * (p.y() - centre_v);
-    };
-    // Each edge's weight: its faces' halves summed (sorted by edge, not hashed: a backdrop has
-    // hundreds of thousands of edges, and a hash map cost a quarter of its fill).
-    std::vector<std::pair<std::uint64_t, double>> weight;
-    weight.reserve(3 * faces.size());
-    for (const auto& t : faces)
-      for (int k = 0; k < 3; ++k) {
-        const int i = t[(k + 1) % 3], j = t[(k + 2) % 3];
-        if (i < n && j < n) continue;
-        const auto e1 = position[i] - position[t[k]], e2 = position[j] - position[t[k]];
-        const double cross = std::abs(e1.x() * e2.y() - e1.y() * e2.x());
-        const std::uint64_t key = (std::uint64_t(std::min(i, j)) << 32) | std::uint32_t(std::max(i, j));
-        weight.emplace_back(key, 0.5 * (e1 * e2) / std::max(cross, 1e-300));
-      }
-    std::sort(weight.begin(), weight.end());
-    std::size_t edge_count = 0;
-    for (std::size_t q = 0; q < weight.size(); ++q)
-      if (edge_count > 0 && weight[edge_count - 1].first == weight[q].first) weight[edge_count - 1].second += weight[q].second;
-      else weight[edge_count++] = weight[q];
-    weight.resize(edge_count);
+    AffineInverseDepth affine;
+    if (f > 0 && !backdrop) affine = fitAffineInverseDepth(uv, boundary);
+    affine.zero = backdrop;
+    const EdgeWeights weight = cotangentWeights(faces, position, n);
     if (m > 0) {
-      // Where an obstacle (a nearer surface of the mesh) covers a vertex's pixel and the
-      // harmonic surface comes in front of it, that vertex is pinned behind the obstacle and
-      // the others are solved again (a few rounds: pinning can push neighbours forward).
-      std::vector<double> pinned(m, 0.0);  // inverse depth, 0: free
-      Eigen::VectorXd inverse_depth(m);
-      // The depth each unknown stays behind (0: none). A backdrop's vertex: every surface within
-      // the reach of its faces (its longest edge, plus a pixel for the mesh faces' own extent).
-      std::vector<double> obstacle(m, 0.0);
-      if (backdrop && backdrop_mode->obstacle_within_m) {
-        std::vector<double> reach(m, 0.0);
-        for (const auto& t : faces)
-          for (int k = 0; k < 3; ++k) {
-            const int i = t[k], j = t[(k + 1) % 3];
-            const double length = std::sqrt(CGAL::squared_distance(position[i], position[j]));
-            if (i >= n) reach[i - n] = std::max(reach[i - n], length);
-            if (j >= n) reach[j - n] = std::max(reach[j - n], length);
-          }
-        for (int k = 0; k < m; ++k)
-          obstacle[k] = backdrop_mode->obstacle_within_m(static_cast<int>(std::lround(unknown_uv[k].x())),
-                                                         static_cast<int>(std::lround(unknown_uv[k].y())),
-                                                         static_cast<int>(std::ceil(reach[k])) + 1);
-      } else if (obstacle_depth_m) {
-        for (int k = 0; k < m; ++k)
-          obstacle[k] = obstacle_depth_m(static_cast<int>(std::lround(unknown_uv[k].x())),
-                                         static_cast<int>(std::lround(unknown_uv[k].y())));
-      }
-      const int rounds = backdrop ? 1 : 4;
-      for (int round = 0; round < rounds; ++round) {
-        std::vector<int> unknown(m, -1);
-        int free_count = 0;
-        for (int k = 0; k < m; ++k)
-          if (pinned[k] == 0) unknown[k] = free_count++;
-        // The harmonic unknowns are residuals from the affine part (zero without a closing path).
-        const auto known = [&](int i) {
-          return (i < n ? 1.0 / boundary[i].z() : pinned[i - n]) - (f > 0 ? affine(position[i]) : 0.0);
-        };
-        std::vector<Eigen::Triplet<double>> entries;
-        Eigen::VectorXd rhs = Eigen::VectorXd::Zero(free_count);
-        for (const auto& [key, w_raw] : weight) {
-          const int i = static_cast<int>(key >> 32), j = static_cast<int>(key & 0xffffffffu);
-          const double w = std::max(w_raw, 0.0) + 1e-6;  // keeps the system definite on flat fans
-          for (const auto& [a, b] : {std::pair(i, j), std::pair(j, i)}) {
-            if (a < n || unknown[a - n] < 0) continue;
-            entries.emplace_back(unknown[a - n], unknown[a - n], w);
-            if (b >= n && unknown[b - n] >= 0) entries.emplace_back(unknown[a - n], unknown[b - n], -w);
-            else rhs[unknown[a - n]] += w * known(b);
-          }
-        }
-        Eigen::VectorXd solved;
-        if (free_count > 0) {
-          Eigen::SparseMatrix<double> laplacian(free_count, free_count);
-          laplacian.setFromTriplets(entries.begin(), entries.end());
-          Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(laplacian);
-          solved = solver.solve(rhs);
-          if (solver.info() != Eigen::Success || !solved.allFinite() ||
-              (f == 0 && solved.size() > 0 && solved.minCoeff() <= 0)) {
-            patch.failure = "harmonic inverse depth could not be solved";
-            return patch;
-          }
-        }
-        if (f > 0) {
-          for (int k = 0; k < m; ++k)
-            if (unknown[k] >= 0) solved[unknown[k]] += affine(unknown_uv[k]);
-          if (solved.size() > 0 && !(solved.minCoeff() > 0)) {
-            patch.failure = "the inverse depth extended to the frame is not positive (the surface would pass behind the camera)";
-            return patch;
-          }
-        }
-        bool changed = false;
-        std::int64_t covered = 0, hidden = 0;
-        for (int k = 0; k < m; ++k) {
-          inverse_depth[k] = unknown[k] >= 0 ? solved[unknown[k]] : pinned[k];
-          if (unknown[k] < 0) continue;
-          const double z = obstacle[k];
-          if (z > 0) {
-            ++covered;
-            hidden += z > kHiddenDepthRatio / inverse_depth[k];
-          }
-          if (z > 0 && 1.0 / inverse_depth[k] < z) {
-            pinned[k] = 1.0 / z;
-            changed = true;
-          }
-        }
-        // A frame hole's region reaches the frame: it is the part behind an occluder only when
-        // the surfaces seen inside it are nearer than the extension. Surfaces farther away are
-        // seen there: the region is not behind the occluder (the run outlines a sheet standing
-        // against other surfaces), and a patch pinned behind them would be a wall of nothing.
-        if (f > 0 && !backdrop && round == 0 && hidden > kMaxHiddenFraction * covered) {
-          patch.failure = "frame hole region shows " + std::to_string(hidden) + " of " + std::to_string(covered) +
-                          " covered vertices farther than the extension (not behind an occluder)";
-          return patch;
-        }
-        if (!changed) break;
-      }
-      // A backdrop is clamped behind its obstacles after its last solve (the solves only
-      // smooth it around the pins).
-      if (backdrop)
-        for (int k = 0; k < m; ++k)
-          if (obstacle[k] > 0 && 1.0 / inverse_depth[k] < obstacle[k]) inverse_depth[k] = 1.0 / obstacle[k];
+      const HarmonicInverseDepth harmonic{boundary, position, unknown_uv, weight, affine, f > 0, backdrop};
+      Eigen::VectorXd inverse_depth;
+      if (!harmonic.solve(obstacleDepths(faces, position, unknown_uv, n, backdrop_mode, obstacle_depth_m),
+                          inverse_depth, patch.failure))
+        return patch;
       for (int k = 0; k < m; ++k)
         patch.new_points.push_back(camera.backproject(unknown_uv[k].x(), unknown_uv[k].y(), 1.0 / inverse_depth[k]));
     }
-    if (backdrop) {
-      // In rows, as the depth mesh was built: OpenMesh attaches a face next to faces already
-      // there cheaply, and one in the middle of nowhere (a new boundary fan) dearly.
-      std::vector<std::pair<double, std::size_t>> row_order(faces.size());
-      for (std::size_t i = 0; i < faces.size(); ++i) {
-        const auto& t = faces[i];
-        const double v = std::min({position[t[0]].y(), position[t[1]].y(), position[t[2]].y()});
-        const double u = std::min({position[t[0]].x(), position[t[1]].x(), position[t[2]].x()});
-        row_order[i] = {v * 1e6 + u, i};
-      }
-      std::sort(row_order.begin(), row_order.end());
-      std::vector<std::array<int, 3>> sorted(faces.size());
-      for (std::size_t i = 0; i < faces.size(); ++i) sorted[i] = faces[row_order[i].second];
-      faces = std::move(sorted);
-    }
+    if (backdrop) sortFacesInRows(faces, position);
     patch.faces = std::move(faces);
     patch.filled = true;
   } catch (const std::exception& e) {

@@ -84,12 +84,13 @@ struct DepthLoops {
   std::vector<std::string> unclosable_notes;
 };
 
-/// Classifies the loops of a depth mesh. `had_depth` (CV_8U, the depth map's size) marks the
-/// pixels that had a vertex before any face was removed: its complement is sky and invalid depth.
-/// `depth_m` is the map the mesh was made from.
 /// How frame holes become backdrops: never (those a backdrop would close are reported
 /// unclosable), those no other closing reaches, or every one (after the other closings failed).
 enum class BackdropMode { Off, Unclosable, EveryFrameHole };
+
+/// Classifies the loops of a depth mesh. `had_depth` (CV_8U, the depth map's size) marks the
+/// pixels that had a vertex before any face was removed: its complement is sky and invalid depth.
+/// `depth_m` is the map the mesh was made from.
 DepthLoops classifyDepthLoops(const DepthMesh& mesh, const cv::Mat& had_depth, const cv::Mat& depth_m,
                               BackdropMode backdrops = BackdropMode::Unclosable);
 

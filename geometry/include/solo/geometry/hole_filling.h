@@ -64,6 +64,19 @@ struct HolePatch {
 HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFillMethod method,
                            const HoleFillOptions& options = {});
 
+/// What the backdrop mode of fillHoleInImage (its `backdrop` argument) asks of the depth mesh.
+struct ImageBackdrop {
+  /// Whether the mesh has an edge between the vertices of pixels (u0, v0) and (u1, v1).
+  std::function<bool(int u0, int v0, int u1, int v1)> mesh_has_edge;
+  /// The depth (metres) the patch must stay behind within radius_px of pixel (u, v) (the
+  /// farthest surface seen there plus a clearance); 0 for none.
+  std::function<double(int u, int v, int radius_px)> obstacle_within_m;
+  /// Whether a surface of the mesh is seen at pixel (u, v) (the patch is hidden there); unset:
+  /// wherever obstacle_within_m(u, v, 0) is positive.
+  std::function<bool(int u, int v)> surface_seen;
+  int hidden_spacing_px = 4;
+};
+
 /// Fills a hole of a depth mesh in image space. `boundary`: camera-frame points (metres, z > 0)
 /// of the hole's loop in border half-edge order; their projections through `camera` form the
 /// hole's polygon (pixels). A simple polygon is triangulated by a constrained Delaunay
@@ -108,17 +121,6 @@ HolePatch fillHolePolyline(const std::vector<Eigen::Vector3d>& boundary, HoleFil
 /// extension has no affine part (over a region this large the boundary's plane may reach
 /// behind the camera): the inverse depth is harmonic with the run's values and no flux across
 /// the path, so it stays within their range (one solve), then clamped behind the obstacles.
-struct ImageBackdrop {
-  /// Whether the mesh has an edge between the vertices of pixels (u0, v0) and (u1, v1).
-  std::function<bool(int u0, int v0, int u1, int v1)> mesh_has_edge;
-  /// The depth (metres) the patch must stay behind within radius_px of pixel (u, v) (the
-  /// farthest surface seen there plus a clearance); 0 for none.
-  std::function<double(int u, int v, int radius_px)> obstacle_within_m;
-  /// Whether a surface of the mesh is seen at pixel (u, v) (the patch is hidden there); unset:
-  /// wherever obstacle_within_m(u, v, 0) is positive.
-  std::function<bool(int u, int v)> surface_seen;
-  int hidden_spacing_px = 4;
-};
 HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const PinholeCamera& camera,
                           const HoleFillOptions& options = {},
                           const std::function<double(int, int)>& obstacle_depth_m = {},
@@ -129,13 +131,13 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
 /// other than in what they share by index (the rules of evaluateMesh: no shared vertex, any
 /// contact; a shared vertex, the opposite edge of one meets the other; a shared edge, coplanar
 /// and folded onto the same side). Faces index into `points`; degenerate faces are skipped.
-/// The same rule for one pair of faces (indices into `points`); false when either is degenerate.
-bool patchFacesIntersect(const std::vector<Eigen::Vector3d>& points, const std::array<int, 3>& a,
-                         const std::array<int, 3>& b);
-
 std::vector<std::uint8_t> findIntersectingFaces(const std::vector<Eigen::Vector3d>& points,
                                                 const std::vector<std::array<int, 3>>& candidates,
                                                 const std::vector<std::array<int, 3>>& others,
                                                 bool candidates_among_themselves = true);
+
+/// The same rule for one pair of faces (indices into `points`); false when either is degenerate.
+bool patchFacesIntersect(const std::vector<Eigen::Vector3d>& points, const std::array<int, 3>& a,
+                         const std::array<int, 3>& b);
 
 }  // namespace solo
