@@ -277,6 +277,14 @@ cv::Mat readNative(const fs::path& file, ImageFileInfo& info) {
   return readOiioChannels(file, *in, 0, in->spec().nchannels);
 }
 
+/// The file's single-channel pixels as stored, or an InputError "<what> must have one channel".
+cv::Mat readSingleChannel(const fs::path& file, ImageFileInfo& info, const char* what) {
+  cv::Mat native = readNative(file, info);
+  if (native.channels() != 1)
+    throw InputError(file, std::string(what) + " must have one channel, found " + std::to_string(native.channels()));
+  return native;
+}
+
 double maxCode(int cv_depth) { return cv_depth == CV_8U ? 255.0 : cv_depth == CV_16U ? 65535.0 : 1.0; }
 
 // An OpenImageIO output proxy over a FILE* that remembers the first failed write: OpenImageIO's
@@ -401,6 +409,10 @@ void writePfmTo(const fs::path& file, const cv::Mat& image) {
 }  // namespace
 
 // ----------------------------------------------------------------------------- public
+
+std::string sizeText(int width, int height) { return std::to_string(width) + "x" + std::to_string(height); }
+
+std::string sizeText(const cv::Mat& image) { return sizeText(image.cols, image.rows); }
 
 ImageFileInfo probeImage(const fs::path& file) {
   if (isNpy(file)) {
@@ -618,9 +630,7 @@ cv::Mat readNormals(const fs::path& file, NormalReadStats* stats, ImageFileInfo*
 
 cv::Mat readLabels(const fs::path& file, ImageFileInfo* info) {
   ImageFileInfo local;
-  cv::Mat native = readNative(file, local);
-  if (native.channels() != 1)
-    throw InputError(file, "label map must have one channel, found " + std::to_string(native.channels()));
+  const cv::Mat native = readSingleChannel(file, local, "label map");
   if (native.depth() != CV_8U && native.depth() != CV_16U && native.depth() != CV_32S)
     throw InputError(file, "label map must hold integers (8/16-bit PNG), found " + local.pixel_type);
   cv::Mat labels;
@@ -655,9 +665,7 @@ cv::Mat readColorImage(const fs::path& file, ImageFileInfo* info) {
 
 cv::Mat readScalarMap(const fs::path& file, ImageFileInfo* info) {
   ImageFileInfo local;
-  cv::Mat native = readNative(file, local);
-  if (native.channels() != 1)
-    throw InputError(file, "scalar map must have one channel, found " + std::to_string(native.channels()));
+  const cv::Mat native = readSingleChannel(file, local, "scalar map");
   if (native.depth() == CV_32S) throw InputError(file, "scalar map must be 8/16-bit or float, found " + local.pixel_type);
   cv::Mat out;
   native.convertTo(out, CV_32F, 1.0 / maxCode(native.depth()));

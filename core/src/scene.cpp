@@ -57,12 +57,9 @@ void checkAspect(const std::string& name, const cv::Mat& map, const cv::Mat& ima
   if (map.empty() || map.size() == image.size()) return;
   const double a = static_cast<double>(map.cols) / map.rows, b = static_cast<double>(image.cols) / image.rows;
   if (std::abs(a / b - 1.0) > 0.01)
-    warnings.push_back(name + " is " + std::to_string(map.cols) + "x" + std::to_string(map.rows) +
-                       ", a different aspect ratio than the " + std::to_string(image.cols) + "x" +
-                       std::to_string(image.rows) + " image: it will be stretched when upsampled");
+    warnings.push_back(name + " is " + sizeText(map) + ", a different aspect ratio than the " + sizeText(image) +
+                       " image: it will be stretched when upsampled");
 }
-
-std::string sizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
 
 }  // namespace
 
@@ -150,12 +147,25 @@ SceneManifest readSceneManifest(const fs::path& manifest_file) {
   return m;
 }
 
-Scene loadScene(const fs::path& manifest_file) {
-  Scene s;
-  s.manifest = readSceneManifest(manifest_file);
-  const SceneManifest& m = s.manifest;
-  s.warnings = m.warnings;
+namespace {
 
+/// Every light id is 0 or categoryId * 1000 + k with categoryId in 1..kLightCategoryCount.
+void checkLightIds(const cv::Mat& lights, const fs::path& file) {
+  for (int y = 0; y < lights.rows; ++y)
+    for (int x = 0; x < lights.cols; ++x) {
+      const int id = lights.at<int>(y, x);
+      const int category = id / 1000;
+      if (id != 0 && (category < 1 || category > kLightCategoryCount))
+        throw InputError(file, "light id " + std::to_string(id) + " at pixel (" + std::to_string(x) + ", " +
+                                   std::to_string(y) + ") has category " + std::to_string(category) +
+                                   ", expected categoryId * 1000 + k with categoryId in 1.." +
+                                   std::to_string(kLightCategoryCount));
+    }
+}
+
+/// Reads the manifest's maps into `s`, each file's header into s.maps; labels derived from the
+/// instances when only those are given.
+void readSceneMaps(const SceneManifest& m, Scene& s) {
   ImageFileInfo info;
   s.image = readColorImage(m.image, &info);
   s.maps.push_back({"image", m.image, info});
@@ -189,25 +199,17 @@ Scene loadScene(const fs::path& manifest_file) {
   labelMap("labels", m.labels, s.labels);
   labelMap("lights", m.lights, s.lights);
   labelMap("light_groups", m.light_groups, s.light_groups);
-  if (!s.lights.empty()) {
-    for (int y = 0; y < s.lights.rows; ++y)
-      for (int x = 0; x < s.lights.cols; ++x) {
-        const int id = s.lights.at<int>(y, x);
-        const int category = id / 1000;
-        if (id != 0 && (category < 1 || category > kLightCategoryCount))
-          throw InputError(*m.lights, "light id " + std::to_string(id) + " at pixel (" + std::to_string(x) + ", " +
-                                          std::to_string(y) + ") has category " + std::to_string(category) +
-                                          ", expected categoryId * 1000 + k with categoryId in 1.." +
-                                          std::to_string(kLightCategoryCount));
-      }
-  }
+  if (!s.lights.empty()) checkLightIds(s.lights, *m.lights);
   if (s.labels.empty() && !s.instances.empty()) {
     s.labels = s.instances.clone();
     s.labels.forEach<int>([](int& v, const int*) { v = cityscapesClassOfInstance(v); });
     s.warnings.push_back("labelIds derived from instanceIds");
   }
+}
 
-  // Camera: validate where it was stated, then scale to the image resolution.
+/// The scene's camera: validated where it was stated (a camera file, the manifest, else the
+/// ACDC default), then scaled to the image resolution. Sets s.camera and s.camera_is_default.
+void setSceneCamera(const SceneManifest& m, Scene& s) {
   PinholeCamera camera;
   fs::path camera_source = m.file;
   if (m.camera_file) {
@@ -238,19 +240,31 @@ Scene loadScene(const fs::path& manifest_file) {
     camera = camera.scaledTo(s.image.cols, s.image.rows);
   }
   s.camera = camera;
+}
 
-  if (!s.normals.empty()) {
-    // Visible surfaces face the camera: n . (K^-1 (u, v, 1)) < 0 at the normal map's own resolution.
-    const PinholeCamera at_map = camera.scaledTo(s.normals.cols, s.normals.rows);
-    std::int64_t back_facing = 0;
-    for (int y = 0; y < s.normals.rows; ++y)
-      for (int x = 0; x < s.normals.cols; ++x) {
-        const cv::Vec3f n = s.normals.at<cv::Vec3f>(y, x);
-        const double along_ray = n[0] * (x - at_map.cx) / at_map.fx + n[1] * (y - at_map.cy) / at_map.fy + n[2];
-        if ((n[0] != 0 || n[1] != 0 || n[2] != 0) && along_ray > 0) ++back_facing;
-      }
-    s.normal_stats->back_facing = back_facing;
-  }
+/// Valid normals facing away from the camera: visible surfaces have n . (K^-1 (u, v, 1)) < 0,
+/// taken at the normal map's own resolution.
+std::int64_t countBackFacingNormals(const cv::Mat& normals, const PinholeCamera& camera) {
+  const PinholeCamera at_map = camera.scaledTo(normals.cols, normals.rows);
+  std::int64_t back_facing = 0;
+  for (int y = 0; y < normals.rows; ++y)
+    for (int x = 0; x < normals.cols; ++x) {
+      const cv::Vec3f n = normals.at<cv::Vec3f>(y, x);
+      const double along_ray = n[0] * (x - at_map.cx) / at_map.fx + n[1] * (y - at_map.cy) / at_map.fy + n[2];
+      if ((n[0] != 0 || n[1] != 0 || n[2] != 0) && along_ray > 0) ++back_facing;
+    }
+  return back_facing;
+}
+
+}  // namespace
+
+Scene loadScene(const fs::path& manifest_file) {
+  Scene s;
+  s.manifest = readSceneManifest(manifest_file);
+  s.warnings = s.manifest.warnings;
+  readSceneMaps(s.manifest, s);
+  setSceneCamera(s.manifest, s);
+  if (!s.normals.empty()) s.normal_stats->back_facing = countBackFacingNormals(s.normals, s.camera);
 
   for (const auto& [name, map] : {std::pair<const char*, const cv::Mat*>{"depth", &s.depth_m},
                                   {"normals", &s.normals}, {"albedo", &s.albedo}, {"roughness", &s.roughness},

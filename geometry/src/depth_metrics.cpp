@@ -3,6 +3,8 @@
 #include "solo/core/error.h"
 #include "solo/core/quantile.h"
 
+#include "evaluation_maps.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -12,38 +14,16 @@
 namespace solo {
 namespace {
 
-std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
-
-/// The map as CV_64F, or an InputError naming the file.
-cv::Mat toDoubleDepth(const cv::Mat& map, const std::filesystem::path& file, const char* what) {
-  if (map.empty()) throw InputError(file, std::string(what) + " is empty");
-  if (map.channels() != 1)
-    throw InputError(file, std::string(what) + " has " + std::to_string(map.channels()) + " channels, depth needs 1");
-  if (map.depth() != CV_32F && map.depth() != CV_64F)
-    throw InputError(file, std::string(what) + " is not a float map (read it with readDepth)");
-  cv::Mat out;
-  map.convertTo(out, CV_64F);
-  return out;
-}
+constexpr EvaluatedMapKind kDepthMap{1, "depth needs", "readDepth"};
 
 bool isValidDepth(double d) { return std::isfinite(d) && d > 0; }
 
 }  // namespace
 
 DepthMetrics evaluateDepth(const DepthEvaluationInput& in, const DepthMetricsOptions& options) {
-  const cv::Mat pred = toDoubleDepth(in.prediction_m, in.prediction_file, "prediction");
-  const cv::Mat gt = toDoubleDepth(in.ground_truth_m, in.ground_truth_file, "ground truth");
-  if (pred.size() != gt.size())
-    throw InputError(in.prediction_file, "prediction is " + sizeText(pred) + " but ground truth " +
-                                             in.ground_truth_file.string() + " is " + sizeText(gt));
-  cv::Mat mask;
-  if (!in.mask.empty()) {
-    if (in.mask.size() != gt.size())
-      throw InputError(in.mask_file, "mask is " + sizeText(in.mask) + " but ground truth " +
-                                         in.ground_truth_file.string() + " is " + sizeText(gt));
-    if (in.mask.channels() != 1) throw InputError(in.mask_file, "mask must have one channel");
-    mask = in.mask != 0;  // CV_8U, 255 where evaluated
-  }
+  const cv::Mat pred = evaluatedMapAsDouble(in.prediction_m, kDepthMap, in.prediction_file, "prediction");
+  const cv::Mat gt = evaluatedMapAsDouble(in.ground_truth_m, kDepthMap, in.ground_truth_file, "ground truth");
+  const cv::Mat mask = checkedEvaluationMask(in, pred, gt);  // CV_8U, 255 where evaluated; or empty
   const double lower = options.min_depth_m.value_or(-HUGE_VAL);
   const double upper = options.max_depth_m.value_or(HUGE_VAL);
   if (!(lower < upper)) {

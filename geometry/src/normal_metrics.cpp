@@ -3,6 +3,8 @@
 #include "solo/core/error.h"
 #include "solo/core/quantile.h"
 
+#include "evaluation_maps.h"
+
 #include <cmath>
 #include <string>
 #include <vector>
@@ -10,19 +12,7 @@
 namespace solo {
 namespace {
 
-std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
-
-/// The map as CV_64FC3, or an InputError naming the file.
-cv::Mat toDoubleNormals(const cv::Mat& map, const std::filesystem::path& file, const char* what) {
-  if (map.empty()) throw InputError(file, std::string(what) + " is empty");
-  if (map.channels() != 3)
-    throw InputError(file, std::string(what) + " has " + std::to_string(map.channels()) + " channels, normals need 3");
-  if (map.depth() != CV_32F && map.depth() != CV_64F)
-    throw InputError(file, std::string(what) + " is not a float map (read it with readNormals)");
-  cv::Mat out;
-  map.convertTo(out, CV_64FC3);
-  return out;
-}
+constexpr EvaluatedMapKind kNormalMap{3, "normals need", "readNormals"};
 
 bool isValidNormal(const cv::Vec3d& n) {
   return std::isfinite(n[0]) && std::isfinite(n[1]) && std::isfinite(n[2]) && (n[0] != 0 || n[1] != 0 || n[2] != 0);
@@ -31,19 +21,9 @@ bool isValidNormal(const cv::Vec3d& n) {
 }  // namespace
 
 NormalMetrics evaluateNormals(const NormalEvaluationInput& in) {
-  const cv::Mat pred = toDoubleNormals(in.prediction, in.prediction_file, "prediction");
-  const cv::Mat gt = toDoubleNormals(in.ground_truth, in.ground_truth_file, "ground truth");
-  if (pred.size() != gt.size())
-    throw InputError(in.prediction_file, "prediction is " + sizeText(pred) + " but ground truth " +
-                                             in.ground_truth_file.string() + " is " + sizeText(gt));
-  cv::Mat mask;
-  if (!in.mask.empty()) {
-    if (in.mask.size() != gt.size())
-      throw InputError(in.mask_file, "mask is " + sizeText(in.mask) + " but ground truth " +
-                                         in.ground_truth_file.string() + " is " + sizeText(gt));
-    if (in.mask.channels() != 1) throw InputError(in.mask_file, "mask must have one channel");
-    mask = in.mask != 0;
-  }
+  const cv::Mat pred = evaluatedMapAsDouble(in.prediction, kNormalMap, in.prediction_file, "prediction");
+  const cv::Mat gt = evaluatedMapAsDouble(in.ground_truth, kNormalMap, in.ground_truth_file, "ground truth");
+  const cv::Mat mask = checkedEvaluationMask(in, pred, gt);  // CV_8U, 255 where evaluated; or empty
 
   NormalMetrics r;
   r.pixels = static_cast<std::int64_t>(gt.total());

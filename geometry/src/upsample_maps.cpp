@@ -1,5 +1,7 @@
 #include "solo/geometry/upsample_maps.h"
 
+#include "solo/core/image_io.h"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -8,8 +10,6 @@
 
 namespace solo {
 namespace {
-
-std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
 
 // Bilinear resize of `values` (invalid samples already 0) and of the validity weight;
 // the ratio is the valid-weighted average.

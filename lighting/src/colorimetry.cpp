@@ -15,10 +15,18 @@ namespace {
 
 constexpr double kSecondRadiationConstant_mK = 1.4388e-2;
 
-/// True when the first line is a header (its first field is not a number).
-bool hasHeader(const std::vector<csv::Line>& lines) {
+/// The file's CSV lines without its header: a first line whose first field is not a number.
+std::vector<csv::Line> readDataLines(const std::filesystem::path& file) {
+  std::vector<csv::Line> lines = csv::readLines(file);
   double value = 0;
-  return !lines.empty() && !lines.front().fields.empty() && !csv::parseNumber(lines.front().fields[0], value);
+  if (!lines.empty() && !lines.front().fields.empty() && !csv::parseNumber(lines.front().fields[0], value))
+    lines.erase(lines.begin());
+  return lines;
+}
+
+/// An InputError naming the file and the line: "line N: <problem>".
+InputError lineError(const std::filesystem::path& file, const csv::Line& line, const std::string& problem) {
+  return InputError(file, "line " + std::to_string(line.number) + ": " + problem);
 }
 
 /// CIE 1960 UCS (u, v) of a chromaticity.
@@ -43,18 +51,16 @@ double ColorMatchingFunctions::step_nm() const {
 }
 
 Spectrum readSpectrumCsv(const std::filesystem::path& file) {
-  std::vector<csv::Line> lines = csv::readLines(file);
-  if (hasHeader(lines)) lines.erase(lines.begin());
   Spectrum s;
-  for (const csv::Line& line : lines) {
+  for (const csv::Line& line : readDataLines(file)) {
     if (line.fields.size() != 2)
-      throw InputError(file, "line " + std::to_string(line.number) + ": expected 2 columns (wavelength_nm, power), got " +
-                                 std::to_string(line.fields.size()));
+      throw lineError(file, line,
+                      "expected 2 columns (wavelength_nm, power), got " + std::to_string(line.fields.size()));
     const double lambda = csv::number(file, line, 0, "wavelength");
     const double power = csv::number(file, line, 1, "power");
-    if (power < 0) throw InputError(file, "line " + std::to_string(line.number) + ": negative spectral power");
+    if (power < 0) throw lineError(file, line, "negative spectral power");
     if (!s.wavelength_nm.empty() && lambda <= s.wavelength_nm.back())
-      throw InputError(file, "line " + std::to_string(line.number) + ": wavelengths must increase");
+      throw lineError(file, line, "wavelengths must increase");
     s.wavelength_nm.push_back(lambda);
     s.power.push_back(power);
   }
@@ -64,12 +70,9 @@ Spectrum readSpectrumCsv(const std::filesystem::path& file) {
 }
 
 ColorMatchingFunctions readColorMatchingFunctions(const std::filesystem::path& file) {
-  std::vector<csv::Line> lines = csv::readLines(file);
-  if (hasHeader(lines)) lines.erase(lines.begin());
   ColorMatchingFunctions cmf;
-  for (const csv::Line& line : lines) {
-    if (line.fields.size() != 4)
-      throw InputError(file, "line " + std::to_string(line.number) + ": expected 4 columns (wavelength_nm, xbar, ybar, zbar)");
+  for (const csv::Line& line : readDataLines(file)) {
+    if (line.fields.size() != 4) throw lineError(file, line, "expected 4 columns (wavelength_nm, xbar, ybar, zbar)");
     cmf.wavelength_nm.push_back(csv::number(file, line, 0, "wavelength"));
     cmf.xbar.push_back(csv::number(file, line, 1, "xbar"));
     cmf.ybar.push_back(csv::number(file, line, 2, "ybar"));
@@ -189,13 +192,6 @@ Eigen::Matrix3d xyzToLinearSrgb() {
   Eigen::Matrix3d m;
   m << 3.2404542, -1.5371385, -0.4985314, -0.9692660, 1.8760108, 0.0415560, 0.0556434, -0.2040259, 1.0572252;
   return m;
-}
-
-double srgbToLinear(double v) { return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4); }
-
-double linearToSrgb(double v) {
-  v = std::clamp(v, 0.0, 1.0);
-  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
 }
 
 }  // namespace solo

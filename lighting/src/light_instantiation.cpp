@@ -2,6 +2,8 @@
 
 #include "solo/lighting/colorimetry.h"
 
+#include <solo/core/srgb.h>
+
 #include <Eigen/Dense>
 
 #include <cmath>
@@ -192,7 +194,7 @@ std::vector<std::optional<Eigen::Vector2d>> inferredChromaticities(const LightGr
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const PixelRun& run : light.runs)
       for (int x = run.first_col; x <= run.last_col; ++x) {
-        const cv::Vec3f rgb = day_image.at<cv::Vec3f>(run.row, x);
+        const cv::Vec3d rgb = day_image.at<cv::Vec3f>(run.row, x);  // decoded in double precision
         sum += Eigen::Vector3d(srgbToLinear(rgb[0]), srgbToLinear(rgb[1]), srgbToLinear(rgb[2]));
       }
     const Eigen::Vector3d xyz = d65_to_e * (linear_srgb_to_xyz * sum);

@@ -2,6 +2,8 @@
 
 #include "solo/lighting/colorimetry.h"
 
+#include <solo/core/srgb.h>
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -13,7 +15,8 @@ Eigen::Vector3d displayColour(const Eigen::Vector2d& xy) {
   const double peak = rgb.maxCoeff();
   if (!(peak > 0)) return Eigen::Vector3d::Ones();
   const Eigen::Vector3d scaled = rgb / peak;
-  return {linearToSrgb(scaled.x()), linearToSrgb(scaled.y()), linearToSrgb(scaled.z())};
+  const auto encode = [](double linear) { return linearToSrgb(std::clamp(linear, 0.0, 1.0)); };
+  return {encode(scaled.x()), encode(scaled.y()), encode(scaled.z())};
 }
 
 cv::Mat drawLightOverlay(const cv::Mat& day_image, const LightGroupTree& tree, const std::vector<LightState>& states,

@@ -1,6 +1,8 @@
 #include <solo/post/chromatic_adaptation.h>
 #include <solo/post/colour_encoding.h>
 
+#include <solo/core/srgb.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -42,8 +44,7 @@ float encodeTransfer(float linear, TransferCurve curve) {
   if (v == 1.f) return 1.f;  // exact white, whatever the curve's rounding
   switch (curve) {
     case TransferCurve::Gamma22: return std::pow(v, 1.f / 2.2f);
-    case TransferCurve::Srgb:
-      return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.f / 2.4f) - 0.055f;
+    case TransferCurve::Srgb: return linearToSrgb(v);
     case TransferCurve::Linear: return v;
   }
   return v;
@@ -53,7 +54,7 @@ float decodeTransfer(float encoded, TransferCurve curve) {
   const float v = std::clamp(encoded, 0.f, 1.f);
   switch (curve) {
     case TransferCurve::Gamma22: return std::pow(v, 2.2f);
-    case TransferCurve::Srgb: return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
+    case TransferCurve::Srgb: return srgbToLinear(v);
     case TransferCurve::Linear: return v;
   }
   return v;

@@ -1,6 +1,8 @@
 #include <solo/post/chromatic_adaptation.h>
 #include <solo/post/sensor_noise.h>
 
+#include <solo/core/srgb.h>
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -103,8 +105,7 @@ const cv::Matx33d kHighPass(0, -0.25, 0, -0.25, 1, -0.25, 0, -0.25, 0);
 double transferSlope(double linear, TransferCurve curve) {
   switch (curve) {
     case TransferCurve::Gamma22: return std::pow(linear, 1 / 2.2 - 1) / 2.2;
-    case TransferCurve::Srgb:
-      return linear <= 0.0031308 ? 12.92 : 1.055 / 2.4 * std::pow(linear, 1 / 2.4 - 1);
+    case TransferCurve::Srgb: return linearToSrgbSlope(linear);
     case TransferCurve::Linear: return 1;
   }
   return 1;

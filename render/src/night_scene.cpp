@@ -1,5 +1,6 @@
 #include "solo/render/night_scene.h"
 
+#include <solo/core/srgb.h>
 #include <solo/lighting/colorimetry.h>
 #include <solo/lighting/light_geometry.h>
 
@@ -13,13 +14,6 @@
 #include <map>
 
 namespace solo {
-namespace {
-
-float srgbToLinear(float v) {
-  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
-
-}  // namespace
 
 namespace {
 

@@ -142,15 +142,27 @@ RTCRayHit closestHit(RTCScene scene, const Eigen::Vector3f& origin, const Eigen:
   return query;
 }
 
+/// A RayHit or SlotHit with what they share filled in from Embree's answer: whether the ray hit
+/// and at what distance (a miss keeps the defaults).
+template <typename Hit>
+Hit hitOrMiss(const RTCRayHit& query) {
+  Hit hit;
+  if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+  hit.hit = true;
+  hit.distance = query.ray.tfar;
+  return hit;
+}
+
+/// Whether a hit lies in the second half (v2, v3, v1) of its quad rather than the first (v0, v1, v3).
+bool inSecondHalf(const RTCHit& hit) { return hit.u + hit.v > 1.f; }
+
 }  // namespace
 
 RayHit RayCaster::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near,
                             float t_far) const {
   const RTCRayHit query = closestHit(impl_->scene, origin, direction, t_near, t_far);
-  RayHit hit;
-  if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
-  hit.hit = true;
-  hit.distance = query.ray.tfar;
+  RayHit hit = hitOrMiss<RayHit>(query);
+  if (!hit.hit) return hit;
   hit.geometric_normal = {query.hit.Ng_x, query.hit.Ng_y, query.hit.Ng_z};
   // Back from the quad's (u, v) to the barycentrics of the input triangle's vertices 1 and 2.
   const QuadSource& source = impl_->quad_sources[query.hit.primID];
@@ -158,7 +170,7 @@ RayHit RayCaster::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f
   int rotation = source.first_rotation;
   float along_next = query.hit.u, along_previous = query.hit.v;  // (v0, v1, v3): weights of v1, v3
   hit.triangle = source.first;
-  if (source.second != QuadSource::kNoTriangle && query.hit.u + query.hit.v > 1.f) {
+  if (source.second != QuadSource::kNoTriangle && inSecondHalf(query.hit)) {
     rotation = source.second_rotation;  // (v2, v3, v1): weights of v3, v1 are 1 - u, 1 - v
     along_next = 1.f - query.hit.u;
     along_previous = 1.f - query.hit.v;
@@ -175,11 +187,9 @@ RayHit RayCaster::intersect(const Eigen::Vector3f& origin, const Eigen::Vector3f
 SlotHit RayCaster::intersectSlot(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near,
                                  float t_far) const {
   const RTCRayHit query = closestHit(impl_->scene, origin, direction, t_near, t_far);
-  SlotHit hit;
-  if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
-  hit.hit = true;
-  hit.distance = query.ray.tfar;
-  hit.slot = 2 * query.hit.primID + (query.hit.u + query.hit.v > 1.f ? 1u : 0u);  // as intersect() decides
+  SlotHit hit = hitOrMiss<SlotHit>(query);
+  if (!hit.hit) return hit;
+  hit.slot = 2 * query.hit.primID + (inSecondHalf(query.hit) ? 1u : 0u);
   return hit;
 }
 

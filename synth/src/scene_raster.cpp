@@ -2,6 +2,8 @@
 
 #include "solo/render/ray_caster.h"
 
+#include <solo/core/srgb.h>
+
 #include <tbb/parallel_for.h>
 
 #include <cmath>
@@ -119,8 +121,7 @@ cv::Mat srgbEncode8(const cv::Mat& linear_rgb) {
       cv::Vec3b& o = out.at<cv::Vec3b>(y, x);
       for (int k = 0; k < 3; ++k) {
         const float v = std::clamp(std::isfinite(c[k]) ? c[k] : 0.f, 0.f, 1.f);
-        const float e = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.f / 2.4f) - 0.055f;
-        o[k] = static_cast<unsigned char>(std::lround(e * 255.f));
+        o[k] = static_cast<unsigned char>(std::lround(linearToSrgb(v) * 255.f));
       }
     }
   return out;

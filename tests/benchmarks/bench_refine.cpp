@@ -29,6 +29,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using solo::sizeText;
+
 struct Truth {
   cv::Mat depth_m, normals;
 };
@@ -47,8 +49,6 @@ struct Row {
   bool has_accuracy = false;
   double abs_rel = 0, rmse_m = 0, normal_mean_deg = 0, normal_median_deg = 0;
 };
-
-std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
 
 void measure(Row& row, const cv::Mat& depth_m, const Truth& truth, const solo::PinholeCamera& camera) {
   solo::DepthEvaluationInput d;

@@ -18,6 +18,11 @@ struct ImageFileInfo {
   std::string format;      ///< "png", "openexr", "tiff", "pfm", "npy", ...
 };
 
+/// "WxH", e.g. "640x480", for messages and reports.
+std::string sizeText(int width, int height);
+/// The image's size as "WxH" (columns x rows).
+std::string sizeText(const cv::Mat& image);
+
 /// Header of an image file (any format OpenImageIO reads, plus .npy).
 ImageFileInfo probeImage(const std::filesystem::path& file);
 

@@ -80,9 +80,4 @@ Eigen::Matrix3d bradfordEToD65();
 /// CIE XYZ (D65-referred) to linear sRGB, IEC 61966-2-1.
 Eigen::Matrix3d xyzToLinearSrgb();
 
-/// sRGB decoding of an encoded value in [0, 1] (IEC 61966-2-1 curve).
-double srgbToLinear(double encoded);
-/// sRGB encoding of a linear value, clamped to [0, 1].
-double linearToSrgb(double linear);
-
 }  // namespace solo
