@@ -3,6 +3,7 @@
 #include "solo/core/atomic_file.h"
 #include "solo/core/error.h"
 #include "solo/core/image_limits.h"
+#include "solo/core/output_path.h"
 #include "solo/core/input_file.h"
 
 #include <OpenImageIO/filesystem.h>
@@ -22,13 +23,7 @@ namespace fs = std::filesystem;
 namespace solo {
 namespace {
 
-std::string lowerExtension(const fs::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext;
-}
-
-bool isNpy(const fs::path& file) { return lowerExtension(file) == ".npy"; }
+bool isNpy(const fs::path& file) { return lowercaseExtension(file) == ".npy"; }
 
 std::uintmax_t requireReadableFile(const fs::path& file) { return requireNonEmptyRegularFile(file, "map or image"); }
 
@@ -365,7 +360,7 @@ void writeOiio(const fs::path& file, const cv::Mat& image) {
   // exception) still writes through a live proxy and file.
   std::optional<OutputFileHandle> handle;
   std::unique_ptr<CheckedOiioOutput> proxy;
-  const std::string ext = lowerExtension(file);
+  const std::string ext = lowercaseExtension(file);
   if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") {
     handle.emplace(file);
     proxy = std::make_unique<CheckedOiioOutput>(handle->get());
@@ -680,14 +675,14 @@ void writeImage(const fs::path& file, const cv::Mat& image) {
     throw InputError(file, "cannot write " + std::to_string(channels) + " channels");
   writeAtomically(file, [&](const fs::path& tmp) {
     if (isNpy(file)) writeNpyTo(tmp, image);
-    else if (lowerExtension(file) == ".pfm") writePfmTo(tmp, image);
+    else if (lowercaseExtension(file) == ".pfm") writePfmTo(tmp, image);
     else writeOiio(tmp, image);
   });
 }
 
 void writeDepth(const fs::path& file, const cv::Mat& depth_m, double scale_m_per_unit) {
   if (depth_m.type() != CV_32F) throw InputError(file, "depth to write must be CV_32F metres");
-  if (lowerExtension(file) != ".png") {
+  if (lowercaseExtension(file) != ".png") {
     cv::Mat clean = depth_m.clone();
     clean.forEach<float>([](float& d, const int*) { if (!(std::isfinite(d) && d > 0)) d = 0.f; });
     writeImage(file, clean);
@@ -710,7 +705,7 @@ void writeDepth(const fs::path& file, const cv::Mat& depth_m, double scale_m_per
 
 void writeNormals(const fs::path& file, const cv::Mat& normals) {
   if (normals.type() != CV_32FC3) throw InputError(file, "normals to write must be CV_32FC3");
-  if (lowerExtension(file) != ".png") {
+  if (lowercaseExtension(file) != ".png") {
     writeImage(file, normals);
     return;
   }

@@ -19,10 +19,11 @@ namespace solo {
 NightConversionOptions::NightConversionOptions() {
   // Self-intersection and manifoldness counts cost more than the rest of the mesh stage.
   mesh.evaluate = false;
-  // A night image is judged beside the sensor noise it gets: a few samples per pixel, stopped
-  // at the sensor noise (noise_target), power-proportional light choice (docs/presets.md).
+  // A night image is judged beside the sensor noise it gets: 2 to 4 samples per pixel, stopped
+  // at the sensor noise (noise_target), the denoiser taking the rest; power-proportional light
+  // choice (docs/presets.md).
   render.min_samples = 2;
-  render.max_samples = 8;
+  render.max_samples = 4;
   render.relative_error = 0.1;
   render.noise_factor = 1;
   render.shadow_roulette = 0.3;
