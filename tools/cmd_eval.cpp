@@ -1,77 +1,30 @@
-// `solo eval depth|normals|mesh|scene`: reads the inputs, computes the metrics (solo_geometry) and
-// writes one record three ways: a table on the terminal, JSON on stdout (--json), and a row
-// appended to a CSV file (--csv). Every record of a command has the same fields in the same
-// order, so rows of a sweep line up under one header. `solo eval night` measures several
-// images at once (solo_render's night statistics): a table row, a JSON object and a CSV row
-// per image.
+// `solo eval depth|normals|mesh|scene`: the record of the library's evaluation
+// (pipeline/evaluation.h) written three ways: a table on the terminal, JSON on stdout (--json),
+// and a row appended to a CSV file (--csv). `solo eval night` measures several images at once
+// (pipeline/night_evaluation.h): a table row, a JSON object and a CSV row per image.
 
 #include "commands.h"
 
-#include <solo/geometry/depth_mesh.h>
-#include <solo/geometry/depth_metrics.h>
 #include <solo/core/error.h>
-#include <solo/core/image_io.h>
-#include <solo/geometry/mesh_metrics.h>
-#include <solo/geometry/normal_metrics.h>
-#include <solo/core/quantile.h>
-#include <solo/core/report.h>
-#include <solo/core/scene.h>
-#include <solo/geometry/spurious_faces.h>
-#include <solo/geometry/triangle_mesh.h>
-#include <solo/geometry/upsample_maps.h>
-#include <solo/geometry/view_mesh_distances.h>
-#include <solo/post/night_statistics.h>
-
-#include <opencv2/imgproc.hpp>
+#include <solo/pipeline/evaluation.h>
+#include <solo/pipeline/night_evaluation.h>
 
 #include <nlohmann/json.hpp>
 
-#include <fcntl.h>
-#include <unistd.h>
 #include <algorithm>
-#include <cctype>
-#include <cerrno>
-#include <charconv>
 #include <cstdio>
-#include <cstring>
-#include <fstream>
 #include <iostream>
 #include <type_traits>
-#include <variant>
+#include <utility>
 
 namespace fs = std::filesystem;
 
 namespace solo::tools {
 namespace {
 
-/// monostate = no value (an option not given, a metric that does not apply): JSON null, an
-/// empty CSV cell, "none" in the table (metrics without a value are left out of it).
-using FieldValue = std::variant<std::monostate, bool, std::int64_t, double, std::string>;
-
-struct Field {
-  std::string key;    ///< JSON key and CSV column
-  std::string label;  ///< table label
-  FieldValue value;
-  std::string unit;  ///< table unit ("m", "deg", ...), empty for none
-};
-
-struct EvalRecord {
-  std::string command;  ///< "eval depth", ...
-  std::vector<Field> inputs, options, metrics;
-  double seconds = 0;
-};
-
-FieldValue optionalPath(const std::optional<fs::path>& p) {
-  return p ? FieldValue(p->string()) : FieldValue(std::monostate{});
-}
-FieldValue optionalNumber(const std::optional<double>& v) { return v ? FieldValue(*v) : FieldValue(std::monostate{}); }
-FieldValue scaleOption(double scale_m_per_unit) {
-  return scale_m_per_unit > 0 ? FieldValue(scale_m_per_unit) : FieldValue(std::monostate{});
-}
-
 // ---- output: JSON ---------------------------------------------------------------------
 
-nlohmann::ordered_json toJson(const FieldValue& v) {
+nlohmann::ordered_json toJson(const EvaluationValue& v) {
   return std::visit(
       [](const auto& x) -> nlohmann::ordered_json {
         if constexpr (std::is_same_v<std::decay_t<decltype(x)>, std::monostate>)
@@ -82,13 +35,13 @@ nlohmann::ordered_json toJson(const FieldValue& v) {
       v);
 }
 
-std::string recordToJson(const EvalRecord& r) {
+std::string recordToJson(const EvaluationRecord& r) {
   nlohmann::ordered_json j;
   j["command"] = r.command;
   for (const auto& [section, fields] :
        {std::pair{"inputs", &r.inputs}, {"options", &r.options}, {"metrics", &r.metrics}}) {
     auto& object = j[section] = nlohmann::ordered_json::object();
-    for (const Field& f : *fields) object[f.key] = toJson(f.value);
+    for (const EvaluationField& f : *fields) object[f.key] = toJson(f.value);
   }
   j["seconds"] = r.seconds;
   return j.dump(2) + "\n";
@@ -96,7 +49,7 @@ std::string recordToJson(const EvalRecord& r) {
 
 // ---- output: table --------------------------------------------------------------------
 
-std::string tableValue(const FieldValue& v) {
+std::string tableValue(const EvaluationValue& v) {
   if (std::holds_alternative<std::monostate>(v)) return "none";
   if (const bool* b = std::get_if<bool>(&v)) return *b ? "yes" : "no";
   if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) return std::to_string(*i);
@@ -108,13 +61,13 @@ std::string tableValue(const FieldValue& v) {
   return std::get<std::string>(v);
 }
 
-std::string recordToTable(const EvalRecord& r) {
+std::string recordToTable(const EvaluationRecord& r) {
   std::string out = "solo " + r.command + "\n";
   int width = 30;  // labels are padded to the longest one
-  for (const std::vector<Field>* fields : {&r.inputs, &r.options, &r.metrics})
-    for (const Field& f : *fields) width = std::max(width, static_cast<int>(f.label.size()));
-  const auto add_rows = [&out, width](const std::vector<Field>& fields, bool skip_missing) {
-    for (const Field& f : fields) {
+  for (const std::vector<EvaluationField>* fields : {&r.inputs, &r.options, &r.metrics})
+    for (const EvaluationField& f : *fields) width = std::max(width, static_cast<int>(f.label.size()));
+  const auto add_rows = [&out, width](const std::vector<EvaluationField>& fields, bool skip_missing) {
+    for (const EvaluationField& f : fields) {
       if (skip_missing && std::holds_alternative<std::monostate>(f.value)) continue;
       char label[128];
       std::snprintf(label, sizeof label, "  %-*s ", width, f.label.c_str());
@@ -131,654 +84,27 @@ std::string recordToTable(const EvalRecord& r) {
   return out + time;
 }
 
-// ---- output: CSV ----------------------------------------------------------------------
 
-std::string csvCell(const FieldValue& v) {
-  if (std::holds_alternative<std::monostate>(v)) return "";
-  if (const bool* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
-  if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) return std::to_string(*i);
-  if (const double* d = std::get_if<double>(&v)) {
-    char text[32];  // shortest text that reads back as the same double
-    const auto result = std::to_chars(text, text + sizeof text, *d);
-    return std::string(text, result.ptr);
-  }
-  const std::string& s = std::get<std::string>(v);
-  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
-  std::string quoted = "\"";
-  for (const char c : s) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
-}
-
-std::string csvLine(const EvalRecord& r, bool header) {
-  std::string line;
-  bool first = true;
-  for (const std::vector<Field>* fields : {&r.inputs, &r.options, &r.metrics})
-    for (const Field& f : *fields) {
-      if (!first) line += ",";
-      first = false;
-      line += header ? f.key : csvCell(f.value);
-    }
-  return line + "\n";
-}
-
-/// Appends the record's row to `file`, with the header first when the file is new or empty.
-/// An existing file must have this command's header. Row (and header) go out in one write(2)
-/// on an O_APPEND descriptor, so rows of parallel runs never interleave.
-void appendCsvRow(const fs::path& file, const EvalRecord& r) {
-  const std::string header = csvLine(r, true);
-  std::string text = csvLine(r, false);
-  std::error_code ec;
-  if (fs::exists(file, ec) && fs::file_size(file, ec) > 0) {
-    std::ifstream in(file);
-    std::string first_line;
-    std::getline(in, first_line);
-    if (first_line + "\n" != header)
-      throw InputError(
-          file, "its columns are not those of `solo " + r.command + "` (the first line differs); append to a new file");
-  } else {
-    text = header + text;
-  }
-  const int fd = ::open(file.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) throw InputError(file, std::string("cannot open for appending: ") + std::strerror(errno));
-  const ssize_t written = ::write(fd, text.data(), text.size());
-  const int write_errno = errno;
-  ::close(fd);
-  if (written != static_cast<ssize_t>(text.size()))
-    throw InputError(
-        file, std::string("cannot append the row: ") + (written < 0 ? std::strerror(write_errno) : "short write"));
-}
-
-int emit(const EvalRecord& r, const EvalOutputOptions& output) {
-  if (output.csv) appendCsvRow(*output.csv, r);
+/// The record on stdout (JSON or the table), its row appended to the CSV file when one is given.
+int emit(const EvaluationRecord& r, const EvalOutputOptions& output) {
+  if (output.csv) appendEvaluationCsvRow(*output.csv, r);
   std::cout << (output.json ? recordToJson(r) : recordToTable(r));
   return 0;
 }
 
-cv::Mat readMask(const std::optional<fs::path>& mask) { return mask ? readLabels(*mask) : cv::Mat(); }
-
-/// A record of several maps' metrics prefixes keys ("est_depth_") and table labels.
-Field prefixed(const std::string& key_prefix, const std::string& label_prefix, Field f) {
-  f.key = key_prefix + f.key;
-  const std::size_t indent = f.label.find_first_not_of(' ');  // sub-rows stay indented
-  f.label = f.label.substr(0, indent) + label_prefix + f.label.substr(indent);
-  return f;
-}
-
-/// The fields of one depth evaluation; without `accounting`, only the scale and the metrics.
-std::vector<Field> depthFields(const DepthMetrics& m, const std::string& key_prefix, const std::string& label_prefix,
-                               bool accounting) {
-  std::vector<Field> fields;
-  if (accounting)
-    fields = {{"pixels", "pixels", m.pixels, ""},
-              {"masked_out", "  masked out", m.masked_out, ""},
-              {"ground_truth_invalid", "  no ground truth", m.ground_truth_invalid, ""},
-              {"outside_range", "  gt outside depth range", m.outside_range, ""},
-              {"prediction_invalid", "  no prediction", m.prediction_invalid, ""},
-              {"valid_pixels", "  valid (evaluated)", m.valid_pixels, ""}};
-  const std::vector<Field> metrics = {{"scale", "scale applied to prediction", m.scale, ""},
-                                      {"abs_rel", "AbsRel", m.abs_rel, ""},
-                                      {"sq_rel_m", "SqRel", m.sq_rel_m, "m"},
-                                      {"rmse_m", "RMSE", m.rmse_m, "m"},
-                                      {"rmse_log", "RMSElog", m.rmse_log, ""},
-                                      {"delta1", "delta < 1.25", m.delta1, ""},
-                                      {"delta2", "delta < 1.25^2", m.delta2, ""},
-                                      {"delta3", "delta < 1.25^3", m.delta3, ""}};
-  fields.insert(fields.end(), metrics.begin(), metrics.end());
-  for (Field& f : fields) f = prefixed(key_prefix, label_prefix, f);
-  return fields;
-}
-
-std::vector<Field> normalFields(const NormalMetrics& m, const std::string& key_prefix,
-                                const std::string& label_prefix) {
-  std::vector<Field> fields = {{"pixels", "pixels", m.pixels, ""},
-                               {"masked_out", "  masked out", m.masked_out, ""},
-                               {"ground_truth_invalid", "  no ground truth", m.ground_truth_invalid, ""},
-                               {"prediction_invalid", "  no prediction", m.prediction_invalid, ""},
-                               {"valid_pixels", "  valid (evaluated)", m.valid_pixels, ""},
-                               {"mean_deg", "mean angle", m.mean_deg, "deg"},
-                               {"median_deg", "median angle", m.median_deg, "deg"},
-                               {"rmse_deg", "RMSE angle", m.rmse_deg, "deg"}};
-  const char* const threshold_keys[] = {"under_5_deg", "under_7_5_deg", "under_11_25_deg", "under_22_5_deg",
-                                        "under_30_deg"};
-  const char* const threshold_labels[] = {"share < 5 deg", "share < 7.5 deg", "share < 11.25 deg", "share < 22.5 deg",
-                                          "share < 30 deg"};
-  for (std::size_t t = 0; t < kNormalAngleThresholdsDeg.size(); ++t)
-    fields.push_back({threshold_keys[t], threshold_labels[t], m.share_under[t], ""});
-  for (Field& f : fields) f = prefixed(key_prefix, label_prefix, f);
-  return fields;
-}
-
-std::vector<Field> meshFields(const MeshMetrics& m, const MeshReadStats& read_stats,
-                              const std::optional<MeshDistances>& d, const std::string& key_prefix,
-                              const std::string& label_prefix) {
-  const auto quality = [&m](double TriangleQuality::*field) {
-    return m.quality ? FieldValue((*m.quality).*field) : FieldValue(std::monostate{});
-  };
-  const auto distance = [&d](auto MeshDistances::*field) {
-    return d ? FieldValue((*d).*field) : FieldValue(std::monostate{});
-  };
-  std::vector<Field> fields = {
-      {"vertices", "vertices", m.vertices, ""},
-      {"faces", "faces (triangles)", m.faces, ""},
-      {"polygons_triangulated", "  polygons fan-split on read", read_stats.polygons_triangulated, ""},
-      {"faces_dropped", "  faces dropped on read", read_stats.faces_dropped, ""},
-      {"unreferenced_vertices", "unreferenced vertices", m.unreferenced_vertices, ""},
-      {"degenerate_faces", "degenerate faces", m.degenerate_faces, ""},
-      {"edges", "edges", m.edges, ""},
-      {"euler_characteristic", "Euler characteristic V-E+F", m.euler_characteristic, ""},
-      {"components", "connected components", m.components, ""},
-      {"closed", "closed", m.closed, ""},
-      {"boundary_loops", "boundary loops", m.boundary_loops, ""},
-      {"boundary_edges", "boundary edges", m.boundary_edges, ""},
-      {"non_manifold_edges", "non-manifold edges", m.non_manifold_edges, ""},
-      {"non_manifold_vertices", "non-manifold vertices", m.non_manifold_vertices, ""},
-      {"self_intersecting_pairs", "self-intersecting face pairs", m.self_intersecting_pairs, ""},
-      {"self_intersecting_faces", "self-intersecting faces", m.self_intersecting_faces, ""},
-      {"self_intersection_check", "  checked as", std::string(selfIntersectionCheckName(m.self_intersection_check)),
-       ""},
-      {"min_angle_deg", "minimum angle", quality(&TriangleQuality::min_angle_deg), "deg"},
-      {"aspect_ratio_min", "aspect ratio min", quality(&TriangleQuality::aspect_ratio_min), ""},
-      {"aspect_ratio_median", "aspect ratio median", quality(&TriangleQuality::aspect_ratio_median), ""},
-      {"aspect_ratio_p95", "aspect ratio p95", quality(&TriangleQuality::aspect_ratio_p95), ""},
-      {"aspect_ratio_max", "aspect ratio max", quality(&TriangleQuality::aspect_ratio_max), ""},
-      {"hausdorff_to_ref", "Hausdorff mesh -> ref", distance(&MeshDistances::hausdorff_to_reference), ""},
-      {"hausdorff_from_ref", "Hausdorff ref -> mesh", distance(&MeshDistances::hausdorff_from_reference), ""},
-      {"hausdorff", "Hausdorff (symmetric)", distance(&MeshDistances::hausdorff), ""},
-      {"mean_to_ref", "mean distance mesh -> ref", distance(&MeshDistances::mean_to_reference), ""},
-      {"mean_from_ref", "mean distance ref -> mesh", distance(&MeshDistances::mean_from_reference), ""},
-      {"chamfer", "Chamfer", distance(&MeshDistances::chamfer), ""},
-      {"ref_bbox_diagonal", "ref bounding-box diagonal", distance(&MeshDistances::reference_bbox_diagonal), ""},
-      {"mesh_vertices_checked", "mesh vertices checked", distance(&MeshDistances::mesh_vertices_checked), ""},
-      {"ref_vertices_checked", "ref vertices checked", distance(&MeshDistances::reference_vertices_checked), ""}};
-  for (Field& f : fields) f = prefixed(key_prefix, label_prefix, f);
-  return fields;
-}
-
-/// The view-based split of a depth mesh's distance to the true surfaces (view_mesh_distances.h):
-/// relative distance, area and distance per depth band, and the true visible surface covered.
-std::vector<Field> viewMeshFields(const std::optional<ViewMeshDistances>& d) {
-  const std::vector<double> edges = ViewMeshDistanceOptions{}.depth_band_edges_m;
-  auto value = [&](auto get) -> FieldValue { return d ? FieldValue(get(*d)) : FieldValue(std::monostate{}); };
-  std::vector<Field> fields = {
-      {"mesh_area_m2", "mesh area", value([](const ViewMeshDistances& v) { return v.area_m2; }), "m^2"},
-      {"mesh_mean_relative_to_ref", "mesh mean distance mesh -> ref / depth",
-       value([](const ViewMeshDistances& v) { return v.mean_relative_to_truth; }), ""},
-      {"mesh_truth_mean_relative_to_mesh", "mesh mean distance true pixel -> mesh / depth",
-       value([](const ViewMeshDistances& v) { return v.truth_mean_relative_to_mesh; }), ""},
-      {"mesh_truth_covered", "mesh true pixels covered (within 5 % of depth)",
-       value([](const ViewMeshDistances& v) { return v.truth_covered; }), ""}};
-  for (std::size_t b = 0; b <= edges.size(); ++b) {
-    const std::string lo = b == 0 ? "0" : std::to_string(static_cast<int>(edges[b - 1]));
-    const std::string hi = b == edges.size() ? "up" : std::to_string(static_cast<int>(edges[b]));
-    const std::string key = "mesh_z_" + lo + "_" + hi + "_";
-    const std::string label = "  depth " + lo + (b == edges.size() ? " m and beyond" : "-" + hi + " m") + ": ";
-    fields.push_back({key + "area_share", label + "mesh area share",
-                      value([b](const ViewMeshDistances& v) { return v.by_depth[b].area_share; }), ""});
-    fields.push_back({key + "mean_to_ref", label + "mean distance mesh -> ref",
-                      value([b](const ViewMeshDistances& v) { return v.by_depth[b].mean_m; }), ""});
-    fields.push_back({key + "contribution_to_mean", label + "share of the mean distance",
-                      value([b](const ViewMeshDistances& v) { return v.by_depth[b].contribution_m; }), ""});
-    fields.push_back({key + "truth_covered", label + "true pixels covered",
-                      value([b](const ViewMeshDistances& v) { return v.truth_covered_by_depth[b]; }), ""});
-  }
-  return fields;
-}
-
-/// The same fields without values: a part of a record that did not run keeps its columns.
-std::vector<Field> blanked(std::vector<Field> fields) {
-  for (Field& f : fields) f.value = std::monostate{};
-  return fields;
-}
-
 }  // namespace
 
-int runEvalDepth(const EvalDepthOptions& o) {
-  Stopwatch clock;
-  DepthEvaluationInput input;
-  input.prediction_m = readDepth(o.prediction, o.prediction_scale_m_per_unit);
-  input.ground_truth_m = readDepth(o.ground_truth, o.ground_truth_scale_m_per_unit);
-  input.mask = readMask(o.mask);
-  input.prediction_file = o.prediction;
-  input.ground_truth_file = o.ground_truth;
-  if (o.mask) input.mask_file = *o.mask;
-  DepthMetricsOptions options;
-  options.min_depth_m = o.min_depth_m;
-  options.max_depth_m = o.max_depth_m;
-  options.median_scaling = o.median_scaling;
-  options.clamp_prediction = o.clamp_prediction;
-  const DepthMetrics m = evaluateDepth(input, options);
+int runEvalDepth(const EvalDepthOptions& o) { return emit(evaluateDepthFiles(o), o.output); }
 
-  EvalRecord r;
-  r.command = "eval depth";
-  r.inputs = {{"prediction", "prediction", o.prediction.string(), ""},
-              {"ground_truth", "ground truth", o.ground_truth.string(), ""},
-              {"mask", "mask", optionalPath(o.mask), ""}};
-  r.options = {
-      {"min_depth_m", "min depth (gt >)", optionalNumber(o.min_depth_m), "m"},
-      {"max_depth_m", "max depth (gt <)", optionalNumber(o.max_depth_m), "m"},
-      {"median_scaling", "median scaling", o.median_scaling, ""},
-      {"clamp_prediction", "clamp prediction", o.clamp_prediction, ""},
-      {"prediction_scale_m_per_unit", "prediction file scale", scaleOption(o.prediction_scale_m_per_unit), "m/unit"},
-      {"ground_truth_scale_m_per_unit", "ground-truth file scale", scaleOption(o.ground_truth_scale_m_per_unit),
-       "m/unit"}};
-  r.metrics = depthFields(m, "", "", true);
-  r.seconds = clock.seconds();
-  return emit(r, o.output);
-}
+int runEvalNormals(const EvalNormalsOptions& o) { return emit(evaluateNormalFiles(o), o.output); }
 
-int runEvalNormals(const EvalNormalsOptions& o) {
-  Stopwatch clock;
-  NormalEvaluationInput input;
-  input.prediction = readNormals(o.prediction);
-  input.ground_truth = readNormals(o.ground_truth);
-  input.mask = readMask(o.mask);
-  input.prediction_file = o.prediction;
-  input.ground_truth_file = o.ground_truth;
-  if (o.mask) input.mask_file = *o.mask;
-  const NormalMetrics m = evaluateNormals(input);
+int runEvalMesh(const EvalMeshOptions& o) { return emit(evaluateMeshFile(o), o.output); }
 
-  EvalRecord r;
-  r.command = "eval normals";
-  r.inputs = {{"prediction", "prediction", o.prediction.string(), ""},
-              {"ground_truth", "ground truth", o.ground_truth.string(), ""},
-              {"mask", "mask", optionalPath(o.mask), ""}};
-  r.metrics = normalFields(m, "", "");
-  r.seconds = clock.seconds();
-  return emit(r, o.output);
-}
-
-int runEvalMesh(const EvalMeshOptions& o) {
-  Stopwatch clock;
-  MeshReadStats read_stats;
-  const TriangleMesh mesh = readMesh(o.mesh, &read_stats);
-  const MeshMetrics m = evaluateMesh(mesh);
-  std::optional<MeshDistances> d;
-  if (o.reference) {
-    const TriangleMesh reference = readMesh(*o.reference);
-    MeshDistanceOptions options;
-    options.samples = o.samples;
-    options.seed = o.seed;
-    d = measureMeshDistances(mesh, reference, options, o.mesh, *o.reference);
-  }
-  EvalRecord r;
-  r.command = "eval mesh";
-  r.inputs = {{"mesh", "mesh", o.mesh.string(), ""}, {"reference", "reference", optionalPath(o.reference), ""}};
-  r.options = {{"samples", "samples per direction", o.samples, ""},
-               {"seed", "seed", static_cast<std::int64_t>(o.seed), ""}};
-  r.metrics = meshFields(m, read_stats, d, "", "");
-  r.seconds = clock.seconds();
-  return emit(r, o.output);
-}
-
-// ---- eval scene -----------------------------------------------------------------------
-
-namespace {
-
-/// <folder>/<stem>.<what><extension>: the files `solo depth` writes beside its output.
-fs::path besideOutput(const fs::path& output, const std::string& what, const std::string& extension) {
-  return output.parent_path() / (output.stem().string() + "." + what + extension);
-}
-
-/// A file given by flag (it must exist: the reader says so otherwise), or the default when it
-/// exists; none with `reason` set otherwise.
-std::optional<fs::path> locate(const std::optional<fs::path>& given, const fs::path& fallback,
-                               const std::string& how_to_make_it, std::string& reason) {
-  if (given) return given;
-  std::error_code ec;
-  if (fs::exists(fallback, ec)) return fallback;
-  reason = fallback.string() + " not found (" + how_to_make_it + ")";
-  return std::nullopt;
-}
-
-/// A map of the image's size: as is, or resized by nearest neighbour (label maps).
-cv::Mat nearestTo(const cv::Mat& map, cv::Size size) {
-  if (map.empty() || map.size() == size) return map;
-  cv::Mat out;
-  cv::resize(map, out, size, 0, 0, cv::INTER_NEAREST);
-  return out;
-}
-
-void append(std::vector<Field>& to, const std::vector<Field>& fields) { to.insert(to.end(), fields.begin(), fields.end()); }
-
-FieldValue reasonValue(const std::string& reason) {
-  return reason.empty() ? FieldValue(std::monostate{}) : FieldValue(reason);
-}
-
-/// A scene folder's estimated inputs and ground truth, checked: the truth at the image's size.
-struct SceneUnderTest {
-  fs::path manifest, truth_manifest;
-  Scene scene, truth;
-  cv::Size size;                ///< the image's: everything is compared at it
-  std::string no_true_normals;  ///< why no normal can be scored; empty when they can
-};
-
-SceneUnderTest loadSceneUnderTest(const fs::path& scene_dir) {
-  std::error_code ec;
-  if (!fs::is_directory(scene_dir, ec)) throw InputError(scene_dir, "folder not found");
-  SceneUnderTest t;
-  t.manifest = scene_dir / "scene.json";
-  if (!fs::exists(t.manifest, ec))
-    throw InputError(t.manifest, "file not found: not a scene folder (`solo synth -o DIR` writes one)");
-  t.scene = loadScene(t.manifest);
-  t.truth_manifest = groundTruthManifest(t.manifest);
-  if (!fs::exists(t.truth_manifest, ec))
-    throw InputError(t.truth_manifest, "file not found (the ground truth " + t.manifest.string() + " names)");
-  t.truth = loadScene(t.truth_manifest);
-
-  // Everything is compared at the image resolution, the ground truth's.
-  t.size = t.scene.image.size();
-  if (t.truth.depth_m.size() != t.size)
-    throw InputError(t.truth.manifest.depth, "ground-truth depth is " + std::to_string(t.truth.depth_m.cols) + "x" +
-                                                 std::to_string(t.truth.depth_m.rows) + ", the image " +
-                                                 std::to_string(t.size.width) + "x" + std::to_string(t.size.height));
-  const bool truth_has_normals = !t.truth.normals.empty();
-  if (truth_has_normals && t.truth.normals.size() != t.size)
-    throw InputError(*t.truth.manifest.normals, "ground-truth normals are not of the image's size");
-  t.no_true_normals = truth_has_normals ? "" : "the ground truth has no normals";
-  return t;
-}
-
-/// The outputs written into a scene folder, each with the reason it is missing (empty when found).
-struct SceneOutputs {
-  std::optional<fs::path> refined, refined_normals, uncertain, mesh;
-  std::string refined_reason, refined_normals_reason, uncertain_reason, mesh_reason, distance_reason;
-  fs::path reference_mesh;  ///< the scene's exact mesh, gt/mesh.ply
-  bool has_reference = false;
-};
-
-SceneOutputs locateSceneOutputs(const EvalSceneOptions& o, const std::string& no_true_normals) {
-  std::error_code ec;
-  SceneOutputs s;
-  s.refined = locate(o.refined, o.scene_dir / "refined.exr", "solo depth SCENE_DIR/scene.json -o SCENE_DIR/refined.exr",
-                     s.refined_reason);
-  if (s.refined) {
-    const fs::path normals_file = besideOutput(*s.refined, "normals", s.refined->extension().string());
-    if (fs::exists(normals_file, ec)) s.refined_normals = normals_file;
-    else s.refined_normals_reason = normals_file.string() + " not found";
-    const fs::path uncertain_file = besideOutput(*s.refined, "uncertain", ".png");
-    if (fs::exists(uncertain_file, ec)) s.uncertain = uncertain_file;
-    else s.uncertain_reason = uncertain_file.string() + " not found: uncertain criterion not applied";
-  } else {
-    s.refined_normals_reason = "no refined depth";
-    s.uncertain_reason = "no refined depth: uncertain criterion not applied";
-  }
-  if (s.refined_normals_reason.empty() && !no_true_normals.empty()) s.refined_normals_reason = no_true_normals;
-  s.mesh = locate(o.mesh, o.scene_dir / "mesh.ply", "solo mesh from-depth SCENE_DIR/scene.json -o SCENE_DIR/mesh.ply",
-                  s.mesh_reason);
-  s.reference_mesh = o.scene_dir / "gt" / "mesh.ply";
-  s.has_reference = fs::exists(s.reference_mesh, ec);
-  if (!s.mesh) s.distance_reason = "no mesh";
-  else if (!s.has_reference) s.distance_reason = s.reference_mesh.string() + " not found";
-  return s;
-}
-
-/// The record's inputs and options, and its first metrics: the image's size.
-EvalRecord sceneRecord(const EvalSceneOptions& o, const SceneUnderTest& t, const SceneOutputs& s) {
-  EvalRecord r;
-  r.command = "eval scene";
-  r.inputs = {{"scene_dir", "scene folder", o.scene_dir.string(), ""},
-              {"manifest", "estimated inputs", t.manifest.string(), ""},
-              {"ground_truth", "ground truth", t.truth_manifest.string(), ""},
-              {"refined", "refined depth", optionalPath(s.refined), ""},
-              {"refined_normals", "refined normals", optionalPath(s.refined_normals), ""},
-              {"uncertain", "uncertain mask", optionalPath(s.uncertain), ""},
-              {"mesh", "mesh", optionalPath(s.mesh), ""},
-              {"reference_mesh", "reference mesh",
-               s.mesh && s.has_reference ? FieldValue(s.reference_mesh.string()) : FieldValue(std::monostate{}), ""}};
-  r.options = {{"samples", "samples per direction", o.samples, ""},
-               {"seed", "seed", static_cast<std::int64_t>(o.seed), ""}};
-  r.metrics = {{"width", "image width", std::int64_t{t.size.width}, "px"},
-               {"height", "image height", std::int64_t{t.size.height}, "px"}};
-  return r;
-}
-
-/// Scores depth and normal maps against the ground truth into a record's metrics; a map that
-/// is missing keeps its columns, without values.
-struct MapScorer {
-  const Scene& truth;
-  std::vector<Field>& metrics;
-
-  /// The metrics as given and median-scaled.
-  void depth(const cv::Mat& prediction, const fs::path& prediction_file, const std::string& key,
-             const std::string& label) {
-    DepthEvaluationInput input;
-    input.prediction_m = prediction;
-    input.ground_truth_m = truth.depth_m;
-    input.prediction_file = prediction_file;
-    input.ground_truth_file = truth.manifest.depth;
-    DepthMetricsOptions scaled;
-    scaled.median_scaling = true;
-    append(metrics, depthFields(evaluateDepth(input), key, label, true));
-    append(metrics, depthFields(evaluateDepth(input, scaled), key + "median_scaled_", label + "median-scaled ", false));
-  }
-  void skipDepth(const std::string& key, const std::string& label) {
-    append(metrics, blanked(depthFields(DepthMetrics{}, key, label, true)));
-    append(metrics, blanked(depthFields(DepthMetrics{}, key + "median_scaled_", label + "median-scaled ", false)));
-  }
-  void normals(const cv::Mat& prediction, const fs::path& prediction_file, const std::string& key,
-               const std::string& label) {
-    NormalEvaluationInput input;
-    input.prediction = prediction;
-    input.ground_truth = truth.normals;
-    input.prediction_file = prediction_file;
-    input.ground_truth_file = *truth.manifest.normals;
-    append(metrics, normalFields(evaluateNormals(input), key, label));
-  }
-  void skipNormals(const std::string& key, const std::string& label) {
-    append(metrics, blanked(normalFields(NormalMetrics{}, key, label)));
-  }
-};
-
-/// (a) The estimated maps, upsampled to the image resolution as depth refinement's first step
-/// does; returns the upsampled depth.
-cv::Mat appendEstimatedMaps(const SceneUnderTest& t, EvalRecord& r) {
-  MapScorer score{t.truth, r.metrics};
-  const cv::Mat estimated_depth = resizeValidBilinear(t.scene.depth_m, t.size);
-  score.depth(estimated_depth, t.scene.manifest.depth, "est_depth_", "est. depth ");
-  std::string est_normals_reason = t.scene.normals.empty() ? "the manifest names no normals" : t.no_true_normals;
-  r.metrics.push_back({"est_normals_skipped", "est. normals skipped", reasonValue(est_normals_reason), ""});
-  if (est_normals_reason.empty())
-    score.normals(resizeNormalsBilinear(t.scene.normals, t.size), *t.scene.manifest.normals, "est_normals_",
-                  "est. normals ");
-  else
-    score.skipNormals("est_normals_", "est. normals ");
-  return estimated_depth;
-}
-
-/// (b) The refined depth and the normals of it that `solo depth` wrote; returns the refined
-/// depth (empty when there is none).
-cv::Mat appendRefinedMaps(const SceneUnderTest& t, const SceneOutputs& s, EvalRecord& r) {
-  MapScorer score{t.truth, r.metrics};
-  cv::Mat refined_depth;
-  r.metrics.push_back({"refined_skipped", "refined depth skipped", reasonValue(s.refined_reason), ""});
-  if (s.refined) {
-    refined_depth = readDepth(*s.refined, 0);
-    score.depth(refined_depth, *s.refined, "refined_depth_", "refined depth ");
-  } else {
-    score.skipDepth("refined_depth_", "refined depth ");
-  }
-  r.metrics.push_back(
-      {"refined_normals_skipped", "refined normals skipped", reasonValue(s.refined_normals_reason), ""});
-  if (s.refined_normals_reason.empty())
-    score.normals(readNormals(*s.refined_normals), *s.refined_normals, "refined_normals_", "refined normals ");
-  else
-    score.skipNormals("refined_normals_", "refined normals ");
-  return refined_depth;
-}
-
-/// The spurious-face fields of the mesh of `depth` (at the image's size), scored against the
-/// faces the exact depth and normals call spurious; without true normals, no values.
-std::vector<Field> spuriousFaceFields(const SceneUnderTest& t, const cv::Mat& depth,
-                                      const std::optional<fs::path>& uncertain) {
-  DetectionScore occlusion_score, all_score;
-  SpuriousFaceResult found;
-  std::int64_t truth_faces = 0;
-  if (t.no_true_normals.empty()) {
-    const cv::Mat instances = nearestTo(t.scene.instances, t.size);
-    cv::Mat uncertain_mask;
-    if (uncertain) {
-      readLabels(*uncertain).convertTo(uncertain_mask, CV_8U);
-      uncertain_mask = nearestTo(uncertain_mask, t.size);
-    }
-    const DepthMesh mesh = meshFromDepth(depth, t.scene.camera, instances);
-    found = findSpuriousFaces(mesh, depth, instances, uncertain_mask);
-    const std::vector<std::uint8_t> truth_flags = spuriousFacesFromGroundTruth(mesh, t.truth.depth_m, t.truth.normals);
-    std::vector<std::uint8_t> occlusion(found.criteria.size());
-    for (std::size_t i = 0; i < occlusion.size(); ++i) occlusion[i] = (found.criteria[i] & kOcclusionCriteria) != 0;
-    occlusion_score = scoreDetection(occlusion, truth_flags);
-    all_score = scoreDetection(found.spurious, truth_flags);
-    truth_faces = occlusion_score.true_positives + occlusion_score.false_negatives;
-  }
-  std::vector<Field> fields = {
-      {"spurious_mesh_faces", "  depth-mesh faces", found.faces_checked, ""},
-      {"spurious_truth_faces", "  spurious by ground truth", truth_faces, ""},
-      {"spurious_removed", "  removed (all criteria)", found.removed, ""},
-      {"spurious_by_depth_jump", "    by depth jump", found.by_depth_jump, ""},
-      {"spurious_by_uncertain_mask", "    by uncertain mask", found.by_uncertain, ""},
-      {"spurious_by_instance_boundary", "    by instance boundary", found.by_instance_boundary, ""},
-      {"spurious_true_positives", "  true positives", occlusion_score.true_positives, ""},
-      {"spurious_false_positives", "  false positives", occlusion_score.false_positives, ""},
-      {"spurious_false_negatives", "  false negatives", occlusion_score.false_negatives, ""},
-      {"spurious_precision", "spurious-face precision", occlusion_score.precision, ""},
-      {"spurious_recall", "spurious-face recall", occlusion_score.recall, ""},
-      {"removal_precision_with_instance_cut", "  precision with instance cut", all_score.precision, ""},
-      {"removal_recall_with_instance_cut", "  recall with instance cut", all_score.recall, ""}};
-  return t.no_true_normals.empty() ? fields : blanked(fields);
-}
-
-/// (c) Spurious faces of the depth mesh (refined depth, else the upsampled estimate), scored
-/// against the faces the exact depth and normals call spurious, as `solo mesh from-depth --truth`.
-void appendSpuriousFaces(const SceneUnderTest& t, const SceneOutputs& s, const cv::Mat& estimated_depth,
-                         const cv::Mat& refined_depth, EvalRecord& r) {
-  const bool from_refined = !refined_depth.empty();
-  r.metrics.push_back({"spurious_skipped", "spurious faces skipped", reasonValue(t.no_true_normals), ""});
-  r.metrics.push_back({"spurious_depth", "spurious faces: mesh of",
-                       t.no_true_normals.empty()
-                           ? FieldValue(std::string(from_refined ? "refined" : "estimated (upsampled)"))
-                           : FieldValue(std::monostate{}),
-                       ""});
-  r.metrics.push_back({"spurious_uncertain_skipped", "  uncertain mask skipped", reasonValue(s.uncertain_reason), ""});
-  const cv::Mat& depth = from_refined ? refined_depth : estimated_depth;
-  const fs::path& depth_file = from_refined ? *s.refined : t.scene.manifest.depth;
-  if (depth.size() != t.size)
-    throw InputError(depth_file, "depth is " + std::to_string(depth.cols) + "x" + std::to_string(depth.rows) +
-                                     ", the image " + std::to_string(t.size.width) + "x" +
-                                     std::to_string(t.size.height));
-  append(r.metrics, spuriousFaceFields(t, depth, s.uncertain));
-}
-
-/// (d) The mesh written into the folder, and its distances to the scene's exact mesh.
-void appendMesh(const EvalSceneOptions& o, const SceneUnderTest& t, const SceneOutputs& s, EvalRecord& r) {
-  r.metrics.push_back({"mesh_skipped", "mesh skipped", reasonValue(s.mesh_reason), ""});
-  r.metrics.push_back({"mesh_distances_skipped", "mesh distances skipped", reasonValue(s.distance_reason), ""});
-  std::optional<ViewMeshDistances> view;
-  if (s.mesh) {
-    MeshReadStats read_stats;
-    const TriangleMesh mesh = readMesh(*s.mesh, &read_stats);
-    std::optional<MeshDistances> d;
-    if (s.has_reference) {
-      MeshDistanceOptions options;
-      options.samples = o.samples;
-      options.seed = o.seed;
-      const TriangleMesh reference = readMesh(s.reference_mesh);
-      d = measureMeshDistances(mesh, reference, options, *s.mesh, s.reference_mesh);
-      ViewMeshDistanceOptions view_options;
-      view_options.samples = o.samples;
-      view_options.seed = o.seed;
-      view = measureViewMeshDistances(mesh, {}, reference, t.truth.depth_m, t.truth.camera, view_options);
-    }
-    append(r.metrics, meshFields(evaluateMesh(mesh), read_stats, d, "mesh_", "mesh "));
-  } else {
-    append(r.metrics, blanked(meshFields(MeshMetrics{}, MeshReadStats{}, std::nullopt, "mesh_", "mesh ")));
-  }
-  append(r.metrics, viewMeshFields(view));
-}
-
-}  // namespace
-
-int runEvalScene(const EvalSceneOptions& o) {
-  Stopwatch clock;
-  const SceneUnderTest t = loadSceneUnderTest(o.scene_dir);
-  const SceneOutputs s = locateSceneOutputs(o, t.no_true_normals);
-  EvalRecord r = sceneRecord(o, t, s);
-  const cv::Mat estimated_depth = appendEstimatedMaps(t, r);
-  const cv::Mat refined_depth = appendRefinedMaps(t, s, r);
-  appendSpuriousFaces(t, s, estimated_depth, refined_depth, r);
-  appendMesh(o, t, s, r);
-  r.seconds = clock.seconds();
-  return emit(r, o.output);
-}
-
-}  // namespace solo::tools
+int runEvalScene(const EvalSceneOptions& o) { return emit(evaluateSceneFolder(o), o.output); }
 
 // ---- eval night -----------------------------------------------------------------------
 
-namespace solo::tools {
 namespace {
-
-/// The images a --reference names: a folder's image files (sorted), or a list file's lines
-/// (paths relative to the list's folder; empty lines and # comments skipped).
-std::vector<fs::path> referenceImages(const fs::path& reference) {
-  std::error_code ec;
-  std::vector<fs::path> images;
-  if (fs::is_directory(reference, ec)) {
-    for (const fs::directory_entry& entry : fs::directory_iterator(reference)) {
-      std::string ext = entry.path().extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-      if (entry.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff"))
-        images.push_back(entry.path());
-    }
-    std::sort(images.begin(), images.end());
-    if (images.empty()) throw InputError(reference, "no image (.png, .jpg, .jpeg, .tif, .tiff) in the folder");
-    return images;
-  }
-  std::ifstream in(reference);
-  if (!in) throw InputError(reference, "reference not found (a folder of images or a list file)");
-  std::string line;
-  while (std::getline(in, line)) {
-    const std::size_t begin = line.find_first_not_of(" \t\r");
-    if (begin == std::string::npos || line[begin] == '#') continue;
-    const std::size_t end = line.find_last_not_of(" \t\r");
-    const fs::path path = line.substr(begin, end - begin + 1);
-    images.push_back(path.is_absolute() ? path : reference.parent_path() / path);
-  }
-  if (images.empty()) throw InputError(reference, "the list names no image");
-  return images;
-}
-
-NightStatistics nightStatisticsOf(const fs::path& image) {
-  return computeNightStatistics(readColorImage(image), ChannelOrder::Rgb);
-}
-
-/// Median (NumPy's rule), minimum and maximum of one statistic over the reference images
-/// that have it; none when none has it.
-struct ReferenceRange {
-  std::optional<double> median, min, max;
-};
-
-std::vector<ReferenceRange> referenceRanges(const std::vector<NightStatistics>& reference) {
-  std::vector<ReferenceRange> ranges(namedNightStatistics(NightStatistics{}).size());
-  for (std::size_t k = 0; k < ranges.size(); ++k) {
-    std::vector<double> values;
-    for (const NightStatistics& s : reference)
-      if (const std::optional<double> v = namedNightStatistics(s)[k].value) values.push_back(*v);
-    if (values.empty()) continue;
-    ranges[k].min = *std::min_element(values.begin(), values.end());
-    ranges[k].max = *std::max_element(values.begin(), values.end());
-    ranges[k].median = sampleQuantile(values, 0.5);
-  }
-  return ranges;
-}
-
-/// The keys of the statistics of `s` outside the reference's [min, max].
-std::vector<std::string> outsideRange(const NightStatistics& s, const std::vector<ReferenceRange>& ranges) {
-  std::vector<std::string> outside;
-  const std::vector<NamedNightStatistic> named = namedNightStatistics(s);
-  for (std::size_t k = 0; k < named.size(); ++k)
-    if (named[k].value && ranges[k].min && (*named[k].value < *ranges[k].min || *named[k].value > *ranges[k].max))
-      outside.push_back(named[k].key);
-  return outside;
-}
 
 std::string joined(const std::vector<std::string>& words, const std::string& separator) {
   std::string out;
@@ -799,14 +125,9 @@ std::string nightCell(const std::string& key, const std::optional<double>& value
   return text;
 }
 
-struct NightRun {
-  std::vector<fs::path> files;
-  std::vector<NightStatistics> statistics;
-  std::optional<fs::path> reference;
-  std::vector<fs::path> reference_files;
-  std::vector<ReferenceRange> ranges;  ///< empty without a reference
-  double seconds = 0;
-};
+/// The reference's rows (table) and objects (JSON): its median, minimum and maximum.
+const std::pair<const char*, std::optional<double> NightReferenceRange::*> kRangeRows[] = {
+    {"median", &NightReferenceRange::median}, {"min", &NightReferenceRange::min}, {"max", &NightReferenceRange::max}};
 
 /// One line of the night table: the label padded to `width` (longer labels keep their end),
 /// then the cells, right-aligned (the blob count narrower), then `tail`.
@@ -830,7 +151,7 @@ std::vector<std::string> nightCells(const std::vector<std::optional<double>>& va
 }
 
 /// The terminal table: a row per image (its path as given), then the reference's rows.
-std::string nightTable(const NightRun& run) {
+std::string nightTable(const NightEvaluation& run) {
   int width = 12;
   for (const fs::path& f : run.files) width = std::max(width, static_cast<int>(f.string().size()));
   width = std::min(width, 48);
@@ -843,17 +164,17 @@ std::string nightTable(const NightRun& run) {
   for (std::size_t i = 0; i < run.files.size(); ++i) {
     std::vector<std::optional<double>> values;
     for (const NamedNightStatistic& n : namedNightStatistics(run.statistics[i])) values.push_back(n.value);
-    const std::string outside = has_reference ? joined(outsideRange(run.statistics[i], run.ranges), ", ") : "";
+    const std::string outside =
+        has_reference ? joined(nightStatisticsOutsideRange(run.statistics[i], run.ranges), ", ") : "";
     out += nightTableLine(run.files[i].string(), width, nightCells(values),
                           has_reference ? (outside.empty() ? "none" : outside) : "");
   }
   if (has_reference) {
     out += "  reference: " + run.reference->string() + " (" + std::to_string(run.reference_files.size()) + " images)\n";
-    for (const auto& [label, field] : {std::pair{"  median", &ReferenceRange::median},
-                                       std::pair{"  min", &ReferenceRange::min}, std::pair{"  max", &ReferenceRange::max}}) {
+    for (const auto& [name, field] : kRangeRows) {
       std::vector<std::optional<double>> values;
-      for (const ReferenceRange& r : run.ranges) values.push_back(r.*field);
-      out += nightTableLine(label, width, nightCells(values), "");
+      for (const NightReferenceRange& r : run.ranges) values.push_back(r.*field);
+      out += nightTableLine(std::string("  ") + name, width, nightCells(values), "");
     }
   }
   char time[64];
@@ -869,7 +190,7 @@ nlohmann::ordered_json statisticJson(const std::string& key, const std::optional
   return optionalJson(v);
 }
 
-std::string nightJson(const NightRun& run) {
+std::string nightJson(const NightEvaluation& run) {
   nlohmann::ordered_json j;
   j["command"] = "eval night";
   j["reference"] = nullptr;
@@ -879,10 +200,10 @@ std::string nightJson(const NightRun& run) {
     ref["images"] = nlohmann::ordered_json::array();
     for (const fs::path& f : run.reference_files) ref["images"].push_back(f.string());
     const std::vector<NamedNightStatistic> keys = namedNightStatistics(NightStatistics{});
-    for (const auto& [name, field] : {std::pair{"median", &ReferenceRange::median},
-                                      std::pair{"min", &ReferenceRange::min}, std::pair{"max", &ReferenceRange::max}}) {
+    for (const auto& [name, field] : kRangeRows) {
       auto& object = ref[name] = nlohmann::ordered_json::object();
-      for (std::size_t k = 0; k < keys.size(); ++k) object[keys[k].key] = statisticJson(keys[k].key, run.ranges[k].*field);
+      for (std::size_t k = 0; k < keys.size(); ++k)
+        object[keys[k].key] = statisticJson(keys[k].key, run.ranges[k].*field);
     }
   }
   j["images"] = nlohmann::ordered_json::array();
@@ -894,50 +215,23 @@ std::string nightJson(const NightRun& run) {
     image["height_px"] = s.source_height_px;
     auto& statistics = image["statistics"] = nlohmann::ordered_json::object();
     for (const NamedNightStatistic& n : namedNightStatistics(s)) statistics[n.key] = statisticJson(n.key, n.value);
-    image["outside_reference"] = run.ranges.empty() ? nlohmann::ordered_json(nullptr)
-                                                    : nlohmann::ordered_json(outsideRange(s, run.ranges));
+    image["outside_reference"] = run.ranges.empty()
+                                     ? nlohmann::ordered_json(nullptr)
+                                     : nlohmann::ordered_json(nightStatisticsOutsideRange(s, run.ranges));
     j["images"].push_back(image);
   }
   j["seconds"] = run.seconds;
   return j.dump(2) + "\n";
 }
 
-/// One CSV row per image: file, size, the statistics, the reference and what is outside it.
-EvalRecord nightCsvRecord(const NightRun& run, std::size_t i) {
-  const NightStatistics& s = run.statistics[i];
-  EvalRecord r;
-  r.command = "eval night";
-  r.inputs = {{"file", "image", run.files[i].string(), ""},
-              {"width_px", "width", std::int64_t{s.source_width_px}, "px"},
-              {"height_px", "height", std::int64_t{s.source_height_px}, "px"}};
-  r.options = {{"reference", "reference", optionalPath(run.reference), ""}};
-  for (const NamedNightStatistic& n : namedNightStatistics(s))
-    r.metrics.push_back({n.key, n.key, optionalNumber(n.value), n.unit});
-  r.metrics.push_back({"outside_reference", "outside reference",
-                       run.ranges.empty() ? FieldValue(std::monostate{})
-                                          : FieldValue(joined(outsideRange(s, run.ranges), ";")),
-                       ""});
-  return r;
-}
-
 }  // namespace
 
 int runEvalNight(const EvalNightOptions& o) {
-  Stopwatch clock;
   if (o.images.empty()) throw InputError("IMAGE", "no image to evaluate");
-  NightRun run;
-  run.files = o.images;
-  for (const fs::path& file : run.files) run.statistics.push_back(nightStatisticsOf(file));
-  if (o.reference) {
-    run.reference = o.reference;
-    run.reference_files = referenceImages(*o.reference);
-    std::vector<NightStatistics> reference;
-    for (const fs::path& file : run.reference_files) reference.push_back(nightStatisticsOf(file));
-    run.ranges = referenceRanges(reference);
-  }
-  run.seconds = clock.seconds();
+  const NightEvaluation run = evaluateNightImages(o);
   if (o.output.csv)
-    for (std::size_t i = 0; i < run.files.size(); ++i) appendCsvRow(*o.output.csv, nightCsvRecord(run, i));
+    for (std::size_t i = 0; i < run.files.size(); ++i)
+      appendEvaluationCsvRow(*o.output.csv, nightEvaluationRecord(run, i));
   std::cout << (o.output.json ? nightJson(run) : nightTable(run));
   return 0;
 }

@@ -3,7 +3,9 @@
 // command-line flags (main.cpp is the only file that knows CLI11) and returns an exit code.
 
 #include <solo/pipeline/data_dir.h>
+#include <solo/pipeline/evaluation.h>
 #include <solo/pipeline/night_conversion.h>
+#include <solo/pipeline/night_evaluation.h>
 #include <solo/pipeline/night_job.h>
 
 #include <cstdint>
@@ -70,51 +72,33 @@ struct EvalOutputOptions {
   std::optional<std::filesystem::path> csv;  ///< append one row (header when the file is new)
 };
 
-struct EvalDepthOptions {
-  std::filesystem::path prediction, ground_truth;
-  std::optional<std::filesystem::path> mask;  ///< 8/16-bit or integer map, non-zero = evaluate
-  std::optional<double> min_depth_m, max_depth_m;  ///< evaluate only min < gt < max
-  bool median_scaling = false;
-  bool clamp_prediction = false;  ///< clamp the prediction into the depth range after scaling
-  double prediction_scale_m_per_unit = 0;    ///< for integer prediction files
-  double ground_truth_scale_m_per_unit = 0;  ///< for integer ground-truth files
+/// `solo eval depth|normals|mesh|scene|night`: the library's evaluation (pipeline/evaluation.h,
+/// night_evaluation.h), each flag bound onto a field of its options, and where the result goes.
+struct EvalDepthOptions : DepthFilesEvaluationOptions {
   EvalOutputOptions output;
 };
 int runEvalDepth(const EvalDepthOptions& options);
 
-struct EvalNormalsOptions {
-  std::filesystem::path prediction, ground_truth;
-  std::optional<std::filesystem::path> mask;  ///< 8/16-bit or integer map, non-zero = evaluate
+struct EvalNormalsOptions : NormalFilesEvaluationOptions {
   EvalOutputOptions output;
 };
 int runEvalNormals(const EvalNormalsOptions& options);
 
-struct EvalMeshOptions {
-  std::filesystem::path mesh;
-  std::optional<std::filesystem::path> reference;  ///< for the Hausdorff and Chamfer distances
-  std::int64_t samples = 100000;  ///< random surface points per direction
-  std::uint64_t seed = 0;         ///< seeds the surface sampling
+struct EvalMeshOptions : MeshFileEvaluationOptions {
   EvalOutputOptions output;
 };
 int runEvalMesh(const EvalMeshOptions& options);
 
 /// `solo eval scene`: a synthetic scene folder's estimated maps and the outputs written into it
 /// (refined depth, mesh) against its ground truth (docs/evaluation.md).
-struct EvalSceneOptions {
-  std::filesystem::path scene_dir;                ///< holds scene.json with "ground_truth"
-  std::optional<std::filesystem::path> refined;   ///< none: <scene_dir>/refined.exr when present
-  std::optional<std::filesystem::path> mesh;      ///< none: <scene_dir>/mesh.ply when present
-  std::int64_t samples = 100000;  ///< random surface points per direction for the mesh distances
-  std::uint64_t seed = 0;         ///< seeds the surface sampling
+struct EvalSceneOptions : SceneFolderEvaluationOptions {
   EvalOutputOptions output;
 };
 int runEvalScene(const EvalSceneOptions& options);
 
 /// `solo eval night`: the realism statistics of night images (docs/evaluation.md), and with a
 /// reference set its median and range per statistic and what falls outside it.
-struct EvalNightOptions {
-  std::vector<std::filesystem::path> images;       ///< 8/16-bit sRGB PNG, JPEG or TIFF
-  std::optional<std::filesystem::path> reference;  ///< a folder of images, or a list file (one path a line)
+struct EvalNightOptions : NightEvaluationOptions {
   EvalOutputOptions output;
 };
 int runEvalNight(const EvalNightOptions& options);

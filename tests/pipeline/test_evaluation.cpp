@@ -1,0 +1,268 @@
+// The evaluations of `solo eval` through the pipeline library, without the CLI: the records'
+// values on hand-computed cases, their CSV form and append rule, a scene folder's parts that
+// run and those that are skipped, and the night statistics against a reference set.
+
+#include <solo/core/error.h>
+#include <solo/core/image_io.h>
+#include <solo/geometry/triangle_mesh.h>
+#include <solo/pipeline/evaluation.h>
+#include <solo/pipeline/night_evaluation.h>
+#include <solo/synth/scene_folder.h>
+
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace {
+
+using solo::EvaluationRecord;
+using solo::EvaluationValue;
+using solo::test::readText;
+using solo::test::TempDir;
+
+/// The field `key` of the record (inputs, options, then metrics); fails the test when missing.
+EvaluationValue valueOf(const EvaluationRecord& r, const std::string& key) {
+  for (const std::vector<solo::EvaluationField>* fields : {&r.inputs, &r.options, &r.metrics})
+    for (const solo::EvaluationField& f : *fields)
+      if (f.key == key) return f.value;
+  ADD_FAILURE() << "no field " << key << " in `" << r.command << "`";
+  return std::monostate{};
+}
+
+double number(const EvaluationRecord& r, const std::string& key) {
+  const EvaluationValue v = valueOf(r, key);
+  return std::holds_alternative<double>(v) ? std::get<double>(v) : std::nan("");
+}
+
+std::int64_t integer(const EvaluationRecord& r, const std::string& key) {
+  const EvaluationValue v = valueOf(r, key);
+  return std::holds_alternative<std::int64_t>(v) ? std::get<std::int64_t>(v) : -1;
+}
+
+bool isNone(const EvaluationRecord& r, const std::string& key) {
+  return std::holds_alternative<std::monostate>(valueOf(r, key));
+}
+
+std::string text(const EvaluationRecord& r, const std::string& key) {
+  const EvaluationValue v = valueOf(r, key);
+  return std::holds_alternative<std::string>(v) ? std::get<std::string>(v) : "<not text>";
+}
+
+/// gt 2, 4, 5, 10 and pred 1, 4, 4, 12 (a 5th pixel without ground truth):
+/// AbsRel (0.5 + 0 + 0.2 + 0.2) / 4 = 0.225, SqRel (0.5 + 0 + 0.2 + 0.4) / 4 = 0.275,
+/// RMSE sqrt((1 + 0 + 1 + 4) / 4) = sqrt(1.5), delta1: 4/4 and 10/12 pass, 2/1 and 5/4 = 1.25 do not.
+void writeDepthPair(const TempDir& dir) {
+  solo::writeImage(dir / "gt.pfm", cv::Mat(std::vector<float>{2, 4, 5, 10, 0}, true).reshape(1, 1));
+  solo::writeImage(dir / "pred.pfm", cv::Mat(std::vector<float>{1, 4, 4, 12, 3}, true).reshape(1, 1));
+}
+
+}  // namespace
+
+TEST(Evaluation, DepthFilesHaveTheHandComputedMetrics) {
+  TempDir dir;
+  writeDepthPair(dir);
+  solo::DepthFilesEvaluationOptions o;
+  o.prediction = dir / "pred.pfm";
+  o.ground_truth = dir / "gt.pfm";
+  const EvaluationRecord r = solo::evaluateDepthFiles(o);
+  EXPECT_EQ(r.command, "eval depth");
+  EXPECT_EQ(text(r, "prediction"), (dir / "pred.pfm").string());
+  EXPECT_TRUE(isNone(r, "mask"));
+  EXPECT_TRUE(isNone(r, "max_depth_m"));
+  EXPECT_TRUE(isNone(r, "prediction_scale_m_per_unit")) << "0 = the file's own unit: none";
+  EXPECT_EQ(integer(r, "pixels"), 5);
+  EXPECT_EQ(integer(r, "ground_truth_invalid"), 1);
+  EXPECT_EQ(integer(r, "valid_pixels"), 4);
+  EXPECT_DOUBLE_EQ(number(r, "abs_rel"), 0.225);
+  EXPECT_DOUBLE_EQ(number(r, "sq_rel_m"), 0.275);
+  EXPECT_DOUBLE_EQ(number(r, "rmse_m"), std::sqrt(1.5));
+  EXPECT_DOUBLE_EQ(number(r, "delta1"), 0.5);
+  EXPECT_GE(r.seconds, 0.0);
+
+  // gt < 8 leaves gt 2, 4, 5 against pred 1, 4, 4; median scale 4 / 4 = 1; AbsRel 0.7 / 3.
+  o.max_depth_m = 8;
+  o.median_scaling = true;
+  const EvaluationRecord scaled = solo::evaluateDepthFiles(o);
+  EXPECT_DOUBLE_EQ(number(scaled, "max_depth_m"), 8.0);
+  EXPECT_EQ(std::get<bool>(valueOf(scaled, "median_scaling")), true);
+  EXPECT_EQ(integer(scaled, "outside_range"), 1);
+  EXPECT_DOUBLE_EQ(number(scaled, "scale"), 1.0);
+  EXPECT_DOUBLE_EQ(number(scaled, "abs_rel"), 0.7 / 3);
+}
+
+TEST(Evaluation, NormalFilesHaveTheHandComputedAngles) {
+  TempDir dir;
+  // gt (0,0,-1) twice; pred equal, then (1,0,0): angles 0 and 90 degrees.
+  cv::Mat gt(1, 2, CV_32FC3, cv::Scalar(0, 0, -1)), pred = gt.clone();
+  pred.at<cv::Vec3f>(0, 1) = cv::Vec3f(1, 0, 0);
+  solo::writeNormals(dir / "gt.exr", gt);
+  solo::writeNormals(dir / "pred.exr", pred);
+  solo::NormalFilesEvaluationOptions o;
+  o.prediction = dir / "pred.exr";
+  o.ground_truth = dir / "gt.exr";
+  const EvaluationRecord r = solo::evaluateNormalFiles(o);
+  EXPECT_EQ(r.command, "eval normals");
+  EXPECT_TRUE(r.options.empty());
+  EXPECT_EQ(integer(r, "valid_pixels"), 2);
+  EXPECT_NEAR(number(r, "mean_deg"), 45.0, 1e-9);
+  EXPECT_NEAR(number(r, "median_deg"), 45.0, 1e-9);
+  EXPECT_NEAR(number(r, "rmse_deg"), std::sqrt(8100.0 / 2), 1e-9);
+  EXPECT_DOUBLE_EQ(number(r, "under_11_25_deg"), 0.5);
+}
+
+TEST(Evaluation, MeshFileWithAndWithoutReference) {
+  TempDir dir;
+  solo::TriangleMesh square;
+  square.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  square.faces = {{0, 1, 2}, {0, 2, 3}};
+  solo::writeMesh(dir / "square.off", square);
+  for (auto& v : square.vertices) v.z() = 0.25;
+  solo::writeMesh(dir / "lifted.ply", square);
+  solo::MeshFileEvaluationOptions o;
+  o.mesh = dir / "square.off";
+  o.reference = dir / "lifted.ply";
+  o.samples = 500;
+  o.seed = 9;
+  const EvaluationRecord r = solo::evaluateMeshFile(o);
+  EXPECT_EQ(r.command, "eval mesh");
+  EXPECT_EQ(integer(r, "vertices"), 4);
+  EXPECT_EQ(integer(r, "faces"), 2);
+  EXPECT_EQ(integer(r, "boundary_loops"), 1);
+  EXPECT_EQ(integer(r, "boundary_edges"), 4);
+  EXPECT_EQ(std::get<bool>(valueOf(r, "closed")), false);
+  EXPECT_EQ(integer(r, "samples"), 500);
+  EXPECT_EQ(integer(r, "seed"), 9);
+  // Parallel squares 0.25 apart: every distance is 0.25.
+  EXPECT_NEAR(number(r, "hausdorff"), 0.25, 1e-12);
+  EXPECT_NEAR(number(r, "chamfer"), 0.25, 1e-12);
+
+  o.reference.reset();
+  const EvaluationRecord alone = solo::evaluateMeshFile(o);
+  EXPECT_EQ(solo::evaluationCsvHeader(alone), solo::evaluationCsvHeader(r)) << "the same columns";
+  EXPECT_TRUE(isNone(alone, "reference"));
+  EXPECT_TRUE(isNone(alone, "hausdorff"));
+  EXPECT_TRUE(isNone(alone, "chamfer"));
+  EXPECT_EQ(integer(alone, "boundary_edges"), 4);
+}
+
+TEST(EvaluationRecord, CsvCellsAndTheAppendRule) {
+  EvaluationRecord r;
+  r.command = "eval test";
+  r.inputs = {{"file", "file", std::string("a,\"b\""), ""}, {"none", "none", std::monostate{}, ""}};
+  r.options = {{"flag", "flag", true, ""}, {"count", "count", std::int64_t{-3}, ""}};
+  r.metrics = {{"tenth", "tenth", 0.1, "m"}, {"third", "third", 1.0 / 3, ""}};
+  EXPECT_EQ(solo::evaluationCsvHeader(r), "file,none,flag,count,tenth,third\n");
+  EXPECT_EQ(solo::evaluationCsvRow(r), "\"a,\"\"b\"\"\",,true,-3,0.1,0.3333333333333333\n");
+
+  TempDir dir;
+  solo::appendEvaluationCsvRow(dir / "rows.csv", r);
+  r.options[0].value = false;
+  solo::appendEvaluationCsvRow(dir / "rows.csv", r);
+  EXPECT_EQ(readText(dir / "rows.csv"),
+            "file,none,flag,count,tenth,third\n"
+            "\"a,\"\"b\"\"\",,true,-3,0.1,0.3333333333333333\n"
+            "\"a,\"\"b\"\"\",,false,-3,0.1,0.3333333333333333\n");
+
+  solo::test::writeText(dir / "other.csv", "a,b\n1,2\n");
+  try {
+    solo::appendEvaluationCsvRow(dir / "other.csv", r);
+    ADD_FAILURE() << "a file with other columns is refused";
+  } catch (const solo::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("its columns are not those of `solo eval test`"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(readText(dir / "other.csv"), "a,b\n1,2\n");
+}
+
+TEST(Evaluation, SceneFolderScoresTheGivenRefinedDepthAndSaysWhatItSkipped) {
+  TempDir dir;
+  solo::SyntheticSceneOptions synth;
+  synth.seed = 3;
+  synth.width = 160;
+  synth.height = 90;
+  const std::filesystem::path scene = solo::writeSyntheticScene(dir / "scene", synth).folder;
+
+  solo::SceneFolderEvaluationOptions o;
+  o.scene_dir = scene;
+  o.refined = scene / "gt/depth.exr";  // the exact depth as the refined one: no error at all
+  const EvaluationRecord r = solo::evaluateSceneFolder(o);
+  EXPECT_EQ(r.command, "eval scene");
+  EXPECT_EQ(text(r, "ground_truth"), (scene / "gt/scene.json").string());
+  EXPECT_EQ(integer(r, "width"), 160);
+  EXPECT_EQ(integer(r, "height"), 90);
+  EXPECT_GT(number(r, "est_depth_abs_rel"), 0.0) << "the estimate is perturbed";
+  EXPECT_TRUE(isNone(r, "refined_skipped"));
+  EXPECT_EQ(number(r, "refined_depth_abs_rel"), 0.0);
+  EXPECT_EQ(number(r, "refined_depth_delta1"), 1.0);
+  EXPECT_EQ(number(r, "refined_depth_median_scaled_scale"), 1.0);
+  EXPECT_EQ(text(r, "refined_normals_skipped"), (scene / "gt/depth.normals.exr").string() + " not found");
+  EXPECT_TRUE(isNone(r, "refined_normals_mean_deg"));
+  EXPECT_EQ(text(r, "spurious_depth"), "refined");
+  EXPECT_EQ(text(r, "spurious_uncertain_skipped"),
+            (scene / "gt/depth.uncertain.png").string() + " not found: uncertain criterion not applied");
+  EXPECT_GT(integer(r, "spurious_truth_faces"), 0) << "the street has occlusions to find";
+  EXPECT_EQ(text(r, "mesh_skipped"), (scene / "mesh.ply").string() +
+                                         " not found (solo mesh from-depth SCENE_DIR/scene.json -o SCENE_DIR/mesh.ply)");
+  EXPECT_EQ(text(r, "mesh_distances_skipped"), "no mesh");
+  EXPECT_TRUE(isNone(r, "mesh_vertices"));
+  EXPECT_TRUE(isNone(r, "mesh_hausdorff"));
+  EXPECT_TRUE(isNone(r, "mesh_area_m2"));
+
+  try {
+    o.scene_dir = dir / "missing";
+    solo::evaluateSceneFolder(o);
+    ADD_FAILURE() << "a missing folder is named";
+  } catch (const solo::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("folder not found"), std::string::npos) << e.what();
+  }
+}
+
+TEST(NightEvaluation, ReferenceRangeFlagsTheOutlierOnly) {
+  TempDir dir;
+  const auto write_grey = [](const std::filesystem::path& file, int level) {
+    solo::writeImage(file, cv::Mat(54, 96, CV_8UC3, cv::Scalar::all(level)));
+  };
+  std::filesystem::create_directories(dir / "ref");
+  for (const int level : {50, 30, 40}) write_grey(dir / "ref" / ("grey" + std::to_string(level) + ".png"), level);
+  write_grey(dir / "bright.png", 120);
+  write_grey(dir / "typical.png", 40);
+  solo::test::writeText(dir / "ref.txt", "# reference\n  ref/grey30.png \n\nref/grey40.png\nref/grey50.png\n");
+  EXPECT_EQ(solo::nightReferenceImages(dir / "ref"), solo::nightReferenceImages(dir / "ref.txt"))
+      << "a folder's images sorted, a list's relative to its folder";
+
+  solo::NightEvaluationOptions o;
+  o.images = {dir / "bright.png", dir / "typical.png"};
+  o.reference = dir / "ref.txt";
+  const solo::NightEvaluation night = solo::evaluateNightImages(o);
+  ASSERT_EQ(night.statistics.size(), 2u);
+  ASSERT_EQ(night.reference_files.size(), 3u);
+  EXPECT_EQ(night.reference_files[0], dir / "ref/grey30.png");
+  const std::vector<solo::NamedNightStatistic> keys = solo::namedNightStatistics(solo::NightStatistics{});
+  ASSERT_EQ(night.ranges.size(), keys.size());
+  ASSERT_EQ(keys[0].key, "mean");
+  EXPECT_NEAR(*night.ranges[0].median, 40.0, 1e-9);
+  EXPECT_NEAR(*night.ranges[0].min, 30.0, 1e-9);
+  EXPECT_NEAR(*night.ranges[0].max, 50.0, 1e-9);
+  EXPECT_EQ(solo::nightStatisticsOutsideRange(night.statistics[0], night.ranges),
+            (std::vector<std::string>{"mean", "p50", "p90", "p99"}));
+  EXPECT_TRUE(solo::nightStatisticsOutsideRange(night.statistics[1], night.ranges).empty());
+
+  const EvaluationRecord bright = solo::nightEvaluationRecord(night, 0);
+  EXPECT_EQ(bright.command, "eval night");
+  EXPECT_EQ(integer(bright, "width_px"), 96);
+  EXPECT_EQ(text(bright, "reference"), (dir / "ref.txt").string());
+  EXPECT_NEAR(number(bright, "mean"), 120.0, 1e-9);
+  EXPECT_TRUE(isNone(bright, "cast_cb")) << "no pixel with 20 < Y < 80";
+  EXPECT_EQ(text(bright, "outside_reference"), "mean;p50;p90;p99");
+  EXPECT_EQ(text(solo::nightEvaluationRecord(night, 1), "outside_reference"), "");
+
+  o.reference.reset();
+  const solo::NightEvaluation alone = solo::evaluateNightImages(o);
+  EXPECT_TRUE(alone.ranges.empty());
+  EXPECT_TRUE(isNone(solo::nightEvaluationRecord(alone, 0), "outside_reference"));
+}
