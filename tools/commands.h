@@ -7,6 +7,7 @@
 #include <solo/pipeline/night_conversion.h>
 #include <solo/pipeline/night_evaluation.h>
 #include <solo/pipeline/night_job.h>
+#include <solo/pipeline/realism_bench.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -231,19 +232,9 @@ struct BenchAccuracyOptions {
 };
 int runBenchAccuracy(const BenchAccuracyOptions& options);
 
-/// `solo bench realism`: `solo night`'s pipeline (the preset applied) on the embedded default
-/// scene and on `solo synth` streets of several seeds and variants (one at twice the street
-/// size); into `output`: night/<scene>.png, scenes/ (the streets), realism.csv (realism
-/// statistics, day mean luma, road and window luminance in cd/m^2, seconds; one row per scene
-/// and a median row), README.md (the table against docs/realism.md's targets, the seed, the
-/// machine's load) and contact_sheet.png.
-struct BenchRealismOptions {
-  std::filesystem::path output;   ///< folder to write (created)
-  std::uint64_t seed = 1;         ///< lights, render and sensor noise of every run
-  bool quick = false;             ///< the default scene and two streets only
-  std::string preset = "default";  ///< `solo night` preset
-  int width = 960, height = 540;  ///< pixels of the streets; the large street is twice each
-};
+/// `solo bench realism`: the library's realism benchmark (pipeline/realism_bench.h), each flag
+/// bound onto a field of its options; prints a line per scene and the table.
+using BenchRealismOptions = RealismBenchOptions;
 int runBenchRealism(const BenchRealismOptions& options);
 
 }  // namespace solo::tools
