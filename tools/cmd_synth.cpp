@@ -11,13 +11,7 @@
 namespace solo::tools {
 
 int runSynth(const SynthOptions& o) {
-  SyntheticSceneOptions options;
-  options.seed = o.seed;
-  options.width = o.width;
-  options.height = o.height;
-  options.variant = o.variant;
-  options.day_render = o.day_render;
-  options.force = o.force;
+  SyntheticSceneOptions options = o;
   options.progress = true;
   const SyntheticSceneResult result = writeSyntheticScene(o.output, options);
   std::cout << reportSummary(result.report) << "scene: " << result.manifest.string() << "\n";

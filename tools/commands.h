@@ -8,6 +8,7 @@
 #include <solo/pipeline/night_evaluation.h>
 #include <solo/pipeline/night_job.h>
 #include <solo/pipeline/realism_bench.h>
+#include <solo/synth/scene_folder.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -104,13 +105,9 @@ struct EvalNightOptions : NightEvaluationOptions {
 };
 int runEvalNight(const EvalNightOptions& options);
 
-struct SynthOptions {
+/// `solo synth`: the library's scene-folder options (synth/scene_folder.h) and the folder.
+struct SynthOptions : SyntheticSceneOptions {
   std::filesystem::path output;  ///< folder to create
-  std::uint64_t seed = 1;
-  int width = 960, height = 540;  ///< pixels
-  std::string variant = "default";  ///< see streetVariantName
-  bool force = false;               ///< replace an existing folder
-  std::string day_render = "raster";  ///< day image: "raster" (1 ray + 1 shadow ray per pixel) or "path" (path traced sun and sky)
 };
 int runSynth(const SynthOptions& options);
 
