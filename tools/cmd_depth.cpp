@@ -39,16 +39,7 @@ int runDepth(const DepthOptions& options) {
   const Scene scene = loadScene(options.scene);
   report.stages.push_back(sceneInputReport(scene, clock.seconds()));
 
-  DepthRefinementOptions refine;
-  refine.upsampling.enabled = options.upsample;
-  refine.filter = options.filter;
-  refine.uncertain_regions = options.uncertain;
-  refine.optimize = options.optimize;
-  refine.optimizer = options.optimizer == "adam" ? DepthOptimizer::Adam : DepthOptimizer::Ceres;
-  const TangentModel model = options.tangent_model == "paper" ? TangentModel::PaperGraph : TangentModel::Perspective;
-  refine.optimization.objective.tangent_model = model;
-  refine.adam.objective.tangent_model = model;
-  const DepthRefinementResult result = refineDepth(sceneForRefinement(scene), refine);
+  const DepthRefinementResult result = refineDepth(sceneForRefinement(scene), options.refinement);
   for (const StageReport& step : result.steps) report.stages.push_back(step);
   report.stages.push_back(result.report);
 

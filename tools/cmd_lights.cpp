@@ -21,7 +21,7 @@ int runLights(const LightsOptions& options) {
   RunReport report;
   report.command = "lights";
   report.scene = scene_file.string();
-  report.seed = options.seed;
+  report.seed = options.stage.instantiation.seed;
   report.versions = dependencyVersions();
 
   const Scene scene = loadScene(scene_file);
@@ -43,11 +43,8 @@ int runLights(const LightsOptions& options) {
     stage.notes.push_back("lights read from " + options.from_record->string() + " (no sampling)");
     report.stages.push_back(stage);
   } else {
-    LightStageOptions stage_options;
-    stage_options.instantiation.seed = options.seed;
-    stage_options.instantiation.ablation = options.ablation;
-    stage_options.instantiation.ablation_luminance_cd_m2 = options.ablation_luminance_cd_m2;
-    stage_options.illuminant_table = options.table ? *options.table : defaultIlluminantTable();
+    LightStageOptions stage_options = options.stage;
+    if (stage_options.illuminant_table.empty()) stage_options.illuminant_table = defaultIlluminantTable();
     LightStageResult result = runLightStage(scene, cv::Mat(), stage_options);
     record = std::move(result.record);
     report.stages.push_back(std::move(result.report));

@@ -76,16 +76,12 @@ int runMeshFromDepth(const MeshFromDepthOptions& options) {
     true_depth = truth.depth_m;
     true_normals = truth.normals;
   }
-  DepthMeshCleanupOptions cleanup;
-  cleanup.close_solids = options.close_solids;
-  cleanup.backdrops = options.backdrops;
-  cleanup.evaluate = options.evaluate;
   StageReport stage;
   // The instance map as solo night's mesh stage sees it: each street light an instance of its own.
   std::int64_t street_light_pixels = 0;
   const cv::Mat instances = sceneForRefinement(scene, &street_light_pixels).instances;
   DepthMesh mesh =
-      meshFromScene(scene.depth_m, scene.camera, instances, uncertain, cleanup, stage, true_depth, true_normals);
+      meshFromScene(scene.depth_m, scene.camera, instances, uncertain, options.cleanup, stage, true_depth, true_normals);
   stage.add("street_light_pixels_relabelled", street_light_pixels);
   const Stopwatch clock;
   writeMesh(options.output, toTriangleMesh(mesh.mesh));
@@ -101,7 +97,7 @@ int runMeshClean(const MeshCleanOptions& options) {
   const TriangleMesh input = readMesh(options.input);
   const double read_seconds = clock.seconds();
   StageReport stage;
-  const TriangleMesh output = cleanMesh(input, MeshCleanupOptions{}, stage, options.input);
+  const TriangleMesh output = cleanMesh(input, options.cleanup, stage, options.input);
   stage.metrics.insert(stage.metrics.begin(), Metric{"seconds_read", read_seconds, "s"});
   clock = Stopwatch();
   if (output.faces.empty()) throw InputError(options.input, "the mesh has no face: nothing to write");

@@ -49,74 +49,58 @@ cv::Mat readThreeChannels(const fs::path& file, StageReport* report) {
   return raw;
 }
 
-}  // namespace
-
-int runPost(const PostOptions& o) {
-  Stopwatch total;
-  PostProcessOptions options;
-  options.glare = o.glare;
-  options.glare_options.size = o.glare_size;
-  options.glare_options.threshold = o.glare_threshold;
-  if (o.glare_method == "auto") options.glare_options.method = GlareMethod::Automatic;
-  else if (o.glare_method == "direct") options.glare_options.method = GlareMethod::Direct;
-  else if (o.glare_method == "fft") options.glare_options.method = GlareMethod::Fft;
-  else if (o.glare_method == "tiled") options.glare_options.method = GlareMethod::TiledFft;
-  else throw InputError("--glare-method", "expected auto, direct, fft or tiled, got \"" + o.glare_method + "\"");
-  if (!std::isfinite(o.glare_threshold)) throw InputError("--glare-threshold", "must be a number (-1: what clips)");
-  if (!(o.glare_scatter > 0 && o.glare_scatter <= 1)) throw InputError("--glare-scatter", "must be in (0, 1]");
-  options.glare_options.scatter_fraction = o.glare_scatter;
-  if (o.glare_size < 2 || o.glare_size > 11) throw InputError("--glare-size", "must be between 2 and 11");
-
-  options.exposure_options.stops = o.stops;
-  if (o.shutter_s || o.f_number) {
-    CameraExposure camera;
-    camera.iso = o.iso;
-    if (o.shutter_s) camera.shutter_s = *o.shutter_s;
-    if (o.f_number) camera.f_number = *o.f_number;
-    if (!(camera.shutter_s > 0)) throw InputError("--shutter", "must be a positive time in seconds");
-    if (!(camera.f_number > 0)) throw InputError("--f-number", "must be positive");
-    options.exposure_options.camera = camera;
+/// Refuses post-process options the flags cannot check alone, naming the flag.
+void checkPostOptions(const PostProcessOptions& options) {
+  const FogGlareOptions& glare = options.glare_options;
+  if (!std::isfinite(glare.threshold)) throw InputError("--glare-threshold", "must be a number (-1: what clips)");
+  if (!(glare.scatter_fraction > 0 && glare.scatter_fraction <= 1)) throw InputError("--glare-scatter", "must be in (0, 1]");
+  if (glare.size < 2 || glare.size > 11) throw InputError("--glare-size", "must be between 2 and 11");
+  if (const std::optional<CameraExposure>& camera = options.exposure_options.camera) {
+    if (!(camera->shutter_s > 0)) throw InputError("--shutter", "must be a positive time in seconds");
+    if (!(camera->f_number > 0)) throw InputError("--f-number", "must be positive");
   }
-  options.noise = o.noise;
-  options.noise_options.iso = o.iso;
-  options.noise_options.std_scale = o.noise_scale;
-  options.noise_options.seed = o.seed;
+  const SensorNoiseOptions& noise = options.noise_options;
   try {
-    noiseCalibrationAtIso(o.iso);
+    noiseCalibrationAtIso(noise.iso);
   } catch (const std::invalid_argument& e) {
     throw InputError("--iso", e.what());
   }
-  if (!(o.noise_scale >= 0)) throw InputError("--noise-scale", "must be 0 or more");
-  options.noise_options.demosaic = o.demosaic;
-  if (!(o.chroma_denoise_px >= 0 && o.chroma_denoise_px <= 100))
+  if (!(noise.std_scale >= 0)) throw InputError("--noise-scale", "must be 0 or more");
+  if (!(noise.chroma_denoise_sigma_px >= 0 && noise.chroma_denoise_sigma_px <= 100))
     throw InputError("--chroma-denoise", "must be a Gaussian sigma of 0 to 100 px");
-  options.noise_options.chroma_denoise_sigma_px = o.chroma_denoise_px;
-  if (!(o.chroma_denoise_strength >= 0 && o.chroma_denoise_strength <= 1))
+  if (!(noise.chroma_denoise_strength >= 0 && noise.chroma_denoise_strength <= 1))
     throw InputError("--chroma-denoise-strength", "must be between 0 and 1");
-  options.noise_options.chroma_denoise_strength = o.chroma_denoise_strength;
-  options.adaptation = o.adaptation;
-  if (o.curve == "gamma2.2") options.encoding_options.curve = TransferCurve::Gamma22;
-  else if (o.curve == "srgb") options.encoding_options.curve = TransferCurve::Srgb;
-  else if (o.curve == "linear") options.encoding_options.curve = TransferCurve::Linear;
-  else throw InputError("--curve", "expected gamma2.2, srgb or linear, got \"" + o.curve + "\"");
-  if (o.negatives == "desaturate") options.encoding_options.negatives = NegativeHandling::Desaturate;
-  else if (o.negatives == "clip") options.encoding_options.negatives = NegativeHandling::Clip;
-  else throw InputError("--negatives", "expected desaturate or clip, got \"" + o.negatives + "\"");
-  if (o.highlights == "desaturate") options.encoding_options.highlights = HighlightHandling::Desaturate;
-  else if (o.highlights == "clip") options.encoding_options.highlights = HighlightHandling::Clip;
-  else throw InputError("--highlights", "expected desaturate or clip, got \"" + o.highlights + "\"");
-  if (!(o.highlight_knee >= 0 && o.highlight_knee <= 1)) throw InputError("--highlight-knee", "must be between 0 and 1");
-  options.encoding_options.highlight_knee = o.highlight_knee;
-  if (!(o.white_clip >= 1 && std::isfinite(o.white_clip))) throw InputError("--white-clip", "must be a finite level >= 1");
-  if (!(o.knee_point > 0 && o.knee_point < 1)) throw InputError("--knee-point", "must be between 0 and 1 (exclusive)");
-  options.encoding_options.white_clip = o.white_clip;
-  options.encoding_options.knee_point = o.knee_point;
+  const ColourEncodingOptions& encoding = options.encoding_options;
+  if (!(encoding.highlight_knee >= 0 && encoding.highlight_knee <= 1))
+    throw InputError("--highlight-knee", "must be between 0 and 1");
+  if (!(encoding.white_clip >= 1 && std::isfinite(encoding.white_clip)))
+    throw InputError("--white-clip", "must be a finite level >= 1");
+  if (!(encoding.knee_point > 0 && encoding.knee_point < 1))
+    throw InputError("--knee-point", "must be between 0 and 1 (exclusive)");
+}
+
+}  // namespace
+
+PostOptions postCommandDefaults() {
+  PostOptions defaults;
+  // Only the pixels that clip glow (PostProcessOptions: a negative threshold is what clips);
+  // FogGlareOptions' 0, the reference's, makes every pixel glow.
+  defaults.post.glare_options.threshold = -1;
+  return defaults;
+}
+
+int runPost(const PostOptions& o) {
+  Stopwatch total;
+  PostProcessOptions options = o.post;
+  // --iso is the sensor's: the noise calibration's and the camera's.
+  if (options.exposure_options.camera) options.exposure_options.camera->iso = options.noise_options.iso;
+  checkPostOptions(options);
   refuseOutputThatIsAnInput(o.output, {o.input}, "-o");
   if (o.report) refuseOutputThatIsAnInput(*o.report, {o.input}, "--report");
 
   RunReport report;
   report.command = "post";
-  report.seed = o.seed;
+  report.seed = options.noise_options.seed;
   report.scene = o.input.string();
   report.versions = dependencyVersions();
   StageReport read;

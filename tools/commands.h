@@ -2,12 +2,16 @@
 // The solo subcommands. Each takes an options struct that maps one to one onto its
 // command-line flags (main.cpp is the only file that knows CLI11) and returns an exit code.
 
+#include <solo/geometry/depth_refinement.h>
+#include <solo/geometry/mesh_cleanup.h>
+#include <solo/lighting/light_stage.h>
 #include <solo/pipeline/data_dir.h>
 #include <solo/pipeline/evaluation.h>
 #include <solo/pipeline/night_conversion.h>
 #include <solo/pipeline/night_evaluation.h>
 #include <solo/pipeline/night_job.h>
 #include <solo/pipeline/realism_bench.h>
+#include <solo/post/post_process.h>
 #include <solo/synth/scene_folder.h>
 
 #include <cstdint>
@@ -118,40 +122,40 @@ struct DepthOptions {
   std::filesystem::path scene;
   std::filesystem::path output = "refined.exr";
   std::optional<std::filesystem::path> report;  ///< none: <output stem>.report.json
-  std::string optimizer = "ceres";              ///< "ceres" or "adam" (the paper's)
-  std::string tangent_model = "perspective";    ///< "perspective" or "paper"
-  bool upsample = true, filter = true, uncertain = true, optimize = true;
+  /// The stage's options, each flag bound onto a field; --tangent-model sets the objective of
+  /// both optimisers (optimization and adam).
+  DepthRefinementOptions refinement;
 };
 int runDepth(const DepthOptions& options);
 
+/// `solo mesh from-depth`: the mesh stage's options (geometry/mesh_cleanup.h), each flag bound
+/// onto a field, and the files.
 struct MeshFromDepthOptions {
   std::filesystem::path scene;   ///< scene manifest
   std::filesystem::path output;  ///< mesh file: PLY, OBJ, OFF or STL by extension
   std::optional<std::filesystem::path> report;     ///< report JSON
   std::optional<std::filesystem::path> uncertain;  ///< uncertain mask (8/16-bit, non-zero = uncertain)
   std::optional<std::filesystem::path> truth;      ///< ground-truth scene: score the spurious-face removal
-  bool close_solids = true;  ///< close foreground things into solids; false: open sheets
-  bool backdrops = true;     ///< close the frame holes only a backdrop closes; false: left open
-  bool evaluate = true;      ///< the final evaluateMesh (self-intersections are costly at 1080p)
+  DepthMeshCleanupOptions cleanup;
 };
 int runMeshFromDepth(const MeshFromDepthOptions& options);
 
 struct MeshCleanOptions {
   std::filesystem::path input, output;          ///< PLY, OBJ, OFF or STL
   std::optional<std::filesystem::path> report;  ///< report JSON
+  MeshCleanupOptions cleanup;                   ///< the repair (no flags: the library's defaults)
 };
 int runMeshClean(const MeshCleanOptions& options);
 
+/// `solo lights`: the light stage's options (lighting/light_stage.h), each flag bound onto a
+/// field, and the files.
 struct LightsOptions {
   std::optional<std::filesystem::path> scene;  ///< none: the embedded default scene
   std::filesystem::path output = "lights.json";  ///< the light record
   std::optional<std::filesystem::path> overlay;  ///< PNG of the lights on the day image
   std::optional<std::filesystem::path> report;   ///< run report JSON
-  std::optional<std::filesystem::path> table;    ///< illuminant table (default: bundled)
   std::optional<std::filesystem::path> from_record;  ///< an edited record to validate and redraw
-  std::uint64_t seed = 0;
-  bool ablation = false;                    ///< every light on, white E, one strength
-  double ablation_luminance_cd_m2 = 1000;   ///< the ablation's one strength, cd/m^2
+  LightStageOptions stage;  ///< an empty illuminant_table is the bundled table (data_dir.h)
 };
 int runLights(const LightsOptions& options);
 
@@ -179,29 +183,12 @@ struct PostOptions {
   std::filesystem::path output = "night.png";   ///< .png/.tif (8-bit, 16 with sixteen_bit), .jpg, .exr (linear)
   std::optional<std::filesystem::path> report;  ///< run report JSON
   bool sixteen_bit = false;
-  double stops = 3.25;                    ///< exposure, unless a camera is given
-  std::optional<double> shutter_s;        ///< physical camera (with iso and f_number)
-  std::optional<double> f_number;         ///< physical camera (with iso and shutter_s)
-  double iso = 3200;                      ///< sensor ISO: noise calibration, and the camera's ISO
-  bool glare = true;
-  double glare_threshold = -1;            ///< luminance in render units; < 0: what clips (the reference: 0)
-  int glare_size = 9;                     ///< kernel 2^size px
-  std::string glare_method = "auto";      ///< auto, direct, fft, tiled
-  bool noise = true;
-  double noise_scale = 0.4;               ///< standard deviation multiplier (SensorNoiseOptions' default)
-  bool demosaic = true;                   ///< an RGGB mosaic; false: every pixel samples R, G and B
-  double chroma_denoise_px = 2;           ///< Gaussian sigma of the chroma noise reduction, px; 0 = off
-  double chroma_denoise_strength = 1;     ///< share of the chroma noise replaced by its smoothed version
-  std::uint64_t seed = 0;
-  bool adaptation = true;
-  std::string curve = "gamma2.2";         ///< gamma2.2, srgb, linear
-  std::string negatives = "desaturate";   ///< desaturate, clip
-  std::string highlights = "desaturate";  ///< desaturate, clip
-  double highlight_knee = 0.8;            ///< share of the chroma headroom left untouched (ColourEncodingOptions)
-  double white_clip = 1;                  ///< linear level encoded as full white (video knee); 1 = clip at white
-  double knee_point = 0.8;                ///< encoded luminance where the knee starts
-  double glare_scatter = 1;               ///< share of the excess the glow carries (1 = the reference)
+  /// The post-process, each flag bound onto a field. --shutter and --f-number set
+  /// exposure_options.camera; its ISO is --iso, noise_options.iso (runPost copies it).
+  PostProcessOptions post;
 };
+/// The options `solo post` starts from (its --help defaults): the library's, except where noted.
+PostOptions postCommandDefaults();
 int runPost(const PostOptions& options);
 
 /// `solo fda`: Fourier domain adaptation of a day photo toward a night photo.

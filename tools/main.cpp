@@ -4,8 +4,12 @@
 #include "commands.h"
 
 #include <solo/core/error.h>
+#include <solo/geometry/depth_refinement.h>
+#include <solo/geometry/normal_guided_objective.h>
 #include <solo/pipeline/large_buffer_allocator.h>
 #include <solo/pipeline/night_presets.h>
+#include <solo/post/colour_encoding.h>
+#include <solo/post/fog_glare.h>
 #include <solo/render/light_sampler.h>
 #include <solo/render/sampler.h>
 
@@ -28,6 +32,39 @@ const std::map<std::string, solo::LightSamplerKind> kLightSamplers = {{"uniform"
                                                                       {"hierarchy", solo::LightSamplerKind::Hierarchy}};
 const std::map<std::string, solo::SamplerKind> kSamplers = {{"sobol", solo::SamplerKind::Sobol},
                                                             {"independent", solo::SamplerKind::Independent}};
+const std::map<std::string, solo::GlareMethod> kGlareMethods = {{"auto", solo::GlareMethod::Automatic},
+                                                                {"direct", solo::GlareMethod::Direct},
+                                                                {"fft", solo::GlareMethod::Fft},
+                                                                {"tiled", solo::GlareMethod::TiledFft}};
+const std::map<std::string, solo::TransferCurve> kTransferCurves = {{"gamma2.2", solo::TransferCurve::Gamma22},
+                                                                    {"srgb", solo::TransferCurve::Srgb},
+                                                                    {"linear", solo::TransferCurve::Linear}};
+const std::map<std::string, solo::NegativeHandling> kNegativeHandlings = {
+    {"desaturate", solo::NegativeHandling::Desaturate}, {"clip", solo::NegativeHandling::Clip}};
+const std::map<std::string, solo::HighlightHandling> kHighlightHandlings = {
+    {"desaturate", solo::HighlightHandling::Desaturate}, {"clip", solo::HighlightHandling::Clip}};
+const std::map<std::string, solo::DepthOptimizer> kDepthOptimizers = {{"ceres", solo::DepthOptimizer::Ceres},
+                                                                      {"adam", solo::DepthOptimizer::Adam}};
+const std::map<std::string, solo::TangentModel> kTangentModels = {{"perspective", solo::TangentModel::Perspective},
+                                                                  {"paper", solo::TangentModel::PaperGraph}};
+
+// The name `names` gives `value` (the option's default as the help shows it).
+template <typename Enum>
+std::string choiceName(const std::map<std::string, Enum>& names, Enum value) {
+  for (const auto& [name, named] : names)
+    if (named == value) return name;
+  return {};
+}
+
+// An option bound to an enum: one of the names of `names`, the value's name as its default, and
+// `choices` ("" or "{a,b}") as its help type instead of the enum's numbers.
+template <typename Enum>
+CLI::Option* namedChoice(CLI::Option* option, const std::map<std::string, Enum>& names, Enum value,
+                         const std::string& choices = "") {
+  return option->transform(CLI::CheckedTransformer(names).description(choices))
+      ->type_name("TEXT")
+      ->default_str(choiceName(names, value));
+}
 
 // A seed: decimal digits only, at most 2^64 - 1 (CLI11 alone would wrap "-1" and overflow).
 const CLI::Validator kSeed(
@@ -332,11 +369,12 @@ void addLightsCommand(CLI::App& app, std::vector<Command>& commands) {
   lights_cmd->add_option("scene", lights.scene, "Scene manifest (JSON); omit for the embedded default scene");
   lights_cmd->add_option("-o,--output", lights.output, "Light record to write (JSON)")->capture_default_str();
   lights_cmd->add_option("--overlay", lights.overlay, "PNG of the lights drawn on the day image");
-  lights_cmd->add_option("--seed", lights.seed, "Random seed")->capture_default_str()->check(kSeed);
-  lights_cmd->add_flag("--ablation", lights.ablation, "Every light on, white, one strength (the paper's ablation)");
-  lights_cmd->add_option("--ablation-luminance", lights.ablation_luminance_cd_m2, "The ablation's strength, cd/m^2")
+  InstantiationOptions& instantiation = lights.stage.instantiation;
+  lights_cmd->add_option("--seed", instantiation.seed, "Random seed")->capture_default_str()->check(kSeed);
+  lights_cmd->add_flag("--ablation", instantiation.ablation, "Every light on, white, one strength (the paper's ablation)");
+  lights_cmd->add_option("--ablation-luminance", instantiation.ablation_luminance_cd_m2, "The ablation's strength, cd/m^2")
       ->capture_default_str();
-  lights_cmd->add_option("--table", lights.table, "Illuminant table CSV (default: the bundled one)");
+  lights_cmd->add_option("--table", lights.stage.illuminant_table, "Illuminant table CSV (default: the bundled one)");
   lights_cmd->add_option("--from", lights.from_record, "Read an (edited) light record instead of sampling");
   lights_cmd->add_option("--report", lights.report, "Report JSON to write");
   commands.push_back({lights_cmd, [lights_holder] { return runLights(*lights_holder); }});
@@ -383,10 +421,10 @@ void addMeshCommands(CLI::App& app, std::vector<Command>& commands) {
   mesh_from_depth_cmd->add_option("--uncertain", mesh_from_depth.uncertain, "Uncertain mask (non-zero = uncertain)");
   mesh_from_depth_cmd->add_option("--truth", mesh_from_depth.truth,
                                   "Ground-truth scene (depth and normals): score the spurious-face removal");
-  mesh_from_depth_cmd->add_flag("!--no-solids", mesh_from_depth.close_solids, "Leave foreground things as open sheets");
-  mesh_from_depth_cmd->add_flag("!--no-backdrops", mesh_from_depth.backdrops,
+  mesh_from_depth_cmd->add_flag("!--no-solids", mesh_from_depth.cleanup.close_solids, "Leave foreground things as open sheets");
+  mesh_from_depth_cmd->add_flag("!--no-backdrops", mesh_from_depth.cleanup.backdrops,
                                 "Leave open the frame holes only a backdrop behind the occluders closes");
-  mesh_from_depth_cmd->add_flag("!--no-evaluation", mesh_from_depth.evaluate,
+  mesh_from_depth_cmd->add_flag("!--no-evaluation", mesh_from_depth.cleanup.evaluate,
                                 "Skip the final topology and self-intersection counts");
   CLI::App* mesh_clean_cmd =
       mesh_cmd->add_subcommand("clean", "Repair a triangle mesh and fill its holes; report self-intersections");
@@ -397,8 +435,71 @@ void addMeshCommands(CLI::App& app, std::vector<Command>& commands) {
   commands.push_back({mesh_clean_cmd, [mesh_clean_holder] { return runMeshClean(*mesh_clean_holder); }});
 }
 
+// The camera on the post-process options: the one --shutter or --f-number made, or a new one.
+CameraExposure& postCamera(PostProcessOptions& post) {
+  std::optional<CameraExposure>& camera = post.exposure_options.camera;
+  if (!camera) camera.emplace();
+  return *camera;
+}
+
+// solo post's glare, exposure and noise flags.
+void addPostCameraFlags(CLI::App* post_cmd, PostProcessOptions& post) {
+  CLI::Option* post_stops = post_cmd->add_option("--stops", post.exposure_options.stops, "Exposure in stops")->capture_default_str();
+  post_cmd->add_option_function<double>(
+              "--shutter", [&post](const double& shutter_s) { postCamera(post).shutter_s = shutter_s; },
+              "Camera shutter time, s (camera: ISO 3200, 1/30 s, f/2 = +3.25 stops)")
+      ->excludes(post_stops);
+  post_cmd->add_option_function<double>(
+              "--f-number", [&post](const double& f_number) { postCamera(post).f_number = f_number; },
+              "Camera f-number (with --shutter and --iso)")
+      ->excludes(post_stops);
+  post_cmd->add_option("--iso", post.noise_options.iso, "Sensor ISO (noise calibration 100 to 3200; the camera's ISO)")
+      ->capture_default_str();
+  post_cmd->add_flag("!--no-glare", post.glare, "Skip the fog glare");
+  post_cmd->add_option("--glare-threshold", post.glare_options.threshold,
+                       "Luminance above which pixels glow (render units before exposure); -1 = what clips; the "
+                       "reference uses 0")
+      ->capture_default_str();
+  post_cmd->add_option("--glare-size", post.glare_options.size, "Glare kernel size 2^N px")->capture_default_str();
+  namedChoice(post_cmd->add_option("--glare-method", post.glare_options.method, "auto, direct, fft or tiled"),
+              kGlareMethods, post.glare_options.method);
+  post_cmd->add_flag("!--no-noise", post.noise, "Skip the sensor noise");
+  post_cmd->add_option("--noise-scale", post.noise_options.std_scale, "Noise standard deviation multiplier")->capture_default_str();
+  post_cmd->add_flag("!--no-demosaic", post.noise_options.demosaic, "Noise without the RGGB mosaic: every pixel samples R, G, B");
+  post_cmd->add_option("--chroma-denoise", post.noise_options.chroma_denoise_sigma_px,
+                       "Chroma noise reduction: Gaussian sigma in px on the noise's colour differences; 0 = off")
+      ->capture_default_str();
+  post_cmd->add_option("--chroma-denoise-strength", post.noise_options.chroma_denoise_strength,
+                       "Share of the chroma noise replaced by its smoothed version, 0 to 1")
+      ->capture_default_str();
+  post_cmd->add_option("--seed", post.noise_options.seed, "Noise seed")->capture_default_str()->check(kSeed);
+}
+
+// solo post's colour flags, then the glare scatter (last in --help).
+void addPostColourFlags(CLI::App* post_cmd, PostProcessOptions& post) {
+  ColourEncodingOptions& encoding = post.encoding_options;
+  post_cmd->add_flag("!--no-adaptation", post.adaptation, "Skip the Bradford E to D65 adaptation");
+  namedChoice(post_cmd->add_option("--curve", encoding.curve, "gamma2.2, srgb or linear"), kTransferCurves, encoding.curve);
+  namedChoice(post_cmd->add_option("--negatives", encoding.negatives, "Out-of-gamut colours: desaturate or clip"),
+              kNegativeHandlings, encoding.negatives);
+  namedChoice(post_cmd->add_option("--highlights", encoding.highlights,
+                                   "Colours above white: desaturate (toward white, hue kept) or clip"),
+              kHighlightHandlings, encoding.highlights);
+  post_cmd->add_option("--highlight-knee", encoding.highlight_knee,
+                       "Desaturation starts above this share of a colour's headroom, 0 to 1 (1 = hard)")
+      ->capture_default_str();
+  post_cmd->add_option("--white-clip", encoding.white_clip,
+                       "Video knee: linear level encoded as full white, in sensor whites (1 = clip at white)")
+      ->capture_default_str();
+  post_cmd->add_option("--knee-point", encoding.knee_point, "Video knee: encoded luminance where it starts, 0 to 1")
+      ->capture_default_str();
+  post_cmd->add_option("--glare-scatter", post.glare_options.scatter_fraction,
+                       "Share of a bright pixel's excess the glow carries (1 = the reference)")
+      ->capture_default_str();
+}
+
 void addPostCommand(CLI::App& app, std::vector<Command>& commands) {
-  auto post_holder = std::make_shared<PostOptions>();
+  auto post_holder = std::make_shared<PostOptions>(postCommandDefaults());
   PostOptions& post = *post_holder;
   CLI::App* post_cmd =
       app.add_subcommand("post", "Post-process a linear XYZ render: glare, exposure, noise, colour (docs/post-processing.md)");
@@ -407,45 +508,8 @@ void addPostCommand(CLI::App& app, std::vector<Command>& commands) {
       ->capture_default_str();
   post_cmd->add_option("--report", post.report, "Report JSON to write");
   post_cmd->add_flag("--16bit", post.sixteen_bit, "16-bit PNG or TIFF");
-  CLI::Option* post_stops = post_cmd->add_option("--stops", post.stops, "Exposure in stops")->capture_default_str();
-  post_cmd->add_option("--shutter", post.shutter_s, "Camera shutter time, s (camera: ISO 3200, 1/30 s, f/2 = +3.25 stops)")
-      ->excludes(post_stops);
-  post_cmd->add_option("--f-number", post.f_number, "Camera f-number (with --shutter and --iso)")->excludes(post_stops);
-  post_cmd->add_option("--iso", post.iso, "Sensor ISO (noise calibration 100 to 3200; the camera's ISO)")
-      ->capture_default_str();
-  post_cmd->add_flag("!--no-glare", post.glare, "Skip the fog glare");
-  post_cmd->add_option("--glare-threshold", post.glare_threshold,
-                       "Luminance above which pixels glow (render units before exposure); -1 = what clips; the "
-                       "reference uses 0")
-      ->capture_default_str();
-  post_cmd->add_option("--glare-size", post.glare_size, "Glare kernel size 2^N px")->capture_default_str();
-  post_cmd->add_option("--glare-method", post.glare_method, "auto, direct, fft or tiled")->capture_default_str();
-  post_cmd->add_flag("!--no-noise", post.noise, "Skip the sensor noise");
-  post_cmd->add_option("--noise-scale", post.noise_scale, "Noise standard deviation multiplier")->capture_default_str();
-  post_cmd->add_flag("!--no-demosaic", post.demosaic, "Noise without the RGGB mosaic: every pixel samples R, G, B");
-  post_cmd->add_option("--chroma-denoise", post.chroma_denoise_px,
-                       "Chroma noise reduction: Gaussian sigma in px on the noise's colour differences; 0 = off")
-      ->capture_default_str();
-  post_cmd->add_option("--chroma-denoise-strength", post.chroma_denoise_strength,
-                       "Share of the chroma noise replaced by its smoothed version, 0 to 1")
-      ->capture_default_str();
-  post_cmd->add_option("--seed", post.seed, "Noise seed")->capture_default_str()->check(kSeed);
-  post_cmd->add_flag("!--no-adaptation", post.adaptation, "Skip the Bradford E to D65 adaptation");
-  post_cmd->add_option("--curve", post.curve, "gamma2.2, srgb or linear")->capture_default_str();
-  post_cmd->add_option("--negatives", post.negatives, "Out-of-gamut colours: desaturate or clip")->capture_default_str();
-  post_cmd->add_option("--highlights", post.highlights, "Colours above white: desaturate (toward white, hue kept) or clip")
-      ->capture_default_str();
-  post_cmd->add_option("--highlight-knee", post.highlight_knee,
-                       "Desaturation starts above this share of a colour's headroom, 0 to 1 (1 = hard)")
-      ->capture_default_str();
-  post_cmd->add_option("--white-clip", post.white_clip,
-                       "Video knee: linear level encoded as full white, in sensor whites (1 = clip at white)")
-      ->capture_default_str();
-  post_cmd->add_option("--knee-point", post.knee_point, "Video knee: encoded luminance where it starts, 0 to 1")
-      ->capture_default_str();
-  post_cmd->add_option("--glare-scatter", post.glare_scatter,
-                       "Share of a bright pixel's excess the glow carries (1 = the reference)")
-      ->capture_default_str();
+  addPostCameraFlags(post_cmd, post.post);
+  addPostColourFlags(post_cmd, post.post);
   commands.push_back({post_cmd, [post_holder] { return runPost(*post_holder); }});
 }
 
@@ -469,14 +533,22 @@ void addDepthCommand(CLI::App& app, std::vector<Command>& commands) {
   depth_cmd->add_option("scene", depth.scene, "Scene manifest (JSON)")->required();
   depth_cmd->add_option("-o,--output", depth.output, "Refined depth to write (EXR, TIFF, PFM, NPY, PNG)")->capture_default_str();
   depth_cmd->add_option("--report", depth.report, "Report JSON to write (default: <output>.report.json)");
-  depth_cmd->add_option("--optimizer", depth.optimizer, "ceres, or adam (the paper's optimiser)")
-      ->capture_default_str()->check(CLI::IsMember({"ceres", "adam"}));
-  depth_cmd->add_option("--tangent-model", depth.tangent_model, "perspective (exact pinhole tangents) or paper")
-      ->capture_default_str()->check(CLI::IsMember({"perspective", "paper"}));
-  depth_cmd->add_flag("!--no-upsample", depth.upsample, "Resize maps by nearest neighbour instead of upsampling");
-  depth_cmd->add_flag("!--no-filter", depth.filter, "Skip the instance-reference cross-bilateral filter");
-  depth_cmd->add_flag("!--no-uncertain", depth.uncertain, "Skip the uncertain regions");
-  depth_cmd->add_flag("!--no-optimize", depth.optimize, "Skip the normal-guided optimisation");
+  DepthRefinementOptions& refinement = depth.refinement;
+  namedChoice(depth_cmd->add_option("--optimizer", refinement.optimizer, "ceres, or adam (the paper's optimiser)"),
+              kDepthOptimizers, refinement.optimizer, "{ceres,adam}");
+  // One tangent model for both optimisers' objectives.
+  namedChoice(depth_cmd->add_option_function<TangentModel>(
+                  "--tangent-model",
+                  [&refinement](const TangentModel& model) {
+                    refinement.optimization.objective.tangent_model = model;
+                    refinement.adam.objective.tangent_model = model;
+                  },
+                  "perspective (exact pinhole tangents) or paper"),
+              kTangentModels, refinement.optimization.objective.tangent_model, "{perspective,paper}");
+  depth_cmd->add_flag("!--no-upsample", refinement.upsampling.enabled, "Resize maps by nearest neighbour instead of upsampling");
+  depth_cmd->add_flag("!--no-filter", refinement.filter, "Skip the instance-reference cross-bilateral filter");
+  depth_cmd->add_flag("!--no-uncertain", refinement.uncertain_regions, "Skip the uncertain regions");
+  depth_cmd->add_flag("!--no-optimize", refinement.optimize, "Skip the normal-guided optimisation");
   commands.push_back({depth_cmd, [depth_holder] { return runDepth(*depth_holder); }});
 }
 
