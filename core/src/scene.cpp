@@ -256,6 +256,22 @@ std::int64_t countBackFacingNormals(const cv::Mat& normals, const PinholeCamera&
   return back_facing;
 }
 
+// Sets every NaN or infinite value of a float map to 0; returns how many there were. A single
+// NaN reflectance would spread through the renderer's sums and turn the night image black.
+std::int64_t zeroNonFinite(cv::Mat& map) {
+  std::int64_t count = 0;
+  if (map.empty() || map.depth() != CV_32F) return 0;
+  for (int y = 0; y < map.rows; ++y) {
+    float* row = map.ptr<float>(y);
+    for (int i = 0; i < map.cols * map.channels(); ++i)
+      if (!std::isfinite(row[i])) {
+        row[i] = 0.f;
+        ++count;
+      }
+  }
+  return count;
+}
+
 }  // namespace
 
 Scene loadScene(const fs::path& manifest_file) {
@@ -263,6 +279,10 @@ Scene loadScene(const fs::path& manifest_file) {
   s.manifest = readSceneManifest(manifest_file);
   s.warnings = s.manifest.warnings;
   readSceneMaps(s.manifest, s);
+  for (const auto& [name, map] : {std::pair<const char*, cv::Mat*>{"day image", &s.image},
+                                  {"albedo", &s.albedo}, {"roughness", &s.roughness}})
+    if (const std::int64_t repaired = zeroNonFinite(*map); repaired > 0)
+      s.warnings.push_back(std::to_string(repaired) + " NaN or infinite values of the " + name + " set to 0");
   setSceneCamera(s.manifest, s);
   if (!s.normals.empty()) s.normal_stats->back_facing = countBackFacingNormals(s.normals, s.camera);
 

@@ -6,6 +6,9 @@
 
 #include "test_support.h"
 
+#include <algorithm>
+#include <limits>
+
 namespace fs = std::filesystem;
 using solo::test::TempDir;
 using solo::test::writeText;
@@ -203,4 +206,33 @@ TEST(Scene, GroundTruthManifestIsResolvedAgainstTheManifestFolder) {
   }
   writeText(dir / "wrong.json", R"({"image": "day.png", "depth": "d.exr", "ground_truth": 3})");
   EXPECT_THROW(solo::readSceneManifest(dir / "wrong.json"), solo::InputError);
+}
+
+TEST(Scene, NonFiniteColoursAreSetToZeroAndCounted) {
+  TempDir dir;
+  cv::Mat day(6, 8, CV_32FC3, cv::Scalar(0.2f, 0.3f, 0.4f));
+  day.at<cv::Vec3f>(1, 2)[0] = std::numeric_limits<float>::quiet_NaN();
+  day.at<cv::Vec3f>(4, 5) = cv::Vec3f::all(std::numeric_limits<float>::infinity());
+  cv::Mat albedo(6, 8, CV_32FC3, cv::Scalar::all(0.5f));
+  albedo.at<cv::Vec3f>(0, 0)[1] = -std::numeric_limits<float>::quiet_NaN();
+  solo::writeImage(dir / "day.exr", day);
+  solo::writeImage(dir / "albedo.exr", albedo);
+  solo::writeImage(dir / "d.exr", cv::Mat(6, 8, CV_32F, cv::Scalar(10)));
+  writeText(dir / "scene.json", R"({"image": "day.exr", "depth": "d.exr", "albedo": "albedo.exr"})");
+  const solo::Scene s = solo::loadScene(dir / "scene.json");
+  EXPECT_TRUE(cv::checkRange(s.image));
+  EXPECT_TRUE(cv::checkRange(s.albedo));
+  EXPECT_EQ(s.image.at<cv::Vec3f>(1, 2), cv::Vec3f(0.f, 0.3f, 0.4f));
+  EXPECT_EQ(s.image.at<cv::Vec3f>(4, 5), cv::Vec3f::all(0.f));
+  EXPECT_EQ(s.albedo.at<cv::Vec3f>(0, 0), cv::Vec3f(0.5f, 0.f, 0.5f));
+  const auto said = [&](const std::string& text) {
+    for (const std::string& w : s.warnings)
+      if (w == text) return true;
+    return false;
+  };
+  EXPECT_TRUE(said("4 NaN or infinite values of the day image set to 0"));
+  EXPECT_TRUE(said("1 NaN or infinite values of the albedo set to 0"));
+  const solo::StageReport r = solo::describeScene(s);
+  EXPECT_NE(std::find(r.notes.begin(), r.notes.end(), "4 NaN or infinite values of the day image set to 0"), r.notes.end())
+      << "the count reaches the input stage's report";
 }
