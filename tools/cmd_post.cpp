@@ -81,14 +81,6 @@ void checkPostOptions(const PostProcessOptions& options) {
 
 }  // namespace
 
-PostOptions postCommandDefaults() {
-  PostOptions defaults;
-  // Only the pixels that clip glow (PostProcessOptions: a negative threshold is what clips);
-  // FogGlareOptions' 0, the reference's, makes every pixel glow.
-  defaults.post.glare_options.threshold = -1;
-  return defaults;
-}
-
 int runPost(const PostOptions& o) {
   Stopwatch total;
   PostProcessOptions options = o.post;

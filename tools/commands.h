@@ -187,8 +187,6 @@ struct PostOptions {
   /// exposure_options.camera; its ISO is --iso, noise_options.iso (runPost copies it).
   PostProcessOptions post;
 };
-/// The options `solo post` starts from (its --help defaults): the library's, except where noted.
-PostOptions postCommandDefaults();
 int runPost(const PostOptions& options);
 
 /// `solo fda`: Fourier domain adaptation of a day photo toward a night photo.

@@ -499,7 +499,7 @@ void addPostColourFlags(CLI::App* post_cmd, PostProcessOptions& post) {
 }
 
 void addPostCommand(CLI::App& app, std::vector<Command>& commands) {
-  auto post_holder = std::make_shared<PostOptions>(postCommandDefaults());
+  auto post_holder = std::make_shared<PostOptions>();
   PostOptions& post = *post_holder;
   CLI::App* post_cmd =
       app.add_subcommand("post", "Post-process a linear XYZ render: glare, exposure, noise, colour (docs/post-processing.md)");

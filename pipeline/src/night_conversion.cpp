@@ -37,7 +37,6 @@ NightConversionOptions::NightConversionOptions() {
   post.glare_options.scatter_fraction = 0.02;
   post.encoding_options.white_clip = 8;
   post.encoding_options.knee_point = 0.7;
-  post.glare_options.threshold = -1;
 }
 
 namespace {

@@ -19,14 +19,21 @@
 
 namespace solo {
 
-/// The camera model's settings. Its defaults are the stages' own (the reference's glare:
-/// threshold 0, scatter 1; no video knee); the night camera's are set once in
-/// NightConversionOptions (pipeline/night_conversion.h).
+/// FogGlareOptions whose threshold is -1: in postProcess, only the pixels that will clip glow.
+inline FogGlareOptions glareAboveWhatClips() {
+  FogGlareOptions glare;
+  glare.threshold = -1;
+  return glare;
+}
+
+/// The camera model's settings. Its defaults are the stages' own (the reference's glare
+/// scatter 1, no video knee), except that only what clips glows; the night camera's are set
+/// once in NightConversionOptions (pipeline/night_conversion.h).
 struct PostProcessOptions {
   bool glare = true;
   /// A negative glare_options.threshold is what will clip: encoding_options.white_clip over
   /// the exposure's scale (only pixels that clip glow; the reference's 0 makes every pixel glow).
-  FogGlareOptions glare_options;
+  FogGlareOptions glare_options = glareAboveWhatClips();
   bool exposure = true;
   ExposureOptions exposure_options;
   bool noise = true;
