@@ -15,11 +15,23 @@ int runNight(const NightOptions& o) {
   job.versions = dependencyVersions();
   if (o.write_config) job.text_file = std::make_pair(*o.write_config, nightConfigText(o));  // throws before any work
   NightConversionCallbacks callbacks;
-  callbacks.stage_started = [](const std::string& stage) {
-    if (stage == "render") std::cerr << "render\n" << std::flush;
-    else if (stage != "denoise" && stage != "post") std::cerr << stage << " ... " << std::flush;
+  bool line_open = false;  // a "stage ... " line waits for its end
+  callbacks.stage_started = [&line_open](const std::string& stage) {
+    if (stage == "render") {
+      std::cerr << "render\n" << std::flush;
+      line_open = false;
+    } else if (stage != "denoise" && stage != "post") {
+      std::cerr << stage << " ... " << std::flush;
+      line_open = true;
+    }
   };
-  const NightJobResult result = runNightJob(job, o.conversion, callbacks);
+  NightJobResult result;
+  try {
+    result = runNightJob(job, o.conversion, callbacks);
+  } catch (...) {
+    if (line_open) std::cerr << "\n";  // the error goes on a line of its own
+    throw;
+  }
   std::cout << reportSummary(result.report) << "night image: " << job.output.string()
             << "\nreport: " << result.report_file.string() << "\n";
   return 0;

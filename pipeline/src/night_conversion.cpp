@@ -286,6 +286,7 @@ void requireInRange(double value, double low, double high, const char* setting) 
 }  // namespace
 
 void validateNightConversionOptions(const NightConversionOptions& o) {
+  requireInRange(o.min_depth_share, 0, 1, "min_depth_share");
   requireInRange(o.mesh_downsample, 1, 8, "--mesh-downsample");
   requireInRange(o.render_downsample, 1, 8, "--render-downsample");
   requireInRange(o.render.min_samples, 1, 1 << 20, "--min-spp");
@@ -313,6 +314,18 @@ void validateNightConversionOptions(const NightConversionOptions& o) {
   requireInRange(o.post.glare_options.threshold, -1e30, 1e30, "--glare-threshold");
 }
 
+void requireDenseDepth(const Scene& scene, const NightConversionOptions& o) {
+  const double pixels = static_cast<double>(scene.depth_m.total());
+  const double share = pixels > 0 ? static_cast<double>(scene.depth_stats.valid) / pixels : 0.0;
+  if (share >= o.min_depth_share) return;
+  char problem[320];
+  std::snprintf(problem, sizeof problem,
+                "only %.2f %% of the depth map's pixels hold a depth, below the %.0f %% the night conversion needs "
+                "(sparse depth such as projected LiDAR: densify it first, docs/scene-format.md)",
+                100.0 * share, 100.0 * o.min_depth_share);
+  throw InputError(scene.manifest.depth, problem);
+}
+
 Scene sceneForRefinement(const Scene& scene, std::int64_t* changed) {
   Scene out = scene;  // cv::Mat copies share their pixels; only the instance map is new
   out.instances = streetLightsAsPoles(scene.instances, scene.lights, changed);
@@ -337,6 +350,7 @@ NightScene runNightSceneStages(const Scene& scene, const NightConversionOptions&
 NightConversionResult runNightConversion(const Scene& scene, const NightConversionOptions& o,
                                          const NightConversionCallbacks& callbacks) {
   validateNightConversionOptions(o);
+  requireDenseDepth(scene, o);
   NightConversionResult r;
   const NightScene night = runNightSceneStages(scene, o, callbacks, r);
   announce(callbacks, "render");

@@ -132,3 +132,45 @@ TEST(NightJob, AnUnsupportedOutputIsRefusedAndNothingIsWritten) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(NightJob, SparseDepthIsRefusedNamingItsShareAndNothingIsWritten) {
+  TempDir dir;
+  solo::writeImage(dir / "day.png", cv::Mat(48, 64, CV_8UC3, cv::Scalar(90, 100, 110)));
+  cv::Mat depth = cv::Mat::zeros(48, 64, CV_32F);
+  for (int i = 0; i < 30; ++i) depth.at<float>(2 * (i % 20) + 4, 2 * i + 1) = 12.f;  // 30 of 3072 pixels: 0.98 %
+  solo::writeImage(dir / "depth.exr", depth);
+  solo::test::writeText(dir / "scene.json", R"({"image": "day.png", "depth": "depth.exr"})");
+  const std::filesystem::path out = dir / "out";
+  std::filesystem::create_directory(out);
+  solo::NightJobOptions job;
+  job.scene = dir / "scene.json";
+  job.output = out / "night.png";
+  try {
+    solo::runNightJob(job, solo::nightPreset("draft"));
+    FAIL() << "sparse depth was accepted";
+  } catch (const solo::InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("depth.exr"), std::string::npos) << what;
+    EXPECT_NE(what.find("0.98 %"), std::string::npos) << what;
+    EXPECT_NE(what.find("20 %"), std::string::npos) << what;
+  }
+  EXPECT_TRUE(solo::test::listFolder(out).empty());
+  // The same depth passes when the caller lowers the share it asks for.
+  NightConversionOptions lenient = solo::nightPreset("draft");
+  lenient.min_depth_share = 0.005;
+  EXPECT_NO_THROW(solo::requireDenseDepth(solo::loadScene(dir / "scene.json"), lenient));
+}
+
+TEST(NightJob, TheBundledLidarSampleIsRefusedByTheCli) {
+  TempDir dir;
+  const auto r = solo::test::runSolo("night " + (solo::dataDirectory() / "samples/dgp-real/scene.json").string() +
+                                     " -o " + (dir.path() / "n.png").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("lidar_depth.png"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("densify"), std::string::npos) << r.output;
+  EXPECT_TRUE(solo::test::listFolder(dir.path()).empty());
+}
+
+}  // namespace

@@ -35,6 +35,12 @@ struct NightConversionOptions {
   /// render and post.noise_options when the conversion runs).
   std::uint64_t seed = 0;
 
+  /// The least share of the depth map's pixels that must hold a depth. Below it (projected
+  /// LiDAR: a few per cent) the mesh would be an empty scatter and the night image sensor noise
+  /// only, so the conversion refuses the scene, naming the share; densify sparse depth first.
+  /// Stereo and monocular depth cover 60-100 % (the sky has none). 0 to 1.
+  double min_depth_share = 0.2;
+
   /// Depth refinement (filter, uncertain regions, optimisation) on; false: upsampling only.
   bool refine = true;
   DepthRefinementOptions refinement;
@@ -101,7 +107,11 @@ Scene sceneForRefinement(const Scene& scene, std::int64_t* changed = nullptr);
 NightScene runNightSceneStages(const Scene& scene, const NightConversionOptions& options,
                                const NightConversionCallbacks& callbacks, NightConversionResult& result);
 
-/// The whole conversion of a loaded scene.
+/// Throws InputError naming the depth file when less than options.min_depth_share of the depth
+/// map's pixels hold a depth (sparse depth: densify it first).
+void requireDenseDepth(const Scene& scene, const NightConversionOptions& options);
+
+/// The whole conversion of a loaded scene; checks the options and requireDenseDepth first.
 NightConversionResult runNightConversion(const Scene& scene, const NightConversionOptions& options,
                                          const NightConversionCallbacks& callbacks = {});
 
