@@ -61,6 +61,11 @@ std::string tableValue(const EvaluationValue& v) {
   return std::get<std::string>(v);
 }
 
+// "  label" padded with spaces to `width` characters, then a space: a table row's start.
+std::string paddedLabel(const std::string& label, int width) {
+  return "  " + label + std::string(std::max(0, width - static_cast<int>(label.size())), ' ') + " ";
+}
+
 std::string recordToTable(const EvaluationRecord& r) {
   std::string out = "solo " + r.command + "\n";
   int width = 30;  // labels are padded to the longest one
@@ -69,19 +74,17 @@ std::string recordToTable(const EvaluationRecord& r) {
   const auto add_rows = [&out, width](const std::vector<EvaluationField>& fields, bool skip_missing) {
     for (const EvaluationField& f : fields) {
       if (skip_missing && std::holds_alternative<std::monostate>(f.value)) continue;
-      char label[128];
-      std::snprintf(label, sizeof label, "  %-*s ", width, f.label.c_str());
       const bool has_unit = !f.unit.empty() && !std::holds_alternative<std::monostate>(f.value);
-      out += label + tableValue(f.value) + (has_unit ? " " + f.unit : "") + "\n";
+      out += paddedLabel(f.label, width) + tableValue(f.value) + (has_unit ? " " + f.unit : "") + "\n";
     }
   };
   add_rows(r.inputs, false);
   add_rows(r.options, false);
   out += "  ----\n";
   add_rows(r.metrics, true);
-  char time[64];
-  std::snprintf(time, sizeof time, "  %-*s %.3f s\n", width, "time", r.seconds);
-  return out + time;
+  char seconds[32];
+  std::snprintf(seconds, sizeof seconds, "%.3f s\n", r.seconds);
+  return out + paddedLabel("time", width) + seconds;
 }
 
 

@@ -357,6 +357,11 @@ TEST(CliEvalScene, EstimatedMapsAndSkippedOutputs) {
   EXPECT_NE(table.output.find("refined depth skipped"), std::string::npos) << table.output;
   EXPECT_NE(table.output.find("spurious-face precision"), std::string::npos) << table.output;
   EXPECT_EQ(table.output.find("refined depth AbsRel"), std::string::npos) << table.output;
+  // The time row keeps its unit however wide the labels are (the spurious-face labels are long).
+  const std::size_t time_row = table.output.rfind("\n  time ");
+  ASSERT_NE(time_row, std::string::npos) << table.output;
+  const std::string row = table.output.substr(time_row + 1, table.output.find('\n', time_row + 1) - time_row - 1);
+  EXPECT_EQ(row.substr(row.size() - 2), " s") << row;
 }
 
 TEST(CliEvalScene, RefinedDepthAndMeshOneCsvRowPerRun) {
