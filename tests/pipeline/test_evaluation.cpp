@@ -117,12 +117,7 @@ TEST(Evaluation, NormalFilesHaveTheHandComputedAngles) {
 
 TEST(Evaluation, MeshFileWithAndWithoutReference) {
   TempDir dir;
-  solo::TriangleMesh square;
-  square.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
-  square.faces = {{0, 1, 2}, {0, 2, 3}};
-  solo::writeMesh(dir / "square.off", square);
-  for (auto& v : square.vertices) v.z() = 0.25;
-  solo::writeMesh(dir / "lifted.ply", square);
+  solo::test::writeSquareAndLiftedSquare(dir.path());
   solo::MeshFileEvaluationOptions o;
   o.mesh = dir / "square.off";
   o.reference = dir / "lifted.ply";

@@ -1,5 +1,7 @@
 #include "test_support.h"
 
+#include <solo/geometry/triangle_mesh.h>
+
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -42,6 +44,15 @@ std::string readText(const fs::path& file) {
 void writeTruncatedCopy(const fs::path& source, const fs::path& target, std::size_t bytes) {
   std::string all = readText(source);
   writeText(target, all.substr(0, std::min(bytes, all.size())));
+}
+
+void writeSquareAndLiftedSquare(const std::filesystem::path& folder) {
+  solo::TriangleMesh square;
+  square.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  square.faces = {{0, 1, 2}, {0, 2, 3}};
+  solo::writeMesh(folder / "square.off", square);
+  for (auto& v : square.vertices) v.z() = 0.25;
+  solo::writeMesh(folder / "lifted.ply", square);
 }
 
 CommandResult runSolo(const std::string& arguments) {

@@ -33,6 +33,10 @@ struct CommandResult {
   int exit_code = -1;
   std::string output;  ///< stdout and stderr together
 };
+/// Writes `folder`/square.off, the unit square in z = 0 as two triangles, and
+/// `folder`/lifted.ply, the same square at z = 0.25 (a reference 0.25 away everywhere).
+void writeSquareAndLiftedSquare(const std::filesystem::path& folder);
+
 /// Runs the solo binary with the given arguments (a shell-quoted string).
 CommandResult runSolo(const std::string& arguments);
 

@@ -189,12 +189,7 @@ TEST(CliEval, NormalsJsonAndTable) {
 
 TEST(CliEval, MeshJsonWithReferenceAndCsv) {
   TempDir dir;
-  solo::TriangleMesh square;
-  square.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
-  square.faces = {{0, 1, 2}, {0, 2, 3}};
-  solo::writeMesh(dir / "square.off", square);
-  for (auto& v : square.vertices) v.z() = 0.25;
-  solo::writeMesh(dir / "lifted.ply", square);
+  solo::test::writeSquareAndLiftedSquare(dir.path());
   const std::string csv = " --csv " + quoted(dir / "mesh.csv");
   auto r = runSolo("eval mesh " + quoted(dir / "square.off") + " --ref " + quoted(dir / "lifted.ply") +
                    " --samples 500 --seed 9 --json" + csv);
