@@ -118,6 +118,8 @@ void addNightSceneFlags(CLI::App* night_cmd, NightOptions& night) {
   night_cmd->add_option("--render-exr", night.job.render_exr, "Also write the linear XYZ render (and AOVs beside it)");
   night_cmd->add_flag("--16bit", night.job.sixteen_bit, "16-bit PNG/TIFF output");
   night_cmd->add_flag("--refine,!--no-refine", night.conversion.refine, "Depth filter, uncertainty and optimisation (default on)");
+  night_cmd->add_flag("--complete,!--no-complete", night.conversion.refinement.complete,
+                      "Depth completion: a depth for every pixel that is not sky (default on)");
   night_cmd->add_flag("--optimize,!--no-optimize", night.conversion.refinement.optimize, "Normal-guided depth optimisation (preset)");
   night_cmd->add_option("--optimize-iterations", night.conversion.refinement.optimization.max_iterations, "Its solver iterations (preset)")
       ->capture_default_str()->check(CLI::Range(1, 100000));
@@ -546,6 +548,7 @@ void addDepthCommand(CLI::App& app, std::vector<Command>& commands) {
                   "perspective (exact pinhole tangents) or paper"),
               kTangentModels, refinement.optimization.objective.tangent_model, "{perspective,paper}");
   depth_cmd->add_flag("!--no-upsample", refinement.upsampling.enabled, "Resize maps by nearest neighbour instead of upsampling");
+  depth_cmd->add_flag("!--no-complete", refinement.complete, "Skip the depth completion (holes stay holes)");
   depth_cmd->add_flag("!--no-filter", refinement.filter, "Skip the instance-reference cross-bilateral filter");
   depth_cmd->add_flag("!--no-uncertain", refinement.uncertain_regions, "Skip the uncertain regions");
   depth_cmd->add_flag("!--no-optimize", refinement.optimize, "Skip the normal-guided optimisation");

@@ -49,6 +49,7 @@ std::string nightConfigText(const NightOptions& options) {
   line("seed", std::to_string(o.seed));
   flag("16bit", j.sixteen_bit);
   flag("refine", o.refine);
+  flag("complete", o.refinement.complete);
   flag("optimize", o.refinement.optimize);
   line("optimize-iterations", std::to_string(o.refinement.optimization.max_iterations));
   line("optimize-tolerance", number(o.refinement.optimization.function_tolerance));

@@ -1,5 +1,6 @@
 #include "solo/geometry/depth_refinement.h"
 
+#include "solo/geometry/depth_completion.h"
 #include "solo/geometry/normals_from_depth.h"
 
 #include <cmath>
@@ -29,7 +30,20 @@ DepthRefinementResult refineDepth(const Scene& scene, const DepthRefinementOptio
   if (!options.upsampling.enabled) out.steps.back().notes.push_back("upsampling switched off");
   out.upsampled_depth_m = out.maps.depth_m;
   out.normals = out.maps.normals;
-  const cv::Mat& depth = out.upsampled_depth_m;
+
+  // 1b. Completion: a depth for every pixel that is not sky.
+  if (!options.complete) {
+    out.completed_depth_m = out.upsampled_depth_m;
+    out.filled = cv::Mat(out.upsampled_depth_m.size(), CV_8U, cv::Scalar(0));
+    out.steps.push_back(skippedStep("complete", "switched off"));
+  } else {
+    DepthCompletionResult completed = completeDepth(out.upsampled_depth_m, scene.image, out.maps.labels,
+                                                    out.maps.instances, options.completion);
+    out.completed_depth_m = completed.depth_m;
+    out.filled = completed.filled;
+    out.steps.push_back(completed.report);
+  }
+  const cv::Mat& depth = out.completed_depth_m;
 
   // 2. Instance-reference cross-bilateral filter.
   if (!options.filter) {
@@ -39,6 +53,15 @@ DepthRefinementResult refineDepth(const Scene& scene, const DepthRefinementOptio
     InstanceBilateralFilterResult filtered = instanceBilateralFilter(depth, out.maps.instances, options.filtering);
     out.filtered_depth_m = filtered.depth_m;
     out.steps.push_back(filtered.report);
+  }
+
+  // 2b. Normals of the filtered depth when the scene has none, for the optimisation and shading.
+  if (out.normals.empty() && options.normals_from_depth) {
+    out.normals = normalsFromDepth(out.filtered_depth_m, scene.camera);
+    out.normals_from_depth = true;
+    out.steps.back().notes.push_back(
+        "no normals given: the optimisation uses the normals of the filtered depth (normalsFromDepth after the "
+        "instance filter's Gaussian)");
   }
 
   // 3. Uncertain regions.

@@ -135,7 +135,7 @@ void runRefineStage(const Scene& scene, const NightConversionOptions& o, NightCo
           "the mesh: the light map outlines a lamp better than the instance map");
   }
   for (const StageReport& step : r.refined.steps) r.stages.push_back(step);
-  if (!o.refine) r.stages.back().notes.push_back("refinement switched off (--no-refine): upsampling only");
+  if (!o.refine) r.stages.back().notes.push_back("refinement switched off (--no-refine): upsampling and completion only");
 }
 
 void runMeshStage(const Scene& scene, const NightConversionOptions& o, NightConversionResult& r) {
@@ -320,8 +320,9 @@ void requireDenseDepth(const Scene& scene, const NightConversionOptions& o) {
   if (share >= o.min_depth_share) return;
   char problem[320];
   std::snprintf(problem, sizeof problem,
-                "only %.2f %% of the depth map's pixels hold a depth, below the %.0f %% the night conversion needs "
-                "(sparse depth such as projected LiDAR: densify it first, docs/scene-format.md)",
+                "only %.2f %% of the depth map's pixels hold a depth, below the %g %% from which depth completion "
+                "can densify it (a LiDAR projected into the image covers 2-5 %%; densify it first, "
+                "docs/scene-format.md)",
                 100.0 * share, 100.0 * o.min_depth_share);
   throw InputError(scene.manifest.depth, problem);
 }

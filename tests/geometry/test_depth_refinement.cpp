@@ -58,7 +58,7 @@ TEST(DepthRefinement, FilteredDepthIsCloserToTheTruthAndItsNormalsFarBetter) {
   const solo::Scene truth = solo::loadScene(kDefault / "gt" / "scene.json");
   const solo::DepthRefinementResult r = solo::refineDepth(scene);
   ASSERT_EQ(r.depth_m.size(), scene.image.size());
-  ASSERT_EQ(r.steps.size(), 4u);
+  ASSERT_EQ(r.steps.size(), 5u);
   for (const solo::StageReport& s : r.steps) EXPECT_FALSE(s.skipped) << s.name << ": " << s.skip_reason;
   EXPECT_TRUE(cv::checkRange(r.depth_m));
   EXPECT_LT(absRel(r.filtered_depth_m, truth.depth_m), absRel(r.upsampled_depth_m, truth.depth_m));
@@ -77,9 +77,9 @@ TEST(DepthRefinement, FilteredDepthIsCloserToTheTruthAndItsNormalsFarBetter) {
 TEST(DepthRefinement, EveryStepCanBeSwitchedOff) {
   const solo::Scene scene = solo::loadScene(kDefault / "scene.json");
   solo::DepthRefinementOptions o;
-  o.upsampling.enabled = false, o.filter = false, o.uncertain_regions = false, o.optimize = false;
+  o.upsampling.enabled = false, o.complete = false, o.filter = false, o.uncertain_regions = false, o.optimize = false;
   const solo::DepthRefinementResult r = solo::refineDepth(scene, o);
-  for (const char* name : {"filter", "uncertain", "optimize"}) {
+  for (const char* name : {"complete", "filter", "uncertain", "optimize"}) {
     EXPECT_TRUE(step(r, name).skipped) << name;
     EXPECT_EQ(step(r, name).skip_reason, "switched off");
   }
@@ -93,15 +93,31 @@ TEST(DepthRefinement, MissingInputsSkipStepsWithTheirReason) {
   scene.normals = cv::Mat();
   scene.instances = cv::Mat();
   scene.labels = cv::Mat();
-  const solo::DepthRefinementResult r = solo::refineDepth(scene);
+  solo::DepthRefinementOptions o;
+  o.normals_from_depth = false;
+  const solo::DepthRefinementResult r = solo::refineDepth(scene, o);
   EXPECT_EQ(step(r, "optimize").skip_reason, "no normals: no normal-guided optimisation");
   EXPECT_TRUE(step(r, "uncertain").skipped);
   EXPECT_FALSE(step(r, "filter").skipped);
   EXPECT_FALSE(std::get<bool>(*step(r, "filter").find("label_term")));
+  EXPECT_EQ(std::get<std::string>(*step(r, "complete").find("sky_rule")), "no depth above (no labels)");
   bool noted = false;
   for (const std::string& note : r.report.notes) noted |= note.find("without the label term") != std::string::npos;
   EXPECT_TRUE(noted);
   EXPECT_EQ(cv::norm(r.depth_m, r.filtered_depth_m, cv::NORM_INF), 0.0);
+}
+
+TEST(DepthRefinement, WithoutNormalsTheOptimisationUsesTheFilteredDepthsNormals) {
+  solo::Scene scene = solo::loadScene(kDefault / "scene.json");
+  const solo::Scene truth = solo::loadScene(kDefault / "gt" / "scene.json");
+  scene.normals = cv::Mat();
+  const solo::DepthRefinementResult r = solo::refineDepth(scene);
+  EXPECT_TRUE(r.normals_from_depth);
+  EXPECT_FALSE(step(r, "optimize").skipped) << step(r, "optimize").skip_reason;
+  // The normals the optimisation pulls toward are the filtered depth's own: the depth stays
+  // within a small fraction of the filtered one (no surface is bent by foreign normals).
+  EXPECT_LT(absRel(r.depth_m, r.filtered_depth_m), 0.01);
+  EXPECT_LE(absRel(r.depth_m, truth.depth_m), absRel(r.filtered_depth_m, truth.depth_m) * 1.05);
 }
 
 TEST(DepthRefinement, TheAdamBaselineRunsTheSameStage) {

@@ -1,11 +1,12 @@
 #pragma once
 // The depth refinement stage ("refine", SOLO reference.md sections 1.1-1.4): upsample the
-// estimated maps to the image resolution, filter the depth with the instance-reference
-// cross-bilateral filter, find the uncertain regions, and optimise the depth against the
+// estimated maps to the image resolution, complete the depth (every pixel that is not sky gets
+// one, depth_completion.h), filter it with the instance-reference cross-bilateral filter, find the uncertain regions, and optimise the depth against the
 // predicted normals. Each step can be switched off and is skipped, with the reason in its
 // report, when its input is missing. docs/depth-refinement.md has the measurements.
 
 #include "solo/geometry/adam_depth_optimizer.h"
+#include "solo/geometry/depth_completion.h"
 #include "solo/geometry/instance_bilateral_filter.h"
 #include "solo/geometry/normal_guided_optimization.h"
 #include "solo/core/report.h"
@@ -23,11 +24,15 @@ enum class DepthOptimizer { Ceres, Adam };
 
 struct DepthRefinementOptions {
   UpsampleOptions upsampling;  ///< .enabled = false: nearest-neighbour resizing only
+  bool complete = true;        ///< a depth for every non-sky pixel (depth_completion.h)
+  DepthCompletionOptions completion;
   bool filter = true;
   InstanceBilateralFilterOptions filtering;
   bool uncertain_regions = true;
   UncertainRegionOptions uncertainty;
   bool optimize = true;
+  /// Without normals in the scene: the optimisation uses the normals of the filtered depth.
+  bool normals_from_depth = true;
   DepthOptimizer optimizer = DepthOptimizer::Ceres;
   NormalGuidedOptimizationOptions optimization;  ///< Ceres
   AdamOptions adam;                              ///< the paper's optimiser
@@ -40,9 +45,12 @@ struct DepthRefinementResult {
   cv::Mat normals;           ///< CV_32FC3 upsampled predicted normals (empty when the scene has none)
   cv::Mat depth_normals;     ///< CV_32FC3 normals of the refined depth (normalsFromDepth)
   cv::Mat upsampled_depth_m; ///< the estimated depth after step 1
+  cv::Mat completed_depth_m; ///< after completion (= upsampled when it is off)
+  cv::Mat filled;            ///< CV_8U, 255 where completion gave the pixel its depth
+  bool normals_from_depth = false;  ///< `normals` are the filtered depth's (the scene had none)
   cv::Mat filtered_depth_m;  ///< d~ after step 2 (= upsampled when the filter is off)
   UpsampledMaps maps;        ///< albedo, roughness, instances, labels at the image resolution
-  /// One report per step ("upsample", "filter", "uncertain", "optimize"), skipped steps with
+  /// One report per step ("upsample", "complete", "filter", "uncertain", "optimize"), skipped steps with
   /// their reason, then the whole stage ("refine": total time and the key figures).
   std::vector<StageReport> steps;
   StageReport report;

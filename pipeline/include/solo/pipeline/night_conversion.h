@@ -35,13 +35,14 @@ struct NightConversionOptions {
   /// render and post.noise_options when the conversion runs).
   std::uint64_t seed = 0;
 
-  /// The least share of the depth map's pixels that must hold a depth. Below it (projected
-  /// LiDAR: a few per cent) the mesh would be an empty scatter and the night image sensor noise
-  /// only, so the conversion refuses the scene, naming the share; densify sparse depth first.
-  /// Stereo and monocular depth cover 60-100 % (the sky has none). 0 to 1.
-  double min_depth_share = 0.2;
+  /// The least share of the depth map's pixels that must hold a depth. Depth completion
+  /// (refinement.completion) densifies anything above it, projected LiDAR's 2-5 % included;
+  /// below it the depth is too sparse to say where surfaces are, and the conversion refuses
+  /// the scene, naming the share. 0 to 1.
+  double min_depth_share = 0.01;
 
-  /// Depth refinement (filter, uncertain regions, optimisation) on; false: upsampling only.
+  /// Depth refinement (filter, uncertain regions, optimisation) on; false: upsampling and
+  /// completion only.
   bool refine = true;
   DepthRefinementOptions refinement;
 
@@ -108,7 +109,7 @@ NightScene runNightSceneStages(const Scene& scene, const NightConversionOptions&
                                const NightConversionCallbacks& callbacks, NightConversionResult& result);
 
 /// Throws InputError naming the depth file when less than options.min_depth_share of the depth
-/// map's pixels hold a depth (sparse depth: densify it first).
+/// map's pixels hold a depth (too sparse for depth completion).
 void requireDenseDepth(const Scene& scene, const NightConversionOptions& options);
 
 /// The whole conversion of a loaded scene; checks the options and requireDenseDepth first.
