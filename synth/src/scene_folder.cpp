@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include <fstream>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <unistd.h>
@@ -54,7 +55,8 @@ const std::set<std::string> kSynthEntries = {"day.png",          "lightIds.png",
                                              "gt/roughness.png", "gt/labelIds.png",    "gt/instanceIds.png",
                                              "gt/mesh.ply",      "gt/scene.json",      "est",
                                              "est/depth.exr",    "est/normals.png",    "est/albedo.png",
-                                             "est/labelIds.png", "est/instanceIds.png"};
+                                             "est/labelIds.png", "est/instanceIds.png", "est/disparity.png",
+                                             "est/camera.json"};
 
 // True when `folder`/synth.json is the record `solo synth` writes ("generator": "solo synth ...").
 bool holdsSynthRecord(const fs::path& folder) {
@@ -121,6 +123,13 @@ std::pair<StreetSceneOptions, fs::path> checkedOptions(const fs::path& folder, c
     throw InputError("--size", "image size must be between 16 and 8192 pixels per side");
   if (o.day_render != "raster" && o.day_render != "path")
     throw InputError("--day-render", "expected raster or path, got \"" + o.day_render + "\"");
+  if (!o.depth_source.empty()) {
+    try {
+      depthSourceFromName(o.depth_source);
+    } catch (const std::invalid_argument& e) {
+      throw InputError("--depth-source", e.what());
+    }
+  }
   const fs::path output = withoutTrailingSeparators(folder);
   if (output.empty()) throw InputError("-o", "the output folder is an empty path");
   std::error_code exists_ec;
@@ -138,6 +147,13 @@ StageReport& addStage(RunReport& report, const std::string& name, double seconds
   return report.stages.back();
 }
 
+/// A simulated sensor's depth for est/depth.exr, with what synth.json records of it.
+struct SensorDepth {
+  cv::Mat depth_m;        ///< CV_32F full resolution, 0 = invalid
+  cv::Mat disparity_png;  ///< CV_16U Cityscapes disparity (stereo only)
+  ordered_json record;    ///< synth.json "depth_source"
+};
+
 /// Everything the folder holds, made in memory.
 struct SyntheticStreet {
   StreetScene scene;
@@ -146,6 +162,7 @@ struct SyntheticStreet {
   cv::Mat day;  ///< linear sRGB
   PredictionNoiseOptions noise;
   SimulatedPredictions est;
+  std::optional<SensorDepth> sensor;  ///< set when --depth-source names one
 };
 
 // The day image, rastered or path traced, with its stage in `report`.
@@ -165,6 +182,95 @@ cv::Mat dayImage(const SyntheticStreet& street, const SyntheticSceneOptions& o, 
   addStage(report, "daylight", clock.seconds()).add("samples_per_pixel", std::int64_t{1}).notes.push_back(
       "day image rastered: sun with one shadow ray, sky as an ambient term (--day-render path traces it)");
   return day;
+}
+
+// synth.json's record of the stereo sensor: its options, search range, reach and holes.
+ordered_json stereoRecord(const StereoSensorOptions& o, const StereoDepth& stereo) {
+  const StereoHoleCounts& h = stereo.holes;
+  return {{"options",
+           {{"baseline_m", o.baseline_m},
+            {"disparity_noise_px", o.disparity_noise_px},
+            {"disparity_step_px", o.disparity_step_px},
+            {"min_disparity_px", o.min_disparity_px},
+            {"max_disparity_width_share", o.max_disparity_width_share},
+            {"texture_window_px", o.texture_window_px},
+            {"texture_min_std", o.texture_min_std},
+            {"texture_reach_width_share", o.texture_reach_width_share}}},
+          {"max_disparity_px", stereo.max_disparity_px},
+          {"texture_reach_px", stereo.texture_reach_px},
+          {"holes",
+           {{"no_surface", h.no_surface},
+            {"left_border", h.left_border},
+            {"too_close", h.too_close},
+            {"occluded", h.occluded},
+            {"textureless", h.textureless},
+            {"too_far", h.too_far}}}};
+}
+
+// synth.json's record of the LiDAR: its options and returns.
+ordered_json lidarRecord(const LidarSensorOptions& o, const LidarDepth& lidar) {
+  return {{"options",
+           {{"beams", o.beams},
+            {"min_elevation_deg", o.min_elevation_deg},
+            {"max_elevation_deg", o.max_elevation_deg},
+            {"azimuth_step_deg", o.azimuth_step_deg},
+            {"range_noise_m", o.range_noise_m},
+            {"max_range_m", o.max_range_m}}},
+          {"returns", lidar.returns}};
+}
+
+// synth.json's record of the monocular depth: its options and what it drew.
+ordered_json monoRecord(const MonoSensorOptions& o, const MonoDepth& mono) {
+  return {{"options",
+           {{"edge_bleed_px", o.edge_bleed_px},
+            {"edge_relative_jump", o.edge_relative_jump},
+            {"scale_error_max", o.scale_error_max},
+            {"inverse_shift_max_per_m", o.inverse_shift_max_per_m},
+            {"max_depth_m", o.max_depth_m},
+            {"noise_relative", o.noise_relative},
+            {"noise_growth_m", o.noise_growth_m}}},
+          {"scale_drawn", mono.scale},
+          {"inverse_shift_drawn_per_m", mono.inverse_shift_per_m}};
+}
+
+// The day image as a camera would store it: sRGB-encoded, in [0, 1].
+cv::Mat daySrgb(const cv::Mat& linear_rgb) {
+  cv::Mat srgb;
+  srgbEncode8(linear_rgb).convertTo(srgb, CV_32FC3, 1.0 / 255);
+  return srgb;
+}
+
+// The depth of the sensor `source`, with its record for synth.json.
+SensorDepth simulateSensor(DepthSource source, const SyntheticStreet& street, const SyntheticSceneOptions& o) {
+  const cv::Mat& exact = street.truth.depth_m;
+  const DepthSensorOptions& sensors = o.depth_sensors;
+  SensorDepth sensor;
+  ordered_json details;
+  if (source == DepthSource::Exact) {
+    sensor.depth_m = exact.clone();
+  } else if (source == DepthSource::Stereo) {
+    StereoDepth stereo = simulateStereoDepth(exact, street.scene.camera, daySrgb(street.day), o.seed, sensors.stereo);
+    sensor.depth_m = stereo.depth_m;
+    sensor.disparity_png = cityscapesDisparityPng(stereo.disparity_px);
+    details = stereoRecord(sensors.stereo, stereo);
+  } else if (source == DepthSource::Lidar) {
+    LidarDepth lidar = simulateLidarDepth(exact, street.scene.camera, o.seed, sensors.lidar);
+    sensor.depth_m = lidar.depth_m;
+    details = lidarRecord(sensors.lidar, lidar);
+  } else {
+    MonoDepth mono = simulateMonoDepth(exact, o.seed, sensors.mono);
+    sensor.depth_m = mono.depth_m;
+    details = monoRecord(sensors.mono, mono);
+  }
+  const DepthSensorAgreement agreement = compareWithExactDepth(sensor.depth_m, exact);
+  sensor.record = {{"sensor", depthSourceName(source)}, {"file", "est/depth.exr"},
+                   {"valid_share", agreement.valid_share}, {"abs_rel", agreement.abs_rel}};
+  if (source == DepthSource::Stereo) {
+    sensor.record["disparity"] = "est/disparity.png";
+    sensor.record["camera"] = "est/camera.json";
+  }
+  for (auto& [key, value] : details.items()) sensor.record[key] = value;
+  return sensor;
 }
 
 // The street, its exact maps, its day image and the simulated predictions; a stage each in `report`.
@@ -191,6 +297,15 @@ SyntheticStreet makeSyntheticStreet(const StreetSceneOptions& scene_options, con
   street.est = simulatePredictions(truth.depth_m, truth.normals, truth.albedo, truth.labels, truth.instances,
                                    street.noise, o.seed);
   addStage(report, "predictions", clock.seconds()).add("depth_scale_bias", street.est.depth_scale_bias);
+
+  if (!o.depth_source.empty()) {
+    clock = Stopwatch();
+    street.sensor = simulateSensor(depthSourceFromName(o.depth_source), street, o);
+    addStage(report, "depth_sensor", clock.seconds())
+        .add("valid_share", street.sensor->record["valid_share"].get<double>())
+        .add("abs_rel", street.sensor->record["abs_rel"].get<double>())
+        .notes.push_back("est/depth.exr: the " + o.depth_source + " sensor's depth (--depth-source)");
+  }
   return street;
 }
 
@@ -210,7 +325,9 @@ void writeMaps(const fs::path& staging, const SyntheticStreet& street) {
   writeImage(staging / "gt/instanceIds.png", toUint16Ids(truth.instances));
   writeMesh(staging / "gt/mesh.ply", street.mesh);
 
-  writeDepth(staging / "est/depth.exr", est.depth_m);
+  writeDepth(staging / "est/depth.exr", street.sensor ? street.sensor->depth_m : est.depth_m);
+  if (street.sensor && !street.sensor->disparity_png.empty())
+    writeImage(staging / "est/disparity.png", street.sensor->disparity_png);
   writeNormals(staging / "est/normals.png", est.normals);
   writeImage(staging / "est/albedo.png", toUint16(est.albedo));
   writeImage(staging / "est/labelIds.png", toUint16Ids(est.labels));
@@ -248,6 +365,13 @@ void writeManifests(const fs::path& staging, const SyntheticStreet& street, cons
   writeJson(staging / "gt/scene.json", exact);
 }
 
+// est/camera.json: the stereo camera as Cityscapes' camera/*.json states it.
+void writeCityscapesCamera(const fs::path& file, const PinholeCamera& c, double baseline_m) {
+  const ordered_json camera = {{"extrinsic", {{"baseline", baseline_m}}},
+                               {"intrinsic", {{"fx", c.fx}, {"fy", c.fy}, {"u0", c.cx}, {"v0", c.cy}}}};
+  writeJson(file, camera);
+}
+
 // synth.json: the generator, the options, the mesh and the perturbations of the predictions.
 void writeSynthRecord(const fs::path& staging, const SyntheticStreet& street, const SyntheticSceneOptions& o) {
   const StreetScene& scene = street.scene;
@@ -276,6 +400,7 @@ void writeSynthRecord(const fs::path& staging, const SyntheticStreet& street, co
         {"albedo_downscale", noise.albedo_downscale},
         {"label_jitter_px", noise.label_jitter_px},
         {"label_jitter_scale_px", noise.label_jitter_scale_px}}}};
+  if (street.sensor) record["depth_source"] = street.sensor->record;
   writeJson(staging / "synth.json", record);
 }
 
@@ -289,6 +414,8 @@ void writeFolder(const fs::path& output, const SyntheticStreet& street, const Sy
   try {
     writeMaps(staging, street);
     writeManifests(staging, street, o);
+    if (street.sensor && !street.sensor->disparity_png.empty())
+      writeCityscapesCamera(staging / "est/camera.json", street.scene.camera, o.depth_sensors.stereo.baseline_m);
     writeSynthRecord(staging, street, o);
     std::error_code exists_ec;
     if (fs::exists(fs::symlink_status(output, exists_ec))) requireReplaceableSynthFolder(output);  // still so

@@ -7,6 +7,7 @@
 // fails leaves no folder, and a replaced folder stays as it was until the new one is complete.
 
 #include <solo/core/report.h>
+#include <solo/synth/depth_sensor.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -19,6 +20,12 @@ struct SyntheticSceneOptions {
   int width = 960, height = 540;      ///< pixels, 16 to 8192 per side
   std::string variant = "default";    ///< streetVariantName; recorded as given
   std::string day_render = "raster";  ///< "raster" (1 ray + 1 shadow ray per pixel) or "path" (path traced sun and sky)
+  /// est/depth.exr: "" for the half-resolution prediction (geometry/prediction_noise.h), or a
+  /// depthSourceName ("exact", "mono", "stereo", "lidar") for that sensor's depth at full
+  /// resolution, 0 = invalid (depth_sensor.h); recorded in synth.json with its agreement
+  /// with the exact depth. "stereo" also writes est/disparity.png and est/camera.json.
+  std::string depth_source;
+  DepthSensorOptions depth_sensors;   ///< the simulated sensors, used as depth_source says
   bool progress = false;              ///< the path-traced day image's progress on stderr
   /// Replace an existing folder, only one this function wrote that holds nothing else.
   bool force = false;
@@ -27,7 +34,9 @@ struct SyntheticSceneOptions {
 struct SyntheticSceneResult {
   std::filesystem::path folder;    ///< as written: the given folder without trailing separators
   std::filesystem::path manifest;  ///< folder/scene.json
-  RunReport report;                ///< command "synth": a stage per step (layout, ground truth, day image, predictions, write)
+  /// command "synth": a stage per step (layout, ground truth, day image, predictions, the depth
+  /// sensor when one is chosen, write)
+  RunReport report;
 };
 
 /// Writes the synthetic street of `options` into `folder`. Throws InputError naming the option
