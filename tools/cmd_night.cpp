@@ -32,7 +32,9 @@ int runNight(const NightOptions& o) {
     if (line_open) std::cerr << "\n";  // the error goes on a line of its own
     throw;
   }
-  std::cout << reportSummary(result.report) << "night image: " << job.output.string()
+  SummaryOptions summary;
+  summary.notes = o.verbose;
+  std::cout << reportSummary(result.report, summary) << "night image: " << job.output.string()
             << "\nreport: " << result.report_file.string() << "\n";
   return 0;
 }

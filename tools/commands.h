@@ -44,6 +44,7 @@ struct NightOptions {
   /// knob not given on the command line or in the config file.
   std::string preset = "default";
   std::optional<std::filesystem::path> write_config;  ///< the effective configuration (TOML)
+  bool verbose = false;  ///< every stage's notes on the terminal (the report has them always)
 };
 int runNight(const NightOptions& options);
 /// The night options as a config file `solo --config FILE night` (or `solo night --config

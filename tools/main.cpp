@@ -118,6 +118,7 @@ void addNightSceneFlags(CLI::App* night_cmd, NightOptions& night) {
   night_cmd->add_option("--render-exr", night.job.render_exr, "Also write the linear XYZ render (and AOVs beside it)");
   night_cmd->add_flag("--16bit", night.job.sixteen_bit, "16-bit PNG/TIFF output");
   night_cmd->add_flag("--refine,!--no-refine", night.conversion.refine, "Depth filter, uncertainty and optimisation (default on)");
+  night_cmd->add_flag("-v,--verbose", night.verbose, "Every stage's notes on the terminal (the report has them)");
   night_cmd->add_flag("--complete,!--no-complete", night.conversion.refinement.complete,
                       "Depth completion: a depth for every pixel that is not sky (default on)");
   night_cmd->add_flag("--optimize,!--no-optimize", night.conversion.refinement.optimize, "Normal-guided depth optimisation (preset)");

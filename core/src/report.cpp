@@ -56,6 +56,7 @@ std::string reportToJson(const RunReport& r) {
       else metrics[m.name] = {{"value", toJson(m.value)}, {"unit", m.unit}};
     }
     js["notes"] = s.notes;
+    if (!s.warnings.empty()) js["warnings"] = s.warnings;
     stages.push_back(js);
   }
   j["notes"] = r.notes;
@@ -66,31 +67,44 @@ void writeReportJson(const std::filesystem::path& file, const RunReport& report)
   writeTextAtomically(file, reportToJson(report));
 }
 
-std::string reportSummary(const RunReport& r) {
+namespace {
+
+// "  refine        1.234 s  metric v, metric v ... (3 notes)": the first six metrics.
+std::string stageLine(const StageReport& s, bool with_note_count) {
+  char head[96];
+  std::snprintf(head, sizeof head, "  %-12s %8.3f s  ", s.name.c_str(), s.seconds);
+  std::string line = head;
+  if (s.skipped) return line + "skipped: " + s.skip_reason + "\n";
+  int shown = 0;
+  for (const Metric& m : s.metrics) {
+    if (shown++ == 6) {
+      line += " ...";
+      break;
+    }
+    line += (shown > 1 ? ", " : "") + m.name + " " + formatValue(m.value) + (m.unit.empty() ? "" : " " + m.unit);
+  }
+  if (with_note_count && !s.notes.empty())
+    line += "  (" + std::to_string(s.notes.size()) + (s.notes.size() == 1 ? " note" : " notes") + ")";
+  return line + "\n";
+}
+
+}  // namespace
+
+std::string reportSummary(const RunReport& r, const SummaryOptions& options) {
   std::ostringstream out;
   out << "solo " << r.command << "  scene: " << r.scene << "  seed: " << r.seed;
   if (!r.preset.empty()) out << "  preset: " << r.preset;
   out << "\n";
   for (const StageReport& s : r.stages) {
-    char head[96];
-    std::snprintf(head, sizeof head, "  %-12s %8.3f s  ", s.name.c_str(), s.seconds);
-    out << head;
-    if (s.skipped) {
-      out << "skipped: " << s.skip_reason << "\n";
-      continue;
-    }
-    int shown = 0;
-    for (const Metric& m : s.metrics) {
-      if (shown++ == 6) {
-        out << " ...";
-        break;
-      }
-      out << (shown > 1 ? ", " : "") << m.name << " " << formatValue(m.value) << (m.unit.empty() ? "" : " " + m.unit);
-    }
-    out << "\n";
-    for (const std::string& n : s.notes) out << "               note: " << n << "\n";
+    out << stageLine(s, !options.notes);
+    for (const std::string& w : s.warnings) out << "               warning: " << w << "\n";
+    if (options.notes)
+      for (const std::string& n : s.notes) out << "               note: " << n << "\n";
   }
-  for (const std::string& n : r.notes) out << "  note: " << n << "\n";
+  if (options.notes)
+    for (const std::string& n : r.notes) out << "  note: " << n << "\n";
+  else if (!r.notes.empty())
+    out << "  (" << r.notes.size() << (r.notes.size() == 1 ? " note" : " notes") << " on the run in the report)\n";
   char total[64];
   std::snprintf(total, sizeof total, "  total        %8.3f s\n", r.total_seconds);
   out << total;

@@ -15,6 +15,7 @@ TEST(Report, JsonKeepsStagesMetricsUnitsAndSkipReasons) {
   input.seconds = 0.25;
   input.add("depth_valid", std::int64_t{1234}).add("depth_max", 99.5, "m").add("camera_default", true);
   input.notes.push_back("no normals map given");
+  input.warnings.push_back("no camera given: square pixels, 56.7 deg wide");
   solo::StageReport glare;
   glare.name = "glare";
   glare.skipped = true;
@@ -36,6 +37,14 @@ TEST(Report, JsonKeepsStagesMetricsUnitsAndSkipReasons) {
   EXPECT_NE(summary.find("seed: 42"), std::string::npos);
   EXPECT_NE(summary.find("skipped: no light above glare threshold"), std::string::npos);
   EXPECT_NE(summary.find("depth_max 99.5 m"), std::string::npos);
+  // The terminal gets a count of the notes and every warning; the report has both in full.
+  EXPECT_EQ(summary.find("no normals map given"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("(1 note)"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("warning: no camera given: square pixels"), std::string::npos) << summary;
+  EXPECT_EQ(j["stages"][0]["warnings"][0], "no camera given: square pixels, 56.7 deg wide");
+  solo::SummaryOptions verbose;
+  verbose.notes = true;
+  EXPECT_NE(solo::reportSummary(r, verbose).find("note: no normals map given"), std::string::npos);
 
   ASSERT_NE(input.find("depth_max"), nullptr);
   EXPECT_EQ(std::get<double>(*input.find("depth_max")), 99.5);

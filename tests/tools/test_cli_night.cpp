@@ -198,7 +198,7 @@ TEST_F(NightCli, WrittenConfigHoldsEveryOptionAndReproducesTheRun) {
   // settings of one run (help, writing the config, the batch driver's own).
   const auto help = runSolo("night --help");
   ASSERT_EQ(help.exit_code, 0);
-  const std::set<std::string> not_settings = {"help", "write-config", "batch", "shard", "jobs", "scene-timeout"};
+  const std::set<std::string> not_settings = {"help", "write-config", "verbose", "batch", "shard", "jobs", "scene-timeout"};
   const std::regex option_line(R"(^\s+(?:-\w,)?--([\w-]+))");
   int options = 0;
   std::istringstream lines(help.output);

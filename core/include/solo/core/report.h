@@ -26,7 +26,8 @@ struct StageReport {
   bool skipped = false;
   std::string skip_reason;  ///< why the stage or an effect did not run
   std::vector<Metric> metrics;
-  std::vector<std::string> notes;  ///< warnings and effects skipped inside the stage
+  std::vector<std::string> notes;     ///< details: effects skipped inside the stage, what was chosen
+  std::vector<std::string> warnings;  ///< what the user must see on the terminal (a guessed camera, ...)
 
   StageReport& add(std::string metric, MetricValue value, std::string unit = {}) {
     metrics.push_back({std::move(metric), std::move(value), std::move(unit)});
@@ -51,8 +52,13 @@ struct RunReport {
 std::string reportToJson(const RunReport& report);
 /// Writes it atomically.
 void writeReportJson(const std::filesystem::path& file, const RunReport& report);
-/// A short human-readable summary: one line per stage with its time and key figures.
-std::string reportSummary(const RunReport& report);
+struct SummaryOptions {
+  bool notes = false;  ///< every stage's notes under its line; otherwise only their count
+};
+
+/// A short human-readable summary: one line per stage with its time and key figures (and the
+/// count of its notes, which the report holds), every warning on a line of its own.
+std::string reportSummary(const RunReport& report, const SummaryOptions& options = {});
 
 /// Wall-clock stopwatch in seconds.
 class Stopwatch {
