@@ -3,9 +3,10 @@
 //
 // Inputs: a list file (one manifest path a line, relative to the list's folder) or a folder
 // searched for `scene.json` / `*.scene.json`; the parent's command line, forwarded to each scene.
-// Outputs: OUT_DIR/<name>.png and OUT_DIR/<name>.report.json per scene, the failures file and
-// the batch summary (JSON), progress and a summary on the terminal. Exit 0 when every scene of
-// the shard is done, 1 when one failed, 130 when interrupted.
+// Outputs: OUT_DIR/<name>.png (with --layout DATASET at the frame's path in the dataset's
+// layout, e.g. OUT_DIR/leftImg8bit_night/<split>/<city>/<stem>.png) and OUT_DIR/<name>.report.json
+// per scene, the failures file and the batch summary (JSON), progress and a summary on the
+// terminal. Exit 0 when every scene of the shard is done, 1 when one failed, 130 when interrupted.
 //
 // Each scene runs in a child process: this binary (/proc/self/exe) with the parent's arguments
 // minus the batch ones.
@@ -104,6 +105,7 @@ int runNightBatch(const NightBatchOptions& batch, const NightOptions& night) {
   options.shard = batch.shard;
   options.jobs = batch.jobs;
   options.scene_timeout_s = batch.scene_timeout_s;
+  if (!batch.layout.empty()) options.layout = parseDataset(batch.layout, "--layout");
   options.output_folder = night.job.output;
   options.seed = night.conversion.seed;
   options.contact_sheet = night.job.contact_sheet.has_value();

@@ -6,6 +6,7 @@
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/lighting/light_stage.h>
 #include <solo/pipeline/data_dir.h>
+#include <solo/pipeline/dataset_scenes.h>
 #include <solo/pipeline/evaluation.h>
 #include <solo/pipeline/night_conversion.h>
 #include <solo/pipeline/night_evaluation.h>
@@ -61,9 +62,18 @@ struct NightBatchOptions {
   std::string shard = "0/1";                  ///< i/N: scenes k with k % N == i
   int jobs = 1;                               ///< scenes converted at once
   double scene_timeout_s = 0;                 ///< a scene running longer is stopped and recorded failed; 0: none
+  std::string layout;                         ///< "cityscapes", "kitti", "acdc": night images in that layout; empty: flat
   std::vector<std::string> arguments;         ///< the command line, forwarded to the scenes minus the batch's own
 };
 int runNightBatch(const NightBatchOptions& batch, const NightOptions& night);
+
+/// `solo scenes cityscapes|kitti|acdc ROOT -o DIR`: a manifest per frame of a dataset, in place,
+/// and the list the batch reads (pipeline/dataset_scenes.h, docs/datasets.md).
+struct ScenesOptions {
+  std::string dataset;  ///< "cityscapes", "kitti" or "acdc"
+  DatasetScenesOptions walk;
+};
+int runScenes(const ScenesOptions& options);
 
 struct ConvertOptions {
   std::string kind = "depth";  ///< "depth" or "normals"

@@ -243,6 +243,10 @@ void addNightCommand(CLI::App& app, std::vector<Command>& commands, int argc, ch
   night_cmd->add_option("--scene-timeout", night_batch.scene_timeout_s,
                         "With --batch: stop a scene after this many seconds and record it failed (0: no limit)")
       ->capture_default_str()->needs(batch_opt)->configurable(false)->check(CLI::NonNegativeNumber);
+  night_cmd->add_option("--layout", night_batch.layout,
+                        "With --batch: write each night image at its frame's path in the dataset's own layout "
+                        "(manifests of solo scenes; docs/datasets.md)")
+      ->needs(batch_opt)->configurable(false)->check(CLI::IsMember({"cityscapes", "kitti", "acdc"}));
   commands.push_back({night_cmd, [night_holder, batch_holder, night_cmd, argc, argv] {
     NightOptions& o = *night_holder;
     // The preset fills every knob the command line and the config file left unset.
@@ -252,6 +256,23 @@ void addNightCommand(CLI::App& app, std::vector<Command>& commands, int argc, ch
     batch_holder->arguments.assign(argv, argv + argc);
     return runNightBatch(*batch_holder, o);
   }});
+}
+
+void addScenesCommand(CLI::App& app, std::vector<Command>& commands) {
+  auto scenes_holder = std::make_shared<ScenesOptions>();
+  ScenesOptions& scenes = *scenes_holder;
+  CLI::App* scenes_cmd =
+      app.add_subcommand("scenes", "Write a scene manifest per frame of a Cityscapes, KITTI or ACDC folder, in place "
+                                   "(docs/datasets.md), and the list solo night --batch reads");
+  scenes_cmd->add_option("dataset", scenes.dataset, "cityscapes, kitti or acdc")
+      ->required()->check(CLI::IsMember({"cityscapes", "kitti", "acdc"}));
+  scenes_cmd->add_option("root", scenes.walk.root, "The dataset's top folder")->required();
+  scenes_cmd->add_option("--split", scenes.walk.split, "Only this split (train, val, ...); default: every split");
+  scenes_cmd->add_option("--depth", scenes.walk.depth_folder,
+                         "Folder of other depth (e.g. a monocular network's, float metres) laid out like the dataset");
+  scenes_cmd->add_option("--normals", scenes.walk.normals_folder, "Folder of normals laid out like the dataset");
+  scenes_cmd->add_option("-o,--output", scenes.walk.output_folder, "Folder for the manifests and scenes.txt")->required();
+  commands.push_back({scenes_cmd, [scenes_holder] { return runScenes(*scenes_holder); }});
 }
 
 void addConvertCommand(CLI::App& app, std::vector<Command>& commands) {
@@ -623,6 +644,7 @@ int main(int argc, char** argv) {
   std::vector<Command> commands;
   addInfoCommand(app, commands);
   addNightCommand(app, commands, argc, argv);
+  addScenesCommand(app, commands);
   addConvertCommand(app, commands);
   addEvalCommands(app, commands);
   addSynthCommand(app, commands);

@@ -5,8 +5,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iomanip>
+#include <sstream>
 #include <set>
 
 namespace fs = std::filesystem;
@@ -61,6 +64,84 @@ void checkAspect(const std::string& name, const cv::Mat& map, const cv::Mat& ima
                        " image: it will be stretched when upsampled");
 }
 
+/// The "depth" key: a path, or {"file", "scale"} / {"file", "disparity": true}.
+void readDepthKey(const fs::path& manifest_file, const json& j, SceneManifest& m) {
+  if (!j.contains("depth")) throw InputError(manifest_file, "required key \"depth\" is missing");
+  const json& depth = j.at("depth");
+  if (depth.is_string()) {
+    m.depth = pathValue(manifest_file, j, "depth");
+    return;
+  }
+  if (!depth.is_object())
+    throw InputError(manifest_file, "\"depth\" must be a path or {\"file\", \"scale\"}, found " + typeName(depth));
+  if (!depth.contains("file")) throw InputError(manifest_file, "\"depth\" object lacks \"file\"");
+  m.depth = pathValue(manifest_file, depth, "file");
+  if (depth.contains("scale")) {
+    const double scale = numberValue(manifest_file, depth, "depth", "scale");
+    if (!(scale > 0) || !std::isfinite(scale))
+      throw InputError(manifest_file, "\"depth\".\"scale\" must be a positive number of metres per unit");
+    m.depth_scale_m_per_unit = scale;
+  }
+  if (depth.contains("disparity")) {
+    if (!depth.at("disparity").is_boolean())
+      throw InputError(manifest_file, "\"depth\".\"disparity\" must be true or false, found " +
+                                          typeName(depth.at("disparity")));
+    m.depth_is_disparity = depth.at("disparity").get<bool>();
+  }
+  if (m.depth_is_disparity && m.depth_scale_m_per_unit)
+    throw InputError(manifest_file, "\"depth\" has both \"disparity\" and \"scale\": a Cityscapes disparity "
+                                    "is converted with the camera's baseline and fx, not scaled");
+  warnUnknown(depth, {"file", "scale", "disparity"}, "depth.", m.warnings);
+}
+
+/// An optional "width" and "height" pair of a camera object, as a resolution-only camera.
+std::optional<PinholeCamera> cameraResolution(const fs::path& manifest_file, const json& c) {
+  if (!c.contains("width") && !c.contains("height")) return std::nullopt;
+  if (c.contains("width") != c.contains("height"))
+    throw InputError(manifest_file, "\"camera\" needs both \"width\" and \"height\" or neither");
+  PinholeCamera resolution;
+  resolution.width = intValue(manifest_file, c, "camera", "width");
+  resolution.height = intValue(manifest_file, c, "camera", "height");
+  return resolution;
+}
+
+/// The "camera" key: a Cityscapes camera JSON (path or {"file", "width", "height"}), a KITTI
+/// calibration ({"kitti", "matrix"}), or inline intrinsics.
+void readCameraKey(const fs::path& manifest_file, const json& j, SceneManifest& m) {
+  if (!j.contains("camera") || j.at("camera").is_null()) return;
+  const json& c = j.at("camera");
+  if (c.is_string()) {
+    m.camera_file = pathValue(manifest_file, j, "camera");
+  } else if (c.is_object() && c.contains("file")) {
+    m.camera_file = pathValue(manifest_file, c, "file");
+    m.camera = cameraResolution(manifest_file, c);  // resolution only; intrinsics come from the file
+    warnUnknown(c, {"file", "width", "height"}, "camera.", m.warnings);
+  } else if (c.is_object() && c.contains("kitti")) {
+    m.camera_file = pathValue(manifest_file, c, "kitti");
+    m.camera_file_format = CameraFileFormat::Kitti;
+    if (c.contains("matrix")) {
+      if (!c.at("matrix").is_string() || c.at("matrix").get<std::string>().empty())
+        throw InputError(manifest_file, "\"camera\".\"matrix\" must name a KITTI projection matrix (\"P_rect_02\", \"P2\")");
+      m.kitti_matrix = c.at("matrix").get<std::string>();
+    }
+    warnUnknown(c, {"kitti", "matrix"}, "camera.", m.warnings);
+  } else if (c.is_object()) {
+    PinholeCamera k;
+    k.fx = numberValue(manifest_file, c, "camera", "fx");
+    k.fy = numberValue(manifest_file, c, "camera", "fy");
+    k.cx = numberValue(manifest_file, c, "camera", "cx");
+    k.cy = numberValue(manifest_file, c, "camera", "cy");
+    if (const auto resolution = cameraResolution(manifest_file, c)) {
+      k.width = resolution->width;
+      k.height = resolution->height;
+    }
+    m.camera = k;
+    warnUnknown(c, {"fx", "fy", "cx", "cy", "width", "height"}, "camera.", m.warnings);
+  } else {
+    throw InputError(manifest_file, "\"camera\" must be an object of intrinsics or a path, found " + typeName(c));
+  }
+}
+
 }  // namespace
 
 SceneManifest readSceneManifest(const fs::path& manifest_file) {
@@ -80,23 +161,7 @@ SceneManifest readSceneManifest(const fs::path& manifest_file) {
 
   if (!j.contains("image")) throw InputError(manifest_file, "required key \"image\" is missing");
   m.image = pathValue(manifest_file, j, "image");
-  if (!j.contains("depth")) throw InputError(manifest_file, "required key \"depth\" is missing");
-  const json& depth = j.at("depth");
-  if (depth.is_string()) {
-    m.depth = pathValue(manifest_file, j, "depth");
-  } else if (depth.is_object()) {
-    if (!depth.contains("file")) throw InputError(manifest_file, "\"depth\" object lacks \"file\"");
-    m.depth = pathValue(manifest_file, depth, "file");
-    if (depth.contains("scale")) {
-      const double scale = numberValue(manifest_file, depth, "depth", "scale");
-      if (!(scale > 0) || !std::isfinite(scale))
-        throw InputError(manifest_file, "\"depth\".\"scale\" must be a positive number of metres per unit");
-      m.depth_scale_m_per_unit = scale;
-    }
-    warnUnknown(depth, {"file", "scale"}, "depth.", m.warnings);
-  } else {
-    throw InputError(manifest_file, "\"depth\" must be a path or {\"file\", \"scale\"}, found " + typeName(depth));
-  }
+  readDepthKey(manifest_file, j, m);
 
   auto optionalPath = [&](const char* key, std::optional<fs::path>& out) {
     if (j.contains(key) && !j.at(key).is_null()) out = pathValue(manifest_file, j, key);
@@ -113,37 +178,10 @@ SceneManifest readSceneManifest(const fs::path& manifest_file) {
     if (j.contains(text_key) && !j.at(text_key).is_string())
       throw InputError(manifest_file, std::string("\"") + text_key + "\" must be a string");
 
-  if (j.contains("camera") && !j.at("camera").is_null()) {
-    const json& c = j.at("camera");
-    if (c.is_string()) {
-      m.camera_file = pathValue(manifest_file, j, "camera");
-    } else if (c.is_object() && c.contains("file")) {
-      m.camera_file = pathValue(manifest_file, c, "file");
-      PinholeCamera resolution;
-      if (c.contains("width") || c.contains("height")) {
-        resolution.width = intValue(manifest_file, c, "camera", "width");
-        resolution.height = intValue(manifest_file, c, "camera", "height");
-        m.camera = resolution;  // resolution only; intrinsics come from the file
-      }
-      warnUnknown(c, {"file", "width", "height"}, "camera.", m.warnings);
-    } else if (c.is_object()) {
-      PinholeCamera k;
-      k.fx = numberValue(manifest_file, c, "camera", "fx");
-      k.fy = numberValue(manifest_file, c, "camera", "fy");
-      k.cx = numberValue(manifest_file, c, "camera", "cx");
-      k.cy = numberValue(manifest_file, c, "camera", "cy");
-      if (c.contains("width") != c.contains("height"))
-        throw InputError(manifest_file, "\"camera\" needs both \"width\" and \"height\" or neither");
-      if (c.contains("width")) {
-        k.width = intValue(manifest_file, c, "camera", "width");
-        k.height = intValue(manifest_file, c, "camera", "height");
-      }
-      m.camera = k;
-      warnUnknown(c, {"fx", "fy", "cx", "cy", "width", "height"}, "camera.", m.warnings);
-    } else {
-      throw InputError(manifest_file, "\"camera\" must be an object of intrinsics or a path, found " + typeName(c));
-    }
-  }
+  readCameraKey(manifest_file, j, m);
+  if (m.depth_is_disparity && (!m.camera_file || m.camera_file_format != CameraFileFormat::Cityscapes))
+    throw InputError(manifest_file, "\"depth\" is a disparity map: it needs a Cityscapes camera file (\"camera\": "
+                                    "\"..._camera.json\") giving \"extrinsic\".\"baseline\" and \"intrinsic\".\"fx\"");
   return m;
 }
 
@@ -163,13 +201,34 @@ void checkLightIds(const cv::Mat& lights, const fs::path& file) {
     }
 }
 
+/// The manifest's depth in metres: a depth file as stored (scaled), or a Cityscapes disparity
+/// converted with its camera file's baseline and fx.
+cv::Mat readManifestDepth(const SceneManifest& m, DepthReadStats& stats, ImageFileInfo& info) {
+  if (!m.depth_is_disparity) return readDepth(m.depth, m.depth_scale_m_per_unit.value_or(0.0), &stats, &info);
+  const std::optional<double> baseline_m = readCityscapesBaseline(*m.camera_file);
+  if (!baseline_m)
+    throw InputError(m.file, "\"depth\" is a disparity map, but its camera file " + m.camera_file->string() +
+                                 " gives no \"extrinsic\".\"baseline\" (metres) to turn it into depth");
+  if (!(*baseline_m > 0) || !std::isfinite(*baseline_m))
+    throw InputError(*m.camera_file, "\"extrinsic\".\"baseline\" must be a positive number of metres");
+  const PinholeCamera camera = readCityscapesCamera(*m.camera_file);
+  if (!(camera.fx > 0) || !std::isfinite(camera.fx))
+    throw InputError(*m.camera_file, "\"intrinsic\".\"fx\" must be a positive number of pixels");
+  cv::Mat depth_m = readCityscapesDisparityDepth(m.depth, *baseline_m, camera.fx, &stats, &info);
+  if (m.camera && m.camera->width > 0 && (m.camera->width != info.width || m.camera->height != info.height))
+    throw InputError(m.depth, "disparity map is " + sizeText(info.width, info.height) + " but the camera's fx is for " +
+                                  sizeText(m.camera->width, m.camera->height) +
+                                  ": a disparity is in pixels of the resolution its camera file describes");
+  return depth_m;
+}
+
 /// Reads the manifest's maps into `s`, each file's header into s.maps; labels derived from the
 /// instances when only those are given.
 void readSceneMaps(const SceneManifest& m, Scene& s) {
   ImageFileInfo info;
   s.image = readColorImage(m.image, &info);
   s.maps.push_back({"image", m.image, info});
-  s.depth_m = readDepth(m.depth, m.depth_scale_m_per_unit.value_or(0.0), &s.depth_stats, &info);
+  s.depth_m = readManifestDepth(m, s.depth_stats, info);
   s.maps.push_back({"depth", m.depth, info});
   if (s.depth_stats.valid == 0) throw InputError(m.depth, "depth has no valid pixel (all 0, NaN, inf or negative)");
 
@@ -207,13 +266,14 @@ void readSceneMaps(const SceneManifest& m, Scene& s) {
   }
 }
 
-/// The scene's camera: validated where it was stated (a camera file, the manifest, else the
-/// ACDC default), then scaled to the image resolution. Sets s.camera and s.camera_is_default.
+/// The scene's camera: validated where it was stated (a camera file, the manifest, else
+/// defaultSceneCamera), then scaled to the image resolution. Sets s.camera and s.camera_is_default.
 void setSceneCamera(const SceneManifest& m, Scene& s) {
   PinholeCamera camera;
   fs::path camera_source = m.file;
   if (m.camera_file) {
-    camera = readCityscapesCamera(*m.camera_file);
+    camera = m.camera_file_format == CameraFileFormat::Kitti ? readKittiCalibration(*m.camera_file, m.kitti_matrix)
+                                                             : readCityscapesCamera(*m.camera_file);
     camera_source = *m.camera_file;
     if (m.camera && m.camera->width > 0) {
       camera.width = m.camera->width;
@@ -222,9 +282,13 @@ void setSceneCamera(const SceneManifest& m, Scene& s) {
   } else if (m.camera) {
     camera = *m.camera;
   } else {
-    camera = PinholeCamera::acdc();
+    camera = defaultSceneCamera(s.image.cols, s.image.rows);
     s.camera_is_default = true;
-    s.warnings.push_back("no camera given: using the ACDC intrinsics (fx = fy = 1780 px at 1920x1080) scaled to the image");
+    std::ostringstream warning;
+    warning << "no camera given: square pixels with ACDC's horizontal field of view of " << std::fixed
+            << std::setprecision(1) << kDefaultHorizontalFovRad * 180.0 / std::acos(-1.0) << " degrees (fx = fy = "
+            << std::setprecision(2) << camera.fx << " px), principal point at the image centre";
+    s.warnings.push_back(warning.str());
   }
   if (camera.width <= 0) {
     camera.width = s.image.cols;
@@ -329,6 +393,126 @@ std::vector<fs::path> manifestFiles(const SceneManifest& m) {
                                &m.light_groups, &m.ground_truth, &m.camera_file})
     if (*optional) files.push_back(**optional);
   return files;
+}
+
+PinholeCamera defaultSceneCamera(int width, int height) {
+  const PinholeCamera acdc = PinholeCamera::acdc();
+  // fx as PinholeCamera::scaledTo computes it (f * s), so a 16:9 image gets what scaling the
+  // ACDC intrinsics gave; (width / 2) / tan(kDefaultHorizontalFovRad / 2) in exact arithmetic.
+  const double f = acdc.fx * (static_cast<double>(width) / acdc.width);
+  return {f, f, (width - 1) / 2.0, (height - 1) / 2.0, width, height};
+}
+
+std::optional<double> readCityscapesBaseline(const fs::path& file) {
+  requireRegularFile(file, "camera");
+  std::ifstream in(file);
+  if (!in) throw InputError(file, "cannot open for reading");
+  json j;
+  try {
+    in >> j;
+  } catch (const json::exception& e) {
+    throw InputError(file, std::string("not valid JSON: ") + e.what());
+  }
+  if (!j.is_object() || !j.contains("extrinsic") || !j.at("extrinsic").is_object()) return std::nullopt;
+  const json& extrinsic = j.at("extrinsic");
+  if (!extrinsic.contains("baseline") || !extrinsic.at("baseline").is_number()) return std::nullopt;
+  return extrinsic.at("baseline").get<double>();
+}
+
+cv::Mat readCityscapesDisparityDepth(const fs::path& file, double baseline_m, double fx_px, DepthReadStats* stats,
+                                     ImageFileInfo* info) {
+  ImageFileInfo local;
+  const cv::Mat stored = readImageRaw(file, &local);
+  if (stored.channels() != 1)
+    throw InputError(file, "a Cityscapes disparity map has one channel, found " + std::to_string(stored.channels()));
+  if (local.pixel_type != "uint16")
+    throw InputError(file, "a Cityscapes disparity map is a 16-bit PNG, found " + local.pixel_type);
+  cv::Mat depth(stored.rows, stored.cols, CV_32F);
+  DepthReadStats s;
+  double lo = INFINITY, hi = -INFINITY;
+  for (int y = 0; y < stored.rows; ++y) {
+    const float* src = stored.ptr<float>(y);
+    float* dst = depth.ptr<float>(y);
+    for (int x = 0; x < stored.cols; ++x) {
+      const double p = src[x];
+      dst[x] = 0.f;
+      if (p == 0) {
+        ++s.zero;  // no disparity
+      } else if (p == 1) {
+        ++s.inf;  // disparity 0: infinitely far
+      } else {
+        const double depth_m = baseline_m * fx_px / ((p - 1.0) / 256.0);
+        dst[x] = static_cast<float>(depth_m);
+        ++s.valid;
+        lo = std::min(lo, depth_m);
+        hi = std::max(hi, depth_m);
+      }
+    }
+  }
+  s.min_m = s.valid ? lo : 0;
+  s.max_m = s.valid ? hi : 0;
+  if (stats) *stats = s;
+  if (info) *info = local;
+  return depth;
+}
+
+namespace {
+
+/// The numbers after "<key>:" on a line of a KITTI calibration file; empty when no line has it.
+std::vector<double> kittiCalibrationValues(const fs::path& file, const std::string& key) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file, "cannot open for reading");
+  std::string line;
+  while (std::getline(in, line)) {
+    const std::size_t colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    std::string name = line.substr(0, colon);
+    name.erase(0, name.find_first_not_of(" \t"));
+    if (name != key) continue;
+    std::istringstream numbers(line.substr(colon + 1));
+    std::vector<double> values;
+    std::string token;
+    while (numbers >> token) {
+      try {
+        std::size_t used = 0;
+        values.push_back(std::stod(token, &used));
+        if (used != token.size()) throw std::invalid_argument(token);
+      } catch (const std::exception&) {
+        throw InputError(file, "\"" + key + ":\" holds \"" + token + "\", not a number");
+      }
+    }
+    return values;
+  }
+  return {};
+}
+
+}  // namespace
+
+PinholeCamera readKittiCalibration(const fs::path& file, const std::string& matrix) {
+  requireRegularFile(file, "KITTI calibration");
+  std::string key = matrix.empty() ? "P_rect_02" : matrix;
+  std::vector<double> p = kittiCalibrationValues(file, key);
+  if (p.empty() && matrix.empty()) p = kittiCalibrationValues(file, key = "P2");
+  if (p.empty())
+    throw InputError(file, matrix.empty() ? "no \"P_rect_02:\" (calib_cam_to_cam.txt) or \"P2:\" (object calib) line: "
+                                            "not a KITTI calibration file"
+                                          : "no \"" + matrix + ":\" line");
+  if (p.size() != 12)
+    throw InputError(file, "\"" + key + ":\" must hold the 12 numbers of a 3x4 projection matrix, found " +
+                               std::to_string(p.size()));
+  PinholeCamera camera;
+  camera.fx = p[0];
+  camera.cx = p[2];
+  camera.fy = p[5];
+  camera.cy = p[6];
+  if (key.rfind("P_rect_", 0) == 0) {  // raw data: S_rect_XX is the rectified image size
+    const std::vector<double> size = kittiCalibrationValues(file, "S_rect_" + key.substr(7));
+    if (size.size() == 2 && size[0] >= 1 && size[1] >= 1) {
+      camera.width = static_cast<int>(std::lround(size[0]));
+      camera.height = static_cast<int>(std::lround(size[1]));
+    }
+  }
+  return camera;
 }
 
 fs::path groundTruthManifest(const fs::path& manifest_file) {

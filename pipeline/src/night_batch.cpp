@@ -177,11 +177,41 @@ std::vector<NightBatchScene> nameScenes(const std::vector<Found>& found, const f
     if (!inserted)
       throw InputError(list_or_dir, "scenes " + it->second + " and " + f.origin + " both get the output name \"" +
                                         name + "\" (listed twice, or rename one)");
-    scenes.push_back({f.manifest, name, nightBatchSceneSeed(batch_seed, name)});
+    scenes.push_back({f.manifest, name, nightBatchSceneSeed(batch_seed, name), name + ".png"});
   }
   std::sort(scenes.begin(), scenes.end(),
             [](const NightBatchScene& a, const NightBatchScene& b) { return a.name < b.name; });
   return scenes;
+}
+
+/// A manifest's "name", read for --layout (the rest of the manifest is the scene's to check).
+std::string manifestName(const fs::path& manifest, Dataset layout) {
+  const std::string needs = "--layout " + datasetName(layout) + " needs the manifest's \"name\"";
+  std::ifstream in(manifest);
+  if (!in) throw InputError(manifest, "cannot open the manifest (" + needs + ")");
+  nlohmann::json j;
+  try {
+    in >> j;
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(manifest, "not valid JSON (" + needs + "): " + e.what());
+  }
+  if (!j.is_object() || !j.contains("name") || !j.at("name").is_string())
+    throw InputError(manifest, "no \"name\": " + needs + ", the frame's path " + datasetLayout(layout).name_form +
+                                   " (solo scenes " + datasetName(layout) + " writes it)");
+  return j.at("name").get<std::string>();
+}
+
+/// With a layout, each scene's night image at its frame's path in the dataset's layout; two
+/// scenes with one night image are an error.
+void placeInLayout(std::vector<NightBatchScene>& scenes, Dataset layout, const fs::path& list_or_dir) {
+  std::map<fs::path, std::string> scene_of_image;
+  for (NightBatchScene& scene : scenes) {
+    scene.image = datasetNightImage(layout, manifestName(scene.manifest, layout), scene.manifest);
+    const auto [it, inserted] = scene_of_image.emplace(scene.image, scene.manifest.string());
+    if (!inserted)
+      throw InputError(list_or_dir, "scenes " + it->second + " and " + scene.manifest.string() +
+                                        " both get the night image " + scene.image.string() + " (one frame listed twice)");
+  }
 }
 
 /// The last lines of a child's log, blank lines dropped.
@@ -197,19 +227,18 @@ std::vector<std::string> tailLines(const fs::path& file, std::size_t count) {
   return lines;
 }
 
-// A killed child leaves its hidden temporary files (writeAtomically: ".<stem>.tmp<pid>_<n><ext>");
-// they never look finished, but a rerun of that scene removes them.
-void removeStaleTemporaries(const fs::path& out_dir, const std::string& name) {
+// A killed child leaves its hidden temporary files (writeAtomically: ".<stem>.tmp<pid>_<n><ext>"
+// beside the target); they never look finished, but a rerun of that scene removes them.
+void removeStaleTemporaries(const fs::path& target) {
+  const std::string prefix = "." + target.stem().string() + ".tmp";
+  const std::string ext = target.extension().string();
   std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(out_dir, ec)) {
+  for (const auto& entry : fs::directory_iterator(target.parent_path(), ec)) {
     const std::string file = entry.path().filename().string();
-    for (const auto& [stem, ext] : {std::pair<std::string, std::string>{name, ".png"}, {name + ".report", ".json"}}) {
-      const std::string prefix = "." + stem + ".tmp";
-      if (file.size() > prefix.size() + ext.size() && file.rfind(prefix, 0) == 0 &&
-          file.compare(file.size() - ext.size(), ext.size(), ext) == 0) {
-        const std::string middle = file.substr(prefix.size(), file.size() - prefix.size() - ext.size());
-        if (std::regex_match(middle, std::regex(R"(\d+_\d+)"))) fs::remove(entry.path(), ec);
-      }
+    if (file.size() > prefix.size() + ext.size() && file.rfind(prefix, 0) == 0 &&
+        file.compare(file.size() - ext.size(), ext.size(), ext) == 0) {
+      const std::string middle = file.substr(prefix.size(), file.size() - prefix.size() - ext.size());
+      if (std::regex_match(middle, std::regex(R"(\d+_\d+)"))) fs::remove(entry.path(), ec);
     }
   }
 }
@@ -269,7 +298,7 @@ class BatchRun {
     const NightBatchShard& shard = plan_.shard;
     return shard.count == 1 ? "" : ".shard-" + std::to_string(shard.index) + "-of-" + std::to_string(shard.count);
   }
-  fs::path pngOf(std::size_t i) const { return plan_.output_folder / (plan_.scenes[i].name + ".png"); }
+  fs::path pngOf(std::size_t i) const { return plan_.output_folder / plan_.scenes[i].image; }
   fs::path reportOf(std::size_t i) const { return plan_.output_folder / (plan_.scenes[i].name + ".report.json"); }
   fs::path logDir() const { return plan_.output_folder / "logs"; }
   fs::path logOf(std::size_t i) const { return logDir() / (plan_.scenes[i].name + ".log"); }
@@ -284,6 +313,10 @@ class BatchRun {
 
   void startScenes();
   void startScene(std::size_t i);
+  void removeTemporariesOf(std::size_t i) const {
+    removeStaleTemporaries(pngOf(i));
+    removeStaleTemporaries(reportOf(i));
+  }
   std::vector<std::string> sceneArguments(std::size_t i) const;
   int spawnScene(std::size_t i, std::vector<std::string> arguments, pid_t& pid) const;
   void stopChildren();
@@ -362,9 +395,10 @@ void BatchRun::startScenes() {
 }
 
 void BatchRun::startScene(std::size_t i) {
-  removeStaleTemporaries(plan_.output_folder, plan_.scenes[i].name);
+  removeTemporariesOf(i);
   std::error_code ec;
   fs::create_directories(logDir(), ec);
+  fs::create_directories(pngOf(i).parent_path(), ec);  // a layout's folders
   pid_t pid = 0;
   const int error = spawnScene(i, sceneArguments(i), pid);
   if (error != 0) {
@@ -476,7 +510,7 @@ void BatchRun::recordExit(std::size_t i, int status, bool timed_out) {
     reason << "timed out: stopped after " << nightBatchSeconds(o.seconds) << " (--scene-timeout "
            << options_.scene_timeout_s << " s)";
     o.reason = reason.str();
-    removeStaleTemporaries(plan_.output_folder, plan_.scenes[i].name);
+    removeTemporariesOf(i);
   }
 }
 
@@ -520,6 +554,7 @@ nlohmann::json perSceneJson(const NightBatchResult& result) {
     nlohmann::json s = {{"scene", scene.name},
                         {"manifest", scene.manifest.string()},
                         {"seed", scene.seed},
+                        {"image", scene.image.generic_string()},
                         {"status", nightBatchStatusName(o.status)}};
     if (o.status == NightBatchStatus::Done || o.status == NightBatchStatus::Failed ||
         o.status == NightBatchStatus::Interrupted) {
@@ -542,6 +577,7 @@ std::string summaryText(const NightBatchOptions& options, const NightBatchResult
                                   {"output_folder", result.plan.output_folder.string()},
                                   {"shard", shard},
                                   {"jobs", options.jobs},
+                                  {"layout", options.layout ? datasetName(*options.layout) : "flat"},
                                   {"seed", options.seed},
                                   {"scenes_in_batch", result.plan.scenes_in_batch},
                                   {"ground_truth_manifests_left_out", result.plan.ground_truth_left_out},
@@ -618,7 +654,8 @@ void checkNightBatchOptions(const NightBatchOptions& options) {
   if (options.executable.empty()) throw InputError("executable", "no program to run the scenes with");
 }
 
-NightBatchPlan collectNightBatchScenes(const fs::path& list_or_dir, std::uint64_t batch_seed) {
+NightBatchPlan collectNightBatchScenes(const fs::path& list_or_dir, std::uint64_t batch_seed,
+                                       const std::optional<Dataset>& layout) {
   std::error_code ec;
   NightBatchPlan plan;
   std::vector<Found> found;
@@ -633,13 +670,14 @@ NightBatchPlan collectNightBatchScenes(const fs::path& list_or_dir, std::uint64_
                                       ? "no scene manifest (scene.json or *.scene.json) in this folder"
                                       : "the list names no scene manifest");
   plan.scenes = nameScenes(found, list_or_dir, batch_seed);
+  if (layout) placeInLayout(plan.scenes, *layout, list_or_dir);
   plan.scenes_in_batch = plan.scenes.size();
   return plan;
 }
 
 ForwardedSceneArguments forwardedSceneArguments(const std::vector<std::string>& argv) {
-  const std::set<std::string> dropped = {"--batch",  "--shard",  "--jobs",          "--scene-timeout", "-o",
-                                         "--output", "--report", "--contact-sheet", "--seed"};
+  const std::set<std::string> dropped = {"--batch",  "--shard",  "--jobs",          "--scene-timeout", "--layout",
+                                         "-o",       "--output", "--report",        "--contact-sheet", "--seed"};
   ForwardedSceneArguments result;
   for (std::size_t i = 1; i < argv.size(); ++i) {
     const std::string& a = argv[i];
@@ -662,7 +700,7 @@ NightBatchResult runNightBatch(const NightBatchOptions& options, const NightBatc
   const fs::path out_dir = prepareOutputFolder(options.output_folder);
 
   NightBatchResult result;
-  result.plan = collectNightBatchScenes(options.list, options.seed);
+  result.plan = collectNightBatchScenes(options.list, options.seed, options.layout);
   NightBatchPlan& plan = result.plan;
   plan.output_folder = out_dir;
   plan.shard = shard;

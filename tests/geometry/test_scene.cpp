@@ -236,3 +236,145 @@ TEST(Scene, NonFiniteColoursAreSetToZeroAndCounted) {
   EXPECT_NE(std::find(r.notes.begin(), r.notes.end(), "4 NaN or infinite values of the day image set to 0"), r.notes.end())
       << "the count reaches the input stage's report";
 }
+
+namespace {
+
+// A Cityscapes-style frame: a 4x2 day image, the disparity PNG `disparity` and a camera JSON
+// (`extrinsic` left out when `baseline` is empty).
+void writeCityscapesFrame(const TempDir& dir, const cv::Mat& disparity, const std::string& baseline) {
+  solo::writeImage(dir / "day.png", cv::Mat(disparity.rows, disparity.cols, CV_8UC3, cv::Scalar(90, 90, 90)));
+  solo::writeImage(dir / "x_disparity.png", disparity);
+  const std::string extrinsic =
+      baseline.empty() ? "" : R"("extrinsic": {"baseline": )" + baseline + R"(, "pitch": 0.038, "roll": 0, "yaw": 0}, )";
+  writeText(dir / "x_camera.json",
+            "{" + extrinsic + R"("intrinsic": {"fx": 2262.52, "fy": 2265.30, "u0": 1.5, "v0": 0.5}})");
+}
+
+}  // namespace
+
+TEST(Scene, CityscapesDisparityBecomesDepthWithTheCameraBaseline) {
+  TempDir dir;
+  cv::Mat disparity(2, 4, CV_16U);
+  disparity.at<uint16_t>(0, 0) = 0;      // no disparity: invalid
+  disparity.at<uint16_t>(0, 1) = 1;      // disparity 0: infinitely far, invalid
+  disparity.at<uint16_t>(0, 2) = 257;    // 1 px
+  disparity.at<uint16_t>(0, 3) = 2561;   // 10 px
+  disparity.at<uint16_t>(1, 0) = 25601;  // 100 px
+  disparity(cv::Rect(1, 1, 3, 1)).setTo(2561);
+  writeCityscapesFrame(dir, disparity, "0.209313");
+  writeText(dir / "scene.json", R"({"image": "day.png", "depth": {"file": "x_disparity.png", "disparity": true},
+                                   "camera": "x_camera.json"})");
+  const solo::Scene s = solo::loadScene(dir / "scene.json");
+  // depth = baseline * fx / ((p - 1) / 256): 0.209313 m * 2262.52 px = 473.57484876 m px.
+  EXPECT_FLOAT_EQ(s.depth_m.at<float>(0, 2), 473.57484876f);
+  EXPECT_FLOAT_EQ(s.depth_m.at<float>(0, 3), 47.357484876f);
+  EXPECT_FLOAT_EQ(s.depth_m.at<float>(1, 0), 4.7357484876f);
+  EXPECT_EQ(s.depth_m.at<float>(0, 3), static_cast<float>(0.209313 * 2262.52 / (2560.0 / 256.0)));
+  EXPECT_EQ(s.depth_m.at<float>(0, 0), 0.f);
+  EXPECT_EQ(s.depth_m.at<float>(0, 1), 0.f);
+  EXPECT_EQ(s.depth_stats.valid, 6);
+  EXPECT_EQ(s.depth_stats.zero, 1) << "p = 0";
+  EXPECT_EQ(s.depth_stats.inf, 1) << "p = 1: disparity 0";
+  EXPECT_NEAR(s.depth_stats.max_m, 473.57484876, 1e-9);
+  EXPECT_DOUBLE_EQ(s.camera.fx, 2262.52) << "the camera file gives the intrinsics too";
+  const solo::StageReport r = solo::describeScene(s);
+  EXPECT_EQ(std::get<std::int64_t>(*r.find("depth_inf")), 1);
+}
+
+TEST(SceneBadInput, DisparityWithoutACameraBaselineNamesTheManifest) {
+  TempDir dir;
+  writeCityscapesFrame(dir, cv::Mat(2, 4, CV_16U, cv::Scalar(2561)), "");
+  writeText(dir / "no_camera.json", R"({"image": "day.png", "depth": {"file": "x_disparity.png", "disparity": true}})");
+  std::string message = loadError(dir / "no_camera.json");
+  EXPECT_NE(message.find((dir / "no_camera.json").string() + ": \"depth\" is a disparity map"), std::string::npos)
+      << message;
+  writeText(dir / "no_baseline.json", R"({"image": "day.png", "depth": {"file": "x_disparity.png", "disparity": true},
+                                         "camera": "x_camera.json"})");
+  message = loadError(dir / "no_baseline.json");
+  EXPECT_NE(message.find((dir / "no_baseline.json").string() + ":"), std::string::npos) << message;
+  EXPECT_NE(message.find("x_camera.json gives no \"extrinsic\".\"baseline\""), std::string::npos) << message;
+  writeText(dir / "scaled.json", R"({"image": "day.png", "camera": "x_camera.json",
+                                    "depth": {"file": "x_disparity.png", "disparity": true, "scale": 0.1}})");
+  EXPECT_NE(loadError(dir / "scaled.json").find("both \"disparity\" and \"scale\""), std::string::npos);
+}
+
+TEST(Scene, KittiCalibrationGivesTheRectifiedLeftColourCamera) {
+  TempDir dir;
+  // Lines of a raw-data calib_cam_to_cam.txt (2011_09_26).
+  writeText(dir / "calib_cam_to_cam.txt",
+            "calib_time: 09-Jan-2012 13:57:47\n"
+            "corner_dist: 9.950000e-02\n"
+            "S_rect_02: 1.242000e+03 3.750000e+02\n"
+            "P_rect_02: 7.215377e+02 0.000000e+00 6.095593e+02 4.485728e+01 0.000000e+00 7.215377e+02 "
+            "1.728540e+02 2.163791e-01 0.000000e+00 0.000000e+00 1.000000e+00 2.745884e-03\n"
+            "S_rect_03: 1.242000e+03 3.750000e+02\n"
+            "P_rect_03: 7.215377e+02 0.000000e+00 6.095593e+02 -3.395242e+02 0.000000e+00 7.215377e+02 "
+            "1.728540e+02 2.199936e+00 0.000000e+00 0.000000e+00 1.000000e+00 2.729905e-03\n");
+  const solo::PinholeCamera raw = solo::readKittiCalibration(dir / "calib_cam_to_cam.txt");
+  EXPECT_DOUBLE_EQ(raw.fx, 721.5377);
+  EXPECT_DOUBLE_EQ(raw.fy, 721.5377);
+  EXPECT_DOUBLE_EQ(raw.cx, 609.5593);
+  EXPECT_DOUBLE_EQ(raw.cy, 172.854);
+  EXPECT_EQ(raw.width, 1242);
+  EXPECT_EQ(raw.height, 375);
+
+  // An object-benchmark calib file: P0..P3, no size.
+  writeText(dir / "000000.txt",
+            "P0: 7.070493e+02 0.000000e+00 6.040814e+02 0.000000e+00 0.000000e+00 7.070493e+02 1.805066e+02 "
+            "0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00\n"
+            "P2: 7.070493e+02 0.000000e+00 6.040814e+02 4.575831e+01 0.000000e+00 7.070493e+02 1.805066e+02 "
+            "-3.454157e-01 0.000000e+00 0.000000e+00 1.000000e+00 4.981016e-03\n");
+  const solo::PinholeCamera object = solo::readKittiCalibration(dir / "000000.txt");
+  EXPECT_DOUBLE_EQ(object.fx, 707.0493);
+  EXPECT_DOUBLE_EQ(object.cy, 180.5066);
+  EXPECT_EQ(object.width, 0) << "the image's";
+
+  // Through a manifest, on a half-size image: scaled to it.
+  solo::writeImage(dir / "day.png", cv::Mat(187, 621, CV_8UC3, cv::Scalar(50, 60, 70)));
+  solo::writeImage(dir / "d.png", cv::Mat(187, 621, CV_16U, cv::Scalar(2560)));
+  writeText(dir / "scene.json", R"({"image": "day.png", "depth": {"file": "d.png", "scale": 0.00390625},
+                                   "camera": {"kitti": "calib_cam_to_cam.txt"}})");
+  const solo::Scene s = solo::loadScene(dir / "scene.json");
+  EXPECT_NEAR(s.camera.fx, 721.5377 * 621 / 1242, 1e-9);
+  EXPECT_NEAR(s.camera.fy, 721.5377 * 187 / 375, 1e-9);
+  EXPECT_FALSE(s.camera_is_default);
+  EXPECT_FLOAT_EQ(s.depth_m.at<float>(0, 0), 10.f);
+  EXPECT_EQ(solo::manifestFiles(s.manifest).back(), dir / "calib_cam_to_cam.txt") << "an input of the run";
+
+  writeText(dir / "other.txt", "R: 1 0 0 0 1 0 0 0 1\n");
+  try {
+    solo::readKittiCalibration(dir / "other.txt");
+    FAIL() << "a file without a projection matrix was read";
+  } catch (const solo::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("other.txt: no \"P_rect_02:\""), std::string::npos) << e.what();
+  }
+  writeText(dir / "short.txt", "P2: 1 2 3\n");
+  EXPECT_THROW(solo::readKittiCalibration(dir / "short.txt"), solo::InputError);
+}
+
+TEST(Scene, DefaultCameraHasSquarePixelsAndTheAcdcFieldOfView) {
+  TempDir dir;
+  solo::writeImage(dir / "kitti.png", cv::Mat(375, 1242, CV_8UC3, cv::Scalar(1, 2, 3)));
+  solo::writeImage(dir / "d.exr", cv::Mat(375, 1242, CV_32F, cv::Scalar(12.5)));
+  writeText(dir / "kitti.json", R"({"image": "kitti.png", "depth": "d.exr"})");
+  const solo::Scene kitti = solo::loadScene(dir / "kitti.json");
+  EXPECT_TRUE(kitti.camera_is_default);
+  EXPECT_NEAR(kitti.camera.fx, 621.0 / std::tan(solo::kDefaultHorizontalFovRad / 2), 1e-9);
+  EXPECT_EQ(kitti.camera.fy, kitti.camera.fx) << "square pixels, not the ACDC intrinsics stretched per axis";
+  EXPECT_EQ(kitti.camera.cx, 620.5);
+  EXPECT_EQ(kitti.camera.cy, 187.0);
+  bool warned = false;
+  for (const std::string& w : kitti.warnings) warned |= w.find("no camera given") != std::string::npos;
+  EXPECT_TRUE(warned);
+  const solo::StageReport r = solo::describeScene(kitti);
+  EXPECT_NE(std::find_if(r.notes.begin(), r.notes.end(),
+                         [](const std::string& n) { return n.find("no camera given") != std::string::npos; }),
+            r.notes.end());
+
+  const solo::PinholeCamera hd = solo::defaultSceneCamera(1920, 1080);
+  EXPECT_EQ(hd.fx, 1780.0);
+  EXPECT_EQ(hd.fy, 1780.0);
+  EXPECT_EQ(hd.cx, 959.5);
+  EXPECT_EQ(hd.cy, 539.5);
+  EXPECT_NEAR(solo::kDefaultHorizontalFovRad, 2 * std::atan(960.0 / 1780.0), 0);
+}

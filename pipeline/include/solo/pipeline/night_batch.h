@@ -8,10 +8,13 @@
 // the batch down, every option of the scene command (presets, config files, ...) is forwarded
 // without the batch knowing it, and wait4 gives the child's peak memory.
 
+#include <solo/pipeline/dataset_scenes.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,6 +27,9 @@ struct NightBatchOptions {
   int jobs = 1;                         ///< scenes converted at once
   double scene_timeout_s = 0;           ///< a scene running longer is stopped and recorded failed; 0: none
   std::filesystem::path output_folder;  ///< OUT_DIR: <name>.png, <name>.report.json, failures, summary, logs/
+  /// --layout: each night image goes to OUT_DIR/<the layout's night folder>/<its manifest's
+  /// "name">.png (datasetNightImage), in the dataset's own folder layout, instead of OUT_DIR/<name>.png.
+  std::optional<Dataset> layout;
   std::uint64_t seed = 0;               ///< the batch seed; each scene's is nightBatchSceneSeed(seed, name)
   /// The scene command's arguments, starting with the subcommand ("night"); the batch adds the
   /// scene after it and -o, --report, --seed (and --contact-sheet) at the end
@@ -43,6 +49,9 @@ struct NightBatchScene {
   std::filesystem::path manifest;  ///< absolute
   std::string name;                ///< output name, unique in the batch
   std::uint64_t seed = 0;
+  /// The night image, relative to the output folder: <name>.png, or with a layout the frame's
+  /// path in the dataset's layout. Its report is <name>.report.json in the output folder.
+  std::filesystem::path image;
 };
 
 /// The scenes of a batch before any runs.
@@ -118,13 +127,15 @@ std::uint64_t nightBatchSceneSeed(std::uint64_t batch_seed, const std::string& n
 /// Every scene of a list file (one manifest a line, relative to the list's folder; blank and
 /// `#` lines skipped; a folder stands for its scene.json) or of a folder searched for
 /// scene.json / *.scene.json (ground-truth manifests left out), sorted by output name, with
-/// their seeds; the shard fields left at one shard. Throws InputError when none is found or two
-/// get one name.
-NightBatchPlan collectNightBatchScenes(const std::filesystem::path& list_or_dir, std::uint64_t batch_seed);
+/// their seeds and night images (with a `layout`, from each manifest's "name"); the shard fields
+/// left at one shard. Throws InputError when none is found, two get one name or one night image,
+/// or, with a layout, a manifest cannot be read or has no "name" of the layout's form.
+NightBatchPlan collectNightBatchScenes(const std::filesystem::path& list_or_dir, std::uint64_t batch_seed,
+                                       const std::optional<Dataset>& layout = std::nullopt);
 
 /// A command line (argv, the program first) as the scene command's arguments: without the
 /// program and without the options the batch sets (--batch, --shard, --jobs, --scene-timeout,
-/// -o/--output, --report, --contact-sheet, --seed; as "--x v", "--x=v" or "-ov").
+/// --layout, -o/--output, --report, --contact-sheet, --seed; as "--x v", "--x=v" or "-ov").
 struct ForwardedSceneArguments {
   std::vector<std::string> arguments;
   bool output_given = false;  ///< the command line had -o / --output
