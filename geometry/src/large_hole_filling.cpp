@@ -23,6 +23,7 @@
 #include <exception>
 #include <map>
 #include <set>
+#include <unordered_set>
 #include <utility>
 
 namespace solo {
@@ -64,6 +65,45 @@ std::vector<Eigen::Vector3d> projectionDirections(const std::vector<Eigen::Vecto
     if (directions.empty() || std::abs(normal.dot(directions[0])) < 0.999) directions.push_back(normal);
   }
   return directions;
+}
+
+/// Vertices where a patch over the loop's first n points must bend, added to `cdt` after
+/// `last` and appended to `grid` (at most `max_interior` in all). A triangle over three boundary
+/// vertices cannot bend: where the boundary folds in 3D (a rim rising around an arch) it cuts the
+/// surface. Each gets a vertex at its centroid, which the fit then places (rounds: the insertions
+/// flip edges). Likewise an edge between two boundary vertices that are not neighbours on the
+/// loop (across a notch of the boundary) gets a vertex at its middle.
+void addBendVertices(Cdt& cdt, int n, int max_interior, std::vector<Eigen::Vector2d>& grid, Cdt::Vertex_handle last) {
+  for (int round = 0; round < 3; ++round) {
+    std::vector<Eigen::Vector2d> centroids;
+    // Faces already visited: looked up, never iterated (their addresses depend on the heap).
+    std::unordered_set<const void*> visited;
+    for (const auto f : cdt.finite_face_handles()) {
+      visited.insert(&*f);
+      if (f->info() % 2 != 1) continue;
+      for (int e = 0; e < 3; ++e) {
+        const int a = f->vertex((e + 1) % 3)->info(), b = f->vertex((e + 2) % 3)->info();
+        const Cdt::Face_handle g = f->neighbor(e);
+        // Each inner edge once (from the second of its faces in the triangulation's order),
+        // never a loop edge.
+        if (a >= n || b >= n || cdt.is_constrained(Cdt::Edge(f, e)) || cdt.is_infinite(g) || g->info() % 2 != 1 ||
+            visited.count(&*g) == 0)
+          continue;
+        const auto c = CGAL::midpoint(f->vertex((e + 1) % 3)->point(), f->vertex((e + 2) % 3)->point());
+        centroids.emplace_back(c.x(), c.y());
+      }
+      if (f->vertex(0)->info() >= n || f->vertex(1)->info() >= n || f->vertex(2)->info() >= n) continue;
+      const auto c = CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point());
+      centroids.emplace_back(c.x(), c.y());
+    }
+    if (centroids.empty() || static_cast<int>(grid.size() + centroids.size()) > max_interior) break;
+    for (const auto& c : centroids) {
+      last = cdt.insert(Point2(c.x(), c.y()), last->face());
+      last->info() = n + static_cast<int>(grid.size());
+      grid.push_back(c);
+    }
+    markNesting(cdt);
+  }
 }
 
 /// Constrained Delaunay triangulation of the loop projected along one of projectionDirections,
@@ -131,37 +171,7 @@ bool triangulateProjected(const std::vector<Eigen::Vector3d>& loop, int max_inte
       last->info() = n + static_cast<int>(k);
     }
     if (!grid.empty()) markNesting(cdt);
-    // A triangle over three boundary vertices cannot bend: where the boundary folds in 3D
-    // (a rim rising around an arch) it cuts the surface. Each gets a vertex at its centroid,
-    // which the fit then places (two rounds: the insertions flip edges).
-    // Likewise an edge between two boundary vertices that are not neighbours on the loop (across
-    // a notch of the boundary) gets a vertex at its middle.
-    for (int round = 0; round < 3; ++round) {
-      std::vector<Eigen::Vector2d> centroids;
-      for (const auto f : cdt.finite_face_handles()) {
-        if (f->info() % 2 != 1) continue;
-        for (int e = 0; e < 3; ++e) {
-          const int a = f->vertex((e + 1) % 3)->info(), b = f->vertex((e + 2) % 3)->info();
-          const Cdt::Face_handle g = f->neighbor(e);
-          // Each inner edge once (from its face with the larger address), never a loop edge.
-          if (a >= n || b >= n || cdt.is_constrained(Cdt::Edge(f, e)) || cdt.is_infinite(g) || g->info() % 2 != 1 ||
-              &*g > &*f)
-            continue;
-          const auto c = CGAL::midpoint(f->vertex((e + 1) % 3)->point(), f->vertex((e + 2) % 3)->point());
-          centroids.emplace_back(c.x(), c.y());
-        }
-        if (f->vertex(0)->info() >= n || f->vertex(1)->info() >= n || f->vertex(2)->info() >= n) continue;
-        const auto c = CGAL::centroid(f->vertex(0)->point(), f->vertex(1)->point(), f->vertex(2)->point());
-        centroids.emplace_back(c.x(), c.y());
-      }
-      if (centroids.empty() || static_cast<int>(grid.size() + centroids.size()) > max_interior) break;
-      for (const auto& c : centroids) {
-        last = cdt.insert(Point2(c.x(), c.y()), last->face());
-        last->info() = n + static_cast<int>(grid.size());
-        grid.push_back(c);
-      }
-      markNesting(cdt);
-    }
+    addBendVertices(cdt, n, max_interior, grid, last);
     const int m = static_cast<int>(grid.size());
     faces.clear();
     for (const auto f : cdt.finite_face_handles()) {

@@ -16,6 +16,10 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/utility.hpp>
 
 namespace {
 
@@ -24,9 +28,11 @@ using solo::TriangleMesh;
 using solo::test::metricInt;
 
 /// Torus (major radius 1, tube radius `r`), `nu` x `nv` quads, each split in two, with the faces
-/// whose centre (u, v) (u around the axis, v around the tube, v = 0 outside) lies in the wavy
-/// region |u| < hu (1 + au sin(wu v)), |v| < hv (1 + av sin(wv u)) removed.
-TriangleMesh torusWithWavyHole(double r, int nu, int nv, double hu, double au, double wu, double hv, double av, double wv) {
+/// whose centre (u, v) (u around the axis from one of `centres_u`, v around the tube, v = 0
+/// outside) lies in the wavy region |u| < hu (1 + au sin(wu v)), |v| < hv (1 + av sin(wv u))
+/// removed.
+TriangleMesh torusWithWavyHoles(double r, int nu, int nv, const std::vector<double>& centres_u, double hu, double au,
+                                double wu, double hv, double av, double wv) {
   TriangleMesh m;
   const auto angle = [](int i, int n) { return 2 * M_PI * i / n - M_PI; };
   for (int j = 0; j < nv; ++j)
@@ -35,14 +41,25 @@ TriangleMesh torusWithWavyHole(double r, int nu, int nv, double hu, double au, d
       m.vertices.emplace_back((1 + r * std::cos(v)) * std::cos(u), (1 + r * std::cos(v)) * std::sin(u), r * std::sin(v));
     }
   const auto id = [&](int i, int j) { return static_cast<std::uint32_t>((i % nu) + nu * (j % nv)); };
+  const auto inHole = [&](double u_from_axis, double v) {
+    for (const double centre : centres_u) {
+      const double u = std::remainder(u_from_axis - centre, 2 * M_PI);
+      if (std::abs(u) < hu * (1 + au * std::sin(wu * v)) && std::abs(v) < hv * (1 + av * std::sin(wv * u))) return true;
+    }
+    return false;
+  };
   for (int j = 0; j < nv; ++j)
     for (int i = 0; i < nu; ++i) {
-      const double u = angle(i, nu) + M_PI / nu, v = angle(j, nv) + M_PI / nv;
-      if (std::abs(u) < hu * (1 + au * std::sin(wu * v)) && std::abs(v) < hv * (1 + av * std::sin(wv * u))) continue;
+      if (inHole(angle(i, nu) + M_PI / nu, angle(j, nv) + M_PI / nv)) continue;
       m.faces.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
       m.faces.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
     }
   return m;
+}
+
+/// The same torus with one wavy hole around u = 0.
+TriangleMesh torusWithWavyHole(double r, int nu, int nv, double hu, double au, double wu, double hv, double av, double wv) {
+  return torusWithWavyHoles(r, nu, nv, {0.0}, hu, au, wu, hv, av, wv);
 }
 
 TEST(LargeHoles, PlanarHoleGetsAFlatMembraneOverAHexagonalGrid) {
@@ -207,6 +224,43 @@ TEST_F(WavyTorus, HoleIsClosedCloseToTheTorus) {
   // 0.348; CGAL's chain split in two pieces: 0.066 and 0.307).
   EXPECT_LT(mean, 0.07);
   EXPECT_LT(worst, 0.2);
+}
+
+/// The torus with two large wavy holes (866 boundary vertices each, on opposite sides of the
+/// axis) closed with `threads` OpenCV threads: the mesh after the closing and the hole methods.
+struct ClosedTorus {
+  TriangleMesh mesh;
+  std::vector<std::string> methods;
+};
+ClosedTorus closeTwoHoles(int threads) {
+  const int threads_before = cv::getNumThreads();
+  cv::setNumThreads(threads);
+  const TriangleMesh soup = torusWithWavyHoles(kTube, 512, 128, {-M_PI / 2, M_PI / 2}, 1.0, 0.2, 6, 1.4, 0.15, 5);
+  solo::SurfaceMesh mesh = solo::toSurfaceMesh(soup);
+  const solo::HoleClosing closing = solo::closeHoles(mesh, solo::findBoundaryLoops(mesh), {});
+  cv::setNumThreads(threads_before);
+  mesh.garbage_collection();
+  return {solo::toTriangleMesh(mesh), closing.hole_methods};
+}
+
+TEST(LargeHoles, ClosingDoesNotDependOnTheThreadCount) {
+  // Both holes defeat CGAL's chain and close in pieces split by chords, filled in parallel by
+  // the large-hole fill (whose projected triangulations get vertices at inner edges'
+  // midpoints): one thread, then two, twice, give the same mesh.
+  const ClosedTorus one = closeTwoHoles(1);
+  ASSERT_EQ(one.methods.size(), 2u);
+  for (const auto& method : one.methods) EXPECT_EQ(method, "chord_split");
+  for (int run = 0; run < 2; ++run) {
+    const ClosedTorus two = closeTwoHoles(2);
+    EXPECT_EQ(two.methods, one.methods);
+    ASSERT_EQ(two.mesh.vertices.size(), one.mesh.vertices.size());
+    ASSERT_EQ(two.mesh.faces.size(), one.mesh.faces.size());
+    std::size_t moved = 0, changed = 0;
+    for (std::size_t i = 0; i < one.mesh.vertices.size(); ++i) moved += two.mesh.vertices[i] != one.mesh.vertices[i];
+    for (std::size_t i = 0; i < one.mesh.faces.size(); ++i) changed += two.mesh.faces[i] != one.mesh.faces[i];
+    EXPECT_EQ(moved, 0u) << "vertices moved in run " << run;
+    EXPECT_EQ(changed, 0u) << "faces changed in run " << run;
+  }
 }
 
 TEST(SharedMeshesBeetle, TheLargestHoleClosesWithoutSelfIntersection) {
