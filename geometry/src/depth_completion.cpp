@@ -93,13 +93,20 @@ cv::Mat skyMask(const cv::Mat& depth_m, const cv::Mat& labels, int window_px) {
   return sky;
 }
 
+// An inverse-depth plane q = a x + b y + c (pixels), the trend of a planar segment.
+struct InversePlane {
+  double a = 0, b = 0, c = 0;
+  double at(int x, int y) const { return a * x + b * y + c; }
+};
+
 struct CompletionState {
   cv::Mat inverse_depth;  // CV_32F 1/z where valid or filled, 0 elsewhere
   cv::Mat valid, sky;     // CV_8U
   cv::Mat segments;       // CV_32S
   cv::Mat hole;           // CV_8U: invalid and not sky
+  cv::Mat extended;       // CV_8U: holes above their column's first depth, given the depth below them
   cv::Mat segment_free;   // CV_8U: the pixel's segment has no valid pixel (filled across borders)
-  std::unordered_map<int, Segment> by_id;
+  std::unordered_map<int, InversePlane> planes;  // the planar segments' trends
 };
 
 std::unordered_map<int, Segment> describeSegments(const CompletionState& s) {
@@ -108,36 +115,128 @@ std::unordered_map<int, Segment> describeSegments(const CompletionState& s) {
     const int* id = s.segments.ptr<int>(y);
     const std::uint8_t* valid = s.valid.ptr<std::uint8_t>(y);
     const std::uint8_t* hole = s.hole.ptr<std::uint8_t>(y);
+    const std::uint8_t* extended = s.extended.ptr<std::uint8_t>(y);
     Segment* cached = nullptr;
     int cached_id = 0;
     for (int x = 0; x < s.segments.cols; ++x) {
       if (!cached || id[x] != cached_id) cached = &segments[id[x]], cached_id = id[x];
       if (!valid[x] && !hole[x]) continue;  // sky
       cached->include(x, y);
-      cached->valid += valid[x] ? 1 : 0;
-      cached->holes += hole[x] ? 1 : 0;
+      cached->valid += valid[x] || extended[x] ? 1 : 0;
+      cached->holes += hole[x] && !extended[x] ? 1 : 0;
     }
   }
   return segments;
 }
 
-// Step 2: a segment's holes from the segment's own valid pixels, within its bounding box.
-void fillWithinSegment(CompletionState& s, int id, const Segment& box) {
+// Step 2: a hole above the first depth of its column takes the nearest depth below it of its own
+// segment, else the nearest below it: a vertical surface (a facade, a vehicle's back) keeps its
+// depth along an image column, and nothing above says otherwise. Returns the pixels extended.
+std::int64_t extendColumnsUpward(CompletionState& s) {
+  const int w = s.hole.cols, h = s.hole.rows;
+  s.extended = cv::Mat(s.hole.size(), CV_8U, cv::Scalar(0));
+  std::int64_t extended = 0;
+  std::vector<std::pair<int, float>> below_by_segment;  // nearest depth below, per segment
+  for (int x = 0; x < w; ++x) {
+    int first = h;
+    for (int y = 0; y < h && first == h; ++y)
+      if (s.valid.at<std::uint8_t>(y, x)) first = y;
+    if (first == 0 || first == h) continue;
+    below_by_segment.clear();
+    float below_any = 0;
+    for (int y = h - 1; y >= 0; --y) {
+      const int id = s.segments.at<int>(y, x);
+      if (s.valid.at<std::uint8_t>(y, x)) {
+        const float q = s.inverse_depth.at<float>(y, x);
+        below_any = q;
+        const auto it = std::find_if(below_by_segment.begin(), below_by_segment.end(),
+                                     [id](const auto& e) { return e.first == id; });
+        if (it != below_by_segment.end()) it->second = q;
+        else below_by_segment.emplace_back(id, q);
+        continue;
+      }
+      if (y >= first || !s.hole.at<std::uint8_t>(y, x)) continue;
+      const auto it = std::find_if(below_by_segment.begin(), below_by_segment.end(),
+                                   [id](const auto& e) { return e.first == id; });
+      s.inverse_depth.at<float>(y, x) = it != below_by_segment.end() ? it->second : below_any;
+      s.extended.at<std::uint8_t>(y, x) = 255;
+      ++extended;
+    }
+  }
+  return extended;
+}
+
+// Least squares of q = a x + b y + c over `samples` (x, y, q), weighted.
+bool fitPlane(const std::vector<cv::Vec3d>& samples, const std::vector<double>& weights, InversePlane& plane) {
+  cv::Matx33d normal = cv::Matx33d::zeros();
+  cv::Vec3d rhs(0, 0, 0);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const cv::Vec3d row(samples[i][0], samples[i][1], 1);
+    normal += weights[i] * row * row.t();
+    rhs += weights[i] * samples[i][2] * row;
+  }
+  cv::Vec3d coefficients;
+  if (!cv::solve(normal, rhs, coefficients, cv::DECOMP_CHOLESKY)) return false;
+  plane = {coefficients[0], coefficients[1], coefficients[2]};
+  return std::isfinite(plane.a) && std::isfinite(plane.b) && std::isfinite(plane.c);
+}
+
+// A segment's inverse-depth plane when its depth is one (median residual below
+// planar_tolerance of its median inverse depth, after one reweighting that drops outliers
+// beyond 3 median residuals): the road, a facade. Up to ~20000 samples.
+bool segmentPlane(const CompletionState& s, int id, const cv::Rect& rect, double planar_tolerance, InversePlane& plane) {
+  std::vector<cv::Vec3d> samples;
+  const std::int64_t area = static_cast<std::int64_t>(rect.area());
+  const int stride = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(area) / 20000.0)));
+  for (int y = rect.y; y < rect.y + rect.height; y += stride)
+    for (int x = rect.x; x < rect.x + rect.width; x += stride)
+      if (s.valid.at<std::uint8_t>(y, x) && s.segments.at<int>(y, x) == id)
+        samples.emplace_back(x, y, s.inverse_depth.at<float>(y, x));
+  if (samples.size() < 50) return false;
+  std::vector<double> weights(samples.size(), 1.0), residuals(samples.size()), values(samples.size());
+  for (int pass = 0; pass < 2; ++pass) {
+    if (!fitPlane(samples, weights, plane)) return false;
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      residuals[i] = std::abs(samples[i][2] - plane.at(static_cast<int>(samples[i][0]), static_cast<int>(samples[i][1])));
+      values[i] = samples[i][2];
+    }
+    std::vector<double> sorted = residuals;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+    const double median_residual = sorted[sorted.size() / 2];
+    for (std::size_t i = 0; i < samples.size(); ++i) weights[i] = residuals[i] <= 3 * median_residual + 1e-12 ? 1 : 0;
+    if (pass == 1) {
+      std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2), values.end());
+      return median_residual <= planar_tolerance * values[values.size() / 2];
+    }
+  }
+  return false;
+}
+
+// Step 3: a segment's holes from the segment's own valid pixels, within its bounding box: the
+// residual from the segment's plane (planar segments) or the inverse depth itself, pull-pushed.
+void fillWithinSegment(CompletionState& s, int id, const Segment& box, double planar_tolerance) {
   const cv::Rect rect(box.x0, box.y0, box.x1 - box.x0 + 1, box.y1 - box.y0 + 1);
-  const cv::Mat ids = s.segments(rect), valid = s.valid(rect), hole = s.hole(rect);
-  cv::Mat weight(rect.size(), CV_32F, cv::Scalar(0));
-  cv::Mat value = s.inverse_depth(rect).clone();
+  const cv::Mat ids = s.segments(rect), valid = s.valid(rect) | s.extended(rect), hole = s.hole(rect) & ~s.extended(rect);
+  InversePlane plane;
+  const bool planar = segmentPlane(s, id, rect, planar_tolerance, plane);
+  if (planar) s.planes[id] = plane;
+  const auto trend = [&](int x, int y) { return planar ? plane.at(x + rect.x, y + rect.y) : 0.0; };
+  cv::Mat weight(rect.size(), CV_32F, cv::Scalar(0)), value(rect.size(), CV_32F, cv::Scalar(0));
   for (int y = 0; y < rect.height; ++y)
     for (int x = 0; x < rect.width; ++x)
-      if (valid.at<std::uint8_t>(y, x) && ids.at<int>(y, x) == id) weight.at<float>(y, x) = 1;
+      if (valid.at<std::uint8_t>(y, x) && ids.at<int>(y, x) == id) {
+        weight.at<float>(y, x) = 1;
+        value.at<float>(y, x) = static_cast<float>(s.inverse_depth(rect).at<float>(y, x) - trend(x, y));
+      }
   const cv::Mat dense = pullPushInterpolate(value, weight);
   cv::Mat out = s.inverse_depth(rect);
   for (int y = 0; y < rect.height; ++y)
     for (int x = 0; x < rect.width; ++x)
-      if (hole.at<std::uint8_t>(y, x) && ids.at<int>(y, x) == id) out.at<float>(y, x) = dense.at<float>(y, x);
+      if (hole.at<std::uint8_t>(y, x) && ids.at<int>(y, x) == id)
+        out.at<float>(y, x) = static_cast<float>(dense.at<float>(y, x) + trend(x, y));
 }
 
-// Step 3: the holes of segments without depth, from every pixel that has one now.
+// Step 4: the holes of segments without depth, from every pixel that has one now.
 void fillAcrossSegments(CompletionState& s) {
   cv::Mat weight(s.inverse_depth.size(), CV_32F, cv::Scalar(0));
   for (int y = 0; y < weight.rows; ++y)
@@ -146,7 +245,7 @@ void fillAcrossSegments(CompletionState& s) {
   const cv::Mat dense = pullPushInterpolate(s.inverse_depth, weight);
   for (int y = 0; y < weight.rows; ++y)
     for (int x = 0; x < weight.cols; ++x)
-      if (s.segment_free.at<std::uint8_t>(y, x) && s.hole.at<std::uint8_t>(y, x))
+      if (s.segment_free.at<std::uint8_t>(y, x) && s.hole.at<std::uint8_t>(y, x) && !s.extended.at<std::uint8_t>(y, x))
         s.inverse_depth.at<float>(y, x) = dense.at<float>(y, x);
 }
 
@@ -155,6 +254,7 @@ struct RelaxNode {
   int index = 0;
   std::array<int, 4> neighbour{};
   std::array<float, 4> weight{};
+  std::array<float, 4> shift{};  // the plane trend's step to the neighbour, subtracted from its value
 };
 
 std::vector<RelaxNode> relaxationNodes(const CompletionState& s, const cv::Mat& image, double sigma_color) {
@@ -164,11 +264,12 @@ std::vector<RelaxNode> relaxationNodes(const CompletionState& s, const cv::Mat& 
   constexpr int kDx[4] = {1, -1, 0, 0}, kDy[4] = {0, 0, 1, -1};
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      if (!s.hole.at<std::uint8_t>(y, x)) continue;
+      if (!s.hole.at<std::uint8_t>(y, x) || s.extended.at<std::uint8_t>(y, x)) continue;
       RelaxNode node;
       node.index = y * w + x;
       const int id = s.segments.at<int>(y, x);
       const bool free = s.segment_free.at<std::uint8_t>(y, x) != 0;
+      const auto plane = free ? s.planes.end() : s.planes.find(id);
       for (int k = 0; k < 4; ++k) {
         const int nx = x + kDx[k], ny = y + kDy[k];
         node.neighbour[k] = node.index;
@@ -181,13 +282,15 @@ std::vector<RelaxNode> relaxationNodes(const CompletionState& s, const cv::Mat& 
         }
         node.neighbour[k] = ny * w + nx;
         node.weight[k] = std::max(wt, 1e-6f);
+        if (plane != s.planes.end())
+          node.shift[k] = static_cast<float>(-(plane->second.a * kDx[k] + plane->second.b * kDy[k]));
       }
       nodes.push_back(node);
     }
   return nodes;
 }
 
-// Step 4: red-black successive over-relaxation of the edge-weighted membrane over the filled
+// Step 5: red-black successive over-relaxation of the edge-weighted membrane over the filled
 // pixels (a 4-neighbour's parity differs from its centre's, so each half-sweep is parallel).
 void relax(CompletionState& s, const cv::Mat& image, const DepthCompletionOptions& options) {
   if (options.relax_iterations <= 0) return;
@@ -204,7 +307,7 @@ void relax(CompletionState& s, const cv::Mat& image, const DepthCompletionOption
       for (int i = range.start; i < range.end; ++i) {
         const RelaxNode& n = nodes[static_cast<std::size_t>(i)];
         float sum_w = 0, sum_wv = 0;
-        for (int k = 0; k < 4; ++k) sum_w += n.weight[k], sum_wv += n.weight[k] * q[n.neighbour[k]];
+        for (int k = 0; k < 4; ++k) sum_w += n.weight[k], sum_wv += n.weight[k] * (q[n.neighbour[k]] + n.shift[k]);
         if (sum_w > 0) q[n.index] = (1 - omega) * q[n.index] + omega * sum_wv / sum_w;
       }
     });
@@ -276,12 +379,13 @@ DepthCompletionResult completeDepth(const cv::Mat& depth_m, const cv::Mat& image
     return result;
   }
 
-  // Steps 2 and 3.
+  // Steps 2 to 4.
+  const std::int64_t extended = extendColumnsUpward(s);
   std::int64_t within = 0, across_segments = 0, across_pixels = 0;
   for (const auto& [id, segment] : describeSegments(s)) {
     if (segment.holes == 0) continue;
     if (segment.valid > 0) {
-      fillWithinSegment(s, id, segment);
+      fillWithinSegment(s, id, segment, options.planar_tolerance);
       ++within;
       continue;
     }
@@ -310,6 +414,8 @@ DepthCompletionResult completeDepth(const cv::Mat& depth_m, const cv::Mat& image
 
   const double non_sky = static_cast<double>(valid + holes);
   report.add("filled_pixels", holes).add("filled_share", 100.0 * static_cast<double>(holes) / non_sky, "%");
+  report.add("extended_upward_pixels", extended);
+  report.add("planar_segments", static_cast<std::int64_t>(s.planes.size()));
   report.add("segments_filled_within", within).add("segments_without_depth", across_segments);
   report.add("pixels_filled_across_segments", across_pixels);
   report.add("relax_iterations", static_cast<std::int64_t>(options.relax_iterations));

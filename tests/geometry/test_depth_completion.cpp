@@ -55,15 +55,29 @@ TEST(DepthCompletion, AHoleInATiltedPlaneIsFilledOnThePlane) {
   const solo::DepthCompletionResult r = solo::completeDepth(depth, {}, {}, {});
   EXPECT_EQ(cv::countNonZero(r.filled), hole.area());
   EXPECT_EQ(cv::countNonZero(r.depth_m > 0), size.area());
-  // Pull-push alone is a blend of scales; the relaxation makes it harmonic, and an affine
-  // inverse depth is harmonic.
-  EXPECT_LT(meanAbsRelOver(r.depth_m, truth, r.filled), 0.01);
-  solo::DepthCompletionOptions pull_push_only;
-  pull_push_only.relax_iterations = 0;
-  const solo::DepthCompletionResult coarse = solo::completeDepth(depth, {}, {}, {}, pull_push_only);
-  EXPECT_LT(meanAbsRelOver(r.depth_m, truth, r.filled), meanAbsRelOver(coarse.depth_m, truth, coarse.filled));
+  // The road's inverse depth fits a plane: the hole continues it.
+  EXPECT_LT(meanAbsRelOver(r.depth_m, truth, r.filled), 1e-4);
+  EXPECT_EQ(std::get<std::int64_t>(*r.report.find("planar_segments")), 1);
   // Valid pixels are returned unchanged.
   EXPECT_EQ(cv::countNonZero((r.depth_m != truth) & (depth > 0)), 0);
+}
+
+TEST(DepthCompletion, TheRelaxationBringsACurvedSurfaceCloserThanPullPushAlone) {
+  // A curved surface (no plane fits): pull-push blends scales, the membrane is smoother.
+  const cv::Size size(160, 120);
+  cv::Mat truth(size, CV_32F);
+  for (int y = 0; y < size.height; ++y)
+    for (int x = 0; x < size.width; ++x)
+      truth.at<float>(y, x) = static_cast<float>(1.0 / (0.05 + 0.02 * std::sin(x / 25.0) + 0.0004 * y));
+  cv::Mat depth = truth.clone();
+  depth(cv::Rect(50, 40, 40, 30)).setTo(0);
+  solo::DepthCompletionOptions relaxed, pull_push_only;
+  pull_push_only.relax_iterations = 0;
+  const solo::DepthCompletionResult r = solo::completeDepth(depth, {}, {}, {}, relaxed);
+  const solo::DepthCompletionResult coarse = solo::completeDepth(depth, {}, {}, {}, pull_push_only);
+  EXPECT_EQ(std::get<std::int64_t>(*r.report.find("planar_segments")), 0);
+  EXPECT_LT(meanAbsRelOver(r.depth_m, truth, r.filled), 0.5 * meanAbsRelOver(coarse.depth_m, truth, coarse.filled));
+  EXPECT_LT(meanAbsRelOver(r.depth_m, truth, r.filled), 0.02);
 }
 
 TEST(DepthCompletion, NeverFillsAcrossAnInstanceBorderWhereBothSidesHaveDepth) {
@@ -123,6 +137,26 @@ TEST(DepthCompletion, SparseRowsLikeLidarBecomeDense) {
   EXPECT_EQ(cv::countNonZero(r.sky), 14 * size.width);
   EXPECT_EQ(cv::countNonZero(r.depth_m > 0), size.area() - 14 * size.width);
   EXPECT_LT(meanAbsRelOver(r.depth_m, truth, r.filled), 0.01);
+}
+
+TEST(DepthCompletion, AFacadeAboveTheHighestReturnKeepsItsColumnsDepth) {
+  // A wall seen at an angle (depth varies along x only, as for any vertical plane), the sky
+  // above it, and no depth in its upper rows (above a LiDAR's highest beam); a near car
+  // in front of its lower part, then the road.
+  const cv::Size size(90, 60);
+  cv::Mat depth(size, CV_32F), labels(size, CV_32S, cv::Scalar(11)), truth(size, CV_32F);
+  for (int y = 0; y < size.height; ++y)
+    for (int x = 0; x < size.width; ++x) truth.at<float>(y, x) = static_cast<float>(1.0 / (0.02 + 0.0008 * x));
+  labels(cv::Rect(0, 0, 90, 10)).setTo(23);
+  labels(cv::Rect(20, 30, 30, 20)).setTo(26);
+  truth(cv::Rect(20, 30, 30, 20)).setTo(6);
+  truth.copyTo(depth);
+  depth(cv::Rect(0, 0, 90, 25)).setTo(0);
+  const solo::DepthCompletionResult r = solo::completeDepth(depth, {}, labels, {});
+  EXPECT_EQ(std::get<std::int64_t>(*r.report.find("extended_upward_pixels")), 90 * 15);
+  for (int y = 10; y < 25; ++y)
+    for (int x = 0; x < 90; ++x) ASSERT_NEAR(r.depth_m.at<float>(y, x), truth.at<float>(y, x), 1e-3 * truth.at<float>(y, x));
+  EXPECT_EQ(cv::countNonZero(r.depth_m(cv::Rect(0, 0, 90, 10))), 0);
 }
 
 TEST(DepthCompletion, ExtremeRangesAndImageEdgesStayFiniteAndBounded) {

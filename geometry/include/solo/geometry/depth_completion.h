@@ -8,14 +8,22 @@
 // 1. Sky: labelIds == 23 when the scene has labels; without labels, an invalid pixel is sky when
 //    no pixel above it holds a depth in its column or the columns within sky_column_window of
 //    it (the sky is the top of every column; a LiDAR's columns between returns are not sky).
-// 2. Within each segment (instance id, or label id without instances): the segment's holes are
+// 2. Above the first depth of its column, a hole takes the nearest depth below it of its own
+//    segment, else the nearest below it: a vertical surface (a facade, the back of a vehicle)
+//    keeps its depth along an image column, and nothing above says otherwise (the top of a
+//    facade above a LiDAR's highest beam, a textureless wall under the sky).
+// 3. Within each segment (instance id, or label id without instances): the segment's holes are
 //    filled from its own valid pixels by pull-push interpolation (Gortler et al. 1996), so a hole
-//    is never filled across an instance border from a segment that has depth of its own.
-// 3. Segments with no valid pixel at all (a pole the matcher missed, the ego vehicle): filled by
+//    is never filled across an instance border from a segment that has depth of its own. A
+//    planar segment (its inverse depth fits a plane to planar_tolerance: the road) interpolates
+//    its residual from that plane, so a hole at the image's edge continues the plane instead of
+//    holding the depth of its far side.
+// 4. Segments with no valid pixel at all (a pole the matcher missed, the ego vehicle): filled by
 //    the same interpolation from every valid or filled pixel, across their borders.
-// 4. Edge-aware relaxation: red-black over-relaxed Gauss-Seidel sweeps of a membrane over the filled pixels (valid pixels
+// 5. Edge-aware relaxation: red-black over-relaxed Gauss-Seidel sweeps of a membrane over the filled pixels (valid pixels
 //    fixed), neighbour weights exp(-|I(p) - I(q)|^2 / 2 sigma^2) from the day image and 0 across
-//    segment borders, so filled depth follows the image's edges within a segment.
+//    segment borders, so filled depth follows the image's edges within a segment (the pixels of
+//    step 2 keep their column's depth; a planar segment relaxes its residual from the plane).
 // Sparse depth (projected LiDAR) goes through the same steps: pull-push is a scattered-data
 // interpolator. The output is clamped to the valid depths' range.
 
@@ -34,6 +42,9 @@ struct DepthCompletionOptions {
   /// Without labels: the columns each side whose first depth bounds the sky, as a share of the
   /// image width (1 %: 19 px at 1920, wider than a LiDAR's gaps between returns).
   double sky_column_window = 0.01;
+  /// A segment is planar when the median distance of its inverse depths from their fitted
+  /// plane is below this share of their median (a road: 0.1-0.5 %; two facades: 5-20 %).
+  double planar_tolerance = 0.02;
   /// Successive over-relaxation factor of the sweeps, in (0, 2); 1 is plain Gauss-Seidel.
   double over_relaxation = 1.8;
 };
