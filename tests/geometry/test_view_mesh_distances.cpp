@@ -244,13 +244,15 @@ TEST(ViewMeshDistances, RefinedDepthMeshErrorIsTheDepthErrorWeightedByArea) {
     }
   }
   // Measured (320x180, seed 3): 7 % of the true pixels lie beyond 80 m and make 98 % of the
-  // 11.9 m mean (the 160 m band alone 11.5 m: 55 % of the mesh's area, 2.5 % of the pixels).
+  // 6.2 m mean (the far end: 6.1 m).
   EXPECT_LT(static_cast<double>(far_pixels), 0.15 * static_cast<double>(pixels));
   EXPECT_GT(far_contribution_m, 0.5 * v.mean_to_truth_m);
-  // Measured: solids 0.044 m, hole patches 0.001 m of the 11.9 m.
-  const double solids_and_patches_m = v.by_origin[static_cast<int>(FaceOrigin::Solid)].contribution_m +
-                                      v.by_origin[static_cast<int>(FaceOrigin::HoleFill)].contribution_m;
-  EXPECT_LT(solids_and_patches_m, 0.2 * v.mean_to_truth_m);
+  // Measured: the mean is 6.2 m (11.8 m without depth completion: a few pixels at the street's
+  // far end without depth left its frame hole open there); solids 0.04 m; the far end's hole
+  // patch 3.2 m, the depth surface 2.9 m.
+  EXPECT_LT(v.mean_to_truth_m, 8.0);
+  EXPECT_LT(v.by_origin[static_cast<int>(FaceOrigin::Solid)].contribution_m, 0.05 * v.mean_to_truth_m);
+  EXPECT_LT(v.by_origin[static_cast<int>(FaceOrigin::HoleFill)].contribution_m, 0.6 * v.mean_to_truth_m);
   // The refined mesh keeps the true surfaces (measured 0.94 of the pixels within 5 % of their depth;
   // the half-resolution estimate's own mesh keeps 0.93 at 960x540 but only 0.3 % of those beyond 160 m).
   EXPECT_GT(v.truth_covered, 0.9);
