@@ -383,7 +383,7 @@ StageReport describeScene(const Scene& s) {
     for (const MapRecord& map : s.maps) present |= map.name == optional_map;
     if (!present) r.notes.push_back(std::string("no ") + optional_map + " map given");
   }
-  for (const std::string& w : s.warnings) r.notes.push_back(w);
+  for (const std::string& w : s.warnings) r.warnings.push_back(w);
   return r;
 }
 

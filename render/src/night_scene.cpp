@@ -152,7 +152,7 @@ FaceVertices NightSceneBuilder::addFaceVertices(SurfaceMesh::FaceHandle f,
     if (props) {
       const auto origin = static_cast<VertexOrigin>(mesh.property(props->origin, vh));
       out.behind |= origin == VertexOrigin::SolidBack || origin == VertexOrigin::Input;
-      out.filled |= origin == VertexOrigin::HoleFill;
+      out.filled |= origin == VertexOrigin::HoleFill || origin == VertexOrigin::Skirt;
     }
     int& index = index_of_vertex[static_cast<std::size_t>(vh.idx())];
     if (index < 0) {
@@ -449,7 +449,7 @@ void NightSceneBuilder::writeReport() {
   report.add("luminance_lights_area_mesh", luminance_area_mesh_m2, "m2");
   report.add("luminance_lights_area_record", luminance_area_record_m2, "m2");
   for (const auto& [category, count] : lights_on_by_category) report.add("on_" + category, count);
-  if (scene.emitters.empty()) report.notes.push_back("no active light in view");
+  if (scene.emitters.empty()) report.warnings.push_back("no active light in view");
 }
 
 }  // namespace

@@ -175,11 +175,15 @@ cv::Mat dayImage(const SyntheticStreet& street, const SyntheticSceneOptions& o, 
     DaylightRender traced = renderDaylightPathTraced(street.scene, day_options);
     traced.report.seconds = clock.seconds();
     traced.report.notes.push_back("day image path traced: sun and sky gradient, NEE + MIS (--day-render path)");
+    traced.report.metrics.insert(traced.report.metrics.begin(), Metric{"day_render", std::string("path"), ""});
     report.stages.push_back(std::move(traced.report));
     return std::move(traced.linear_rgb);
   }
   cv::Mat day = renderDaylight(street.scene, street.truth);
-  addStage(report, "daylight", clock.seconds()).add("samples_per_pixel", std::int64_t{1}).notes.push_back(
+  addStage(report, "daylight", clock.seconds())
+      .add("day_render", std::string("raster"))
+      .add("samples_per_pixel", std::int64_t{1})
+      .notes.push_back(
       "day image rastered: sun with one shadow ray, sky as an ambient term (--day-render path traces it)");
   return day;
 }

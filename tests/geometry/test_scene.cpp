@@ -96,7 +96,7 @@ TEST(Scene, LoadsEveryMapAndRecordsSizesAndCounts) {
   EXPECT_EQ(std::get<std::int64_t>(*r.find("depth_invalid")), 3);
 }
 
-TEST(Scene, DefaultCameraIsAcdcScaledWithAWarning) {
+TEST(Scene, DefaultCameraAt16By9IsAcdcsWithAWarning) {
   TempDir dir;
   solo::writeImage(dir / "day.png", cv::Mat(540, 960, CV_8UC3, cv::Scalar(1, 2, 3)));
   solo::writeImage(dir / "d.exr", cv::Mat(540, 960, CV_32F, cv::Scalar(12.5)));
@@ -233,8 +233,9 @@ TEST(Scene, NonFiniteColoursAreSetToZeroAndCounted) {
   EXPECT_TRUE(said("4 NaN or infinite values of the day image set to 0"));
   EXPECT_TRUE(said("1 NaN or infinite values of the albedo set to 0"));
   const solo::StageReport r = solo::describeScene(s);
-  EXPECT_NE(std::find(r.notes.begin(), r.notes.end(), "4 NaN or infinite values of the day image set to 0"), r.notes.end())
-      << "the count reaches the input stage's report";
+  EXPECT_NE(std::find(r.warnings.begin(), r.warnings.end(), "4 NaN or infinite values of the day image set to 0"),
+            r.warnings.end())
+      << "the count reaches the input stage's report, as a warning the terminal shows";
 }
 
 namespace {
@@ -366,10 +367,11 @@ TEST(Scene, DefaultCameraHasSquarePixelsAndTheAcdcFieldOfView) {
   bool warned = false;
   for (const std::string& w : kitti.warnings) warned |= w.find("no camera given") != std::string::npos;
   EXPECT_TRUE(warned);
+  // A warning of the input stage: on the terminal, not only in the report's notes.
   const solo::StageReport r = solo::describeScene(kitti);
-  EXPECT_NE(std::find_if(r.notes.begin(), r.notes.end(),
+  EXPECT_NE(std::find_if(r.warnings.begin(), r.warnings.end(),
                          [](const std::string& n) { return n.find("no camera given") != std::string::npos; }),
-            r.notes.end());
+            r.warnings.end());
 
   const solo::PinholeCamera hd = solo::defaultSceneCamera(1920, 1080);
   EXPECT_EQ(hd.fx, 1780.0);

@@ -93,7 +93,7 @@ TEST(NightScene, FacesTakeTheAlbedoOfTheirPixelAndNoLightMeansNoEmitter) {
   EXPECT_TRUE(night.scene.emitters.empty());
   EXPECT_TRUE(night.scene.rectangle_lights.empty());
   bool said_no_light = false;
-  for (const std::string& note : night.report.notes) said_no_light |= note == "no active light in view";
+  for (const std::string& warning : night.report.warnings) said_no_light |= warning == "no active light in view";
   EXPECT_TRUE(said_no_light);
 }
 

@@ -28,17 +28,21 @@ TEST(CliDepth, WritesRefinedDepthNormalsMaskAndReport) {
   EXPECT_EQ(j["command"], "depth");
   std::vector<std::string> names;
   for (const auto& stage : j["stages"]) names.push_back(stage["name"]);
-  EXPECT_EQ(names, (std::vector<std::string>{"input", "upsample", "filter", "uncertain", "optimize", "refine"}));
-  EXPECT_EQ(j["stages"][5]["metrics"]["uncertain_pixels"], cv::countNonZero(mask));
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"input", "upsample", "complete", "filter", "uncertain", "optimize", "refine"}));
+  EXPECT_EQ(j["stages"][6]["metrics"]["uncertain_pixels"], cv::countNonZero(mask));
 }
 
 TEST(CliDepth, SwitchedOffStepsAreReportedAsSkipped) {
   TempDir dir;
-  const auto r = runSolo("depth " + kScene + " -o \"" + (dir / "d.pfm").string() + "\" --no-optimize --no-uncertain");
+  const auto r = runSolo("depth " + kScene + " -o \"" + (dir / "d.pfm").string() +
+                         "\" --no-optimize --no-uncertain --no-complete");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(solo::test::readText(dir / "d.report.json"));
-  EXPECT_TRUE(j["stages"][3]["skipped"].get<bool>());
-  EXPECT_EQ(j["stages"][4]["skip_reason"], "switched off");
+  EXPECT_EQ(j["stages"][2]["name"], "complete");
+  EXPECT_EQ(j["stages"][2]["skip_reason"], "switched off");
+  EXPECT_TRUE(j["stages"][4]["skipped"].get<bool>());
+  EXPECT_EQ(j["stages"][5]["skip_reason"], "switched off");
 }
 
 TEST(CliDepth, AMissingSceneIsAnErrorNamingItAndWritesNothing) {
