@@ -257,36 +257,50 @@ struct RelaxNode {
   std::array<float, 4> shift{};  // the plane trend's step to the neighbour, subtracted from its value
 };
 
-std::vector<RelaxNode> relaxationNodes(const CompletionState& s, const cv::Mat& image, double sigma_color) {
+// The nodes of row y, in pixel order.
+void relaxationRow(const CompletionState& s, const cv::Mat& image, float inv_two_sigma2, int y,
+                   std::vector<RelaxNode>& nodes) {
   const int w = s.hole.cols, h = s.hole.rows;
-  const float inv_two_sigma2 = static_cast<float>(1.0 / (2 * sigma_color * sigma_color));
-  std::vector<RelaxNode> nodes;
   constexpr int kDx[4] = {1, -1, 0, 0}, kDy[4] = {0, 0, 1, -1};
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      if (!s.hole.at<std::uint8_t>(y, x) || s.extended.at<std::uint8_t>(y, x)) continue;
-      RelaxNode node;
-      node.index = y * w + x;
-      const int id = s.segments.at<int>(y, x);
-      const bool free = s.segment_free.at<std::uint8_t>(y, x) != 0;
-      const auto plane = free ? s.planes.end() : s.planes.find(id);
-      for (int k = 0; k < 4; ++k) {
-        const int nx = x + kDx[k], ny = y + kDy[k];
-        node.neighbour[k] = node.index;
-        if (nx < 0 || ny < 0 || nx >= w || ny >= h || s.sky.at<std::uint8_t>(ny, nx)) continue;
-        if (!free && s.segments.at<int>(ny, nx) != id) continue;
-        float wt = 1;
-        if (!image.empty()) {
-          const cv::Vec3f d = image.at<cv::Vec3f>(y, x) - image.at<cv::Vec3f>(ny, nx);
-          wt = std::exp(-d.dot(d) * inv_two_sigma2);
-        }
-        node.neighbour[k] = ny * w + nx;
-        node.weight[k] = std::max(wt, 1e-6f);
-        if (plane != s.planes.end())
-          node.shift[k] = static_cast<float>(-(plane->second.a * kDx[k] + plane->second.b * kDy[k]));
+  for (int x = 0; x < w; ++x) {
+    if (!s.hole.at<std::uint8_t>(y, x) || s.extended.at<std::uint8_t>(y, x)) continue;
+    RelaxNode node;
+    node.index = y * w + x;
+    const int id = s.segments.at<int>(y, x);
+    const bool free = s.segment_free.at<std::uint8_t>(y, x) != 0;
+    const auto plane = free ? s.planes.end() : s.planes.find(id);
+    for (int k = 0; k < 4; ++k) {
+      const int nx = x + kDx[k], ny = y + kDy[k];
+      node.neighbour[k] = node.index;
+      if (nx < 0 || ny < 0 || nx >= w || ny >= h || s.sky.at<std::uint8_t>(ny, nx)) continue;
+      if (!free && s.segments.at<int>(ny, nx) != id) continue;
+      float wt = 1;
+      if (!image.empty()) {
+        const cv::Vec3f d = image.at<cv::Vec3f>(y, x) - image.at<cv::Vec3f>(ny, nx);
+        wt = std::exp(-d.dot(d) * inv_two_sigma2);
       }
-      nodes.push_back(node);
+      node.neighbour[k] = ny * w + nx;
+      node.weight[k] = std::max(wt, 1e-6f);
+      if (plane != s.planes.end())
+        node.shift[k] = static_cast<float>(-(plane->second.a * kDx[k] + plane->second.b * kDy[k]));
     }
+    nodes.push_back(node);
+  }
+}
+
+// Every filled pixel's node, in pixel order (rows built in parallel, joined in order).
+std::vector<RelaxNode> relaxationNodes(const CompletionState& s, const cv::Mat& image, double sigma_color) {
+  const float inv_two_sigma2 = static_cast<float>(1.0 / (2 * sigma_color * sigma_color));
+  std::vector<std::vector<RelaxNode>> rows(static_cast<std::size_t>(s.hole.rows));
+  cv::parallel_for_(cv::Range(0, s.hole.rows), [&](const cv::Range& range) {
+    for (int y = range.start; y < range.end; ++y)
+      relaxationRow(s, image, inv_two_sigma2, y, rows[static_cast<std::size_t>(y)]);
+  });
+  std::size_t count = 0;
+  for (const auto& row : rows) count += row.size();
+  std::vector<RelaxNode> nodes;
+  nodes.reserve(count);
+  for (const auto& row : rows) nodes.insert(nodes.end(), row.begin(), row.end());
   return nodes;
 }
 
