@@ -276,16 +276,6 @@ void closeSolids(StageReport& report, DepthMesh& m, const HoleClosing& holes, co
   report.add("foreground_solids_per_class", classes);
 }
 
-// The skirts' counts (occlusion_skirts.h).
-void addSkirtCounts(StageReport& report, const SkirtCounts& skirts) {
-  report.add("skirt_candidates", skirts.candidates);
-  report.add("skirt_faces", skirts.faces);
-  report.add("skirt_vertices", skirts.vertices);
-  report.add("skirt_faces_not_added", skirts.not_attached);
-  report.add("frame_skirt_faces", skirts.frame_faces);
-  report.add("frame_skirt_vertices", skirts.frame_vertices);
-}
-
 }  // namespace
 
 void addMeshCounts(StageReport& report, const std::string& prefix, const MeshMetrics& m) {
@@ -320,8 +310,6 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
 
   Stopwatch step;
   const SpuriousFaceResult spurious = findSpuriousFaces(m, depth_m, instances, uncertain, options.spurious);
-  SkirtSources skirt_sources;
-  if (options.skirts) skirt_sources = recordSkirtSources(m, spurious);
   removeSpuriousFaces(report, m, spurious);
   report.add("seconds_spurious_faces", step.seconds(), "s");
   if (spurious_truth) addSpuriousScores(report, spurious, *spurious_truth);
@@ -353,15 +341,11 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
   step = Stopwatch();
   const DepthLoops remaining = classifyDepthLoops(m, had_depth, depth_m, backdrop_mode);
   addLoopCounts(report, "after_", remaining);
-  const Stopwatch skirt_clock;
-  if (options.skirts) addSkirtCounts(report, addSkirts(m, skirt_sources));
-  const double skirt_seconds = skirt_clock.seconds();
-  report.add("seconds_skirts", skirt_seconds, "s");
   collectGarbage(mesh);
   rebuildPixelIndex(m);
   report.add("after_vertices_live", static_cast<std::int64_t>(mesh.n_vertices()));
   report.add("after_faces_live", static_cast<std::int64_t>(mesh.n_faces()));
-  report.add("seconds_garbage_collection", step.seconds() - skirt_seconds, "s");
+  report.add("seconds_garbage_collection", step.seconds(), "s");
 
   if (options.evaluate) {
     step = Stopwatch();

@@ -210,7 +210,7 @@ std::vector<FaceOrigin> faceOrigins(const SurfaceMesh& mesh) {
       for (const auto v : mesh.fv_range(f)) {
         const auto o = static_cast<VertexOrigin>(mesh.property(properties->origin, v));
         if (o == VertexOrigin::SolidBack) origin = FaceOrigin::Solid;
-        else if ((o == VertexOrigin::HoleFill || o == VertexOrigin::Skirt) && origin != FaceOrigin::Solid) origin = FaceOrigin::HoleFill;
+        else if (o == VertexOrigin::HoleFill && origin != FaceOrigin::Solid) origin = FaceOrigin::HoleFill;
       }
     out.push_back(origin);
   }

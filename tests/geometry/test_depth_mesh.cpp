@@ -10,8 +10,6 @@
 
 #include "test_support.h"
 
-#include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -562,66 +560,6 @@ TEST(DepthMeshCleanup, SkySeenThroughAGapStaysOpen) {
   EXPECT_EQ(metricInt(r, "found_inner_holes"), 0);
   EXPECT_EQ(metricInt(r, "after_boundary_loops_total"), 2);
   EXPECT_GE(metricDouble(r, "seconds_hole_filling"), 0.0);
-}
-
-/// The nearest hit (camera-space z) of the ray through pixel (u, v) with the live faces, or 0.
-double rayHitDepth(const solo::DepthMesh& m, double u, double v) {
-  const Eigen::Vector3d d((u - m.camera.cx) / m.camera.fx, (v - m.camera.cy) / m.camera.fy, 1.0);
-  double nearest = 0;
-  for (const auto f : m.mesh.faces()) {
-    if (m.mesh.status(f).deleted()) continue;
-    std::vector<Eigen::Vector3d> q;
-    for (const auto w : m.mesh.fv_range(f)) q.emplace_back(m.mesh.point(w)[0], m.mesh.point(w)[1], m.mesh.point(w)[2]);
-    const Eigen::Vector3d e1 = q[1] - q[0], e2 = q[2] - q[0], p = d.cross(e2);
-    const double det = e1.dot(p);
-    if (std::abs(det) < 1e-14) continue;
-    const Eigen::Vector3d s = -q[0];
-    const double a = s.dot(p) / det, b = d.dot(s.cross(e1)) / det;
-    const double t = e2.dot(s.cross(e1)) / det;
-    const double tolerance = 1e-9;
-    if (a < -tolerance || b < -tolerance || a + b > 1 + tolerance || t <= 0) continue;
-    if (nearest == 0 || t < nearest) nearest = t;
-  }
-  return nearest;
-}
-
-TEST(DepthMeshCleanup, SkirtsLeaveNoRayThroughAPixelWithoutAFace) {
-  // A box at 4 m standing on the bottom frame before a wall at 10 m. Without hole filling the
-  // wall stops one pixel short of the box; its skirt reaches under the box's edge at 10 m.
-  cv::Mat depth(kCamera.height, kCamera.width, CV_32F, cv::Scalar(10.0f));
-  const cv::Rect box(10, 9, 12, kCamera.height - 9);
-  depth(box).setTo(4.0f);
-  for (const bool fill_holes : {false, true}) {
-    solo::DepthMeshCleanupOptions options;
-    options.fill_holes = fill_holes;
-    solo::DepthMesh m = solo::meshFromDepth(depth, kCamera);
-    const solo::StageReport r = solo::cleanDepthMesh(m, depth, {}, {}, options);
-    EXPECT_GT(metricInt(r, "spurious_faces_removed"), 0);
-    EXPECT_GT(metricInt(r, "frame_skirt_faces"), 0);
-    if (!fill_holes) {
-      EXPECT_EQ(metricInt(r, "skirt_faces"), metricInt(r, "spurious_faces_removed"));
-    }
-    EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0);
-    EXPECT_EQ(metricInt(r, "after_non_manifold_vertices"), 0);
-    EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
-    EXPECT_EQ(metricInt(r, "after_degenerate_faces"), 0);
-    // Every pixel centre and pixel corner, the frame's outer corners too.
-    for (int j = -1; j < 2 * kCamera.height; ++j)
-      for (int i = -1; i < 2 * kCamera.width; ++i)
-        EXPECT_GT(rayHitDepth(m, 0.5 * i, 0.5 * j), 0.0)
-            << "ray through (" << 0.5 * i << ", " << 0.5 * j << ") misses, hole filling " << fill_holes;
-    if (fill_holes) continue;
-    // Between the box's edge pixels and the wall's, the rays meet the wall's skirt at 10 m.
-    for (const double v : {12.0, 15.5, 20.0})
-      for (const double offset : {0.25, 0.5, 0.75}) {
-        EXPECT_NEAR(rayHitDepth(m, box.x - 1 + offset, v), 10.0, 1e-6) << "left edge, v " << v;
-        EXPECT_NEAR(rayHitDepth(m, box.x + box.width - 1 + offset, v), 10.0, 1e-6) << "right edge, v " << v;
-      }
-    for (const double u : {12.0, 15.5, 20.0})
-      for (const double offset : {0.25, 0.5, 0.75}) EXPECT_NEAR(rayHitDepth(m, u, box.y - 1 + offset), 10.0, 1e-6);
-    // Inside the box the rays still meet the box.
-    EXPECT_NEAR(rayHitDepth(m, box.x + 0.5, 15.0), 4.0, 1e-6);
-  }
 }
 
 }  // namespace

@@ -1,8 +1,7 @@
 #pragma once
 // The mesh stage. From a depth map: backprojection, spurious-face removal, fragment and pinch
 // removal, hole filling (inner holes and holes against the frame or sky line), foreground solids,
-// skirts (no camera ray through a pixel with depth misses the mesh), and the quality counts of
-// the result. From any triangle mesh: soup repair and hole filling.
+// and the quality counts of the result. From any triangle mesh: soup repair and hole filling.
 // Each returns a StageReport with counts before and after, removals per criterion, holes found
 // and filled, and the time of every step (docs/mesh.md lists every metric).
 
@@ -11,7 +10,6 @@
 #include "solo/geometry/hole_filling.h"
 #include "solo/geometry/large_hole_filling.h"
 #include "solo/geometry/mesh_metrics.h"
-#include "solo/geometry/occlusion_skirts.h"
 #include "solo/core/report.h"
 #include "solo/geometry/spurious_faces.h"
 
@@ -30,10 +28,6 @@ struct DepthMeshCleanupOptions {
   bool backdrops = true;
   bool close_solids = true;
   ForegroundSolidOptions solids;
-  /// Close the image-space gaps the other steps leave (occlusion_skirts.h): every face removed
-  /// as spurious comes back at the background's depth where nothing closes the background
-  /// behind the occluder, and the mesh reaches half a pixel beyond the frame.
-  bool skirts = true;
   bool evaluate = true;  ///< run evaluateMesh on the result (self-intersections included)
 };
 

@@ -34,7 +34,6 @@ enum class VertexOrigin : std::uint8_t {
   HoleFill = 1,   ///< added by hole filling (its pixel is where it projects, clamped to the map)
   SolidBack = 2,  ///< back side of a foreground solid (same pixel as its front vertex)
   Input = 3,      ///< read from a mesh file (no pixel)
-  Skirt = 4,      ///< added by the skirts (occlusion_skirts.h): behind a nearer surface or beyond the frame
 };
 
 /// Handles of the image properties, stored in the mesh under the names "solo:pixel",
