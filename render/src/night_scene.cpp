@@ -152,7 +152,7 @@ FaceVertices NightSceneBuilder::addFaceVertices(SurfaceMesh::FaceHandle f,
     if (props) {
       const auto origin = static_cast<VertexOrigin>(mesh.property(props->origin, vh));
       out.behind |= origin == VertexOrigin::SolidBack || origin == VertexOrigin::Input;
-      out.filled |= origin == VertexOrigin::HoleFill || origin == VertexOrigin::Skirt;
+      out.filled |= origin == VertexOrigin::HoleFill;
     }
     int& index = index_of_vertex[static_cast<std::size_t>(vh.idx())];
     if (index < 0) {
