@@ -2,6 +2,7 @@
 
 #include <solo/core/error.h>
 #include <solo/core/image_io.h>
+#include <solo/core/option_checks.h>
 #include <solo/core/output_path.h>
 
 #include <iostream>
@@ -9,6 +10,8 @@
 namespace solo::tools {
 
 int runConvert(const ConvertOptions& o) {
+  requireOptionInRange(o.input_scale_m_per_unit, 0, 1e6, "--input-scale");
+  requireOptionAboveAndAtMost(o.output_scale_m_per_unit, 0, 1e6, "--output-scale");
   refuseOutputThatIsAnInput(o.output, {o.input}, "output");
   if (o.kind == "depth") {
     DepthReadStats stats;

@@ -16,6 +16,7 @@ namespace solo::tools {
 
 
 int runLights(const LightsOptions& options) {
+  validateLightStageOptions(options.stage);
   Stopwatch total;
   const fs::path scene_file = options.scene ? *options.scene : defaultScene();
   RunReport report;

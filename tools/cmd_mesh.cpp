@@ -56,10 +56,27 @@ void writeReport(const std::optional<fs::path>& file, const std::string& command
   writeReportJson(*file, report);
 }
 
+/// Refuses a depth map in which no 2x2 block of pixels all hold a depth: the backprojection
+/// makes its faces from such blocks, so the mesh would be empty.
+void requireAFaceOfDepth(const Scene& scene) {
+  const cv::Mat& depth = scene.depth_m;
+  for (int y = 0; y + 1 < depth.rows; ++y) {
+    const float* row = depth.ptr<float>(y);
+    const float* below = depth.ptr<float>(y + 1);
+    for (int x = 0; x + 1 < depth.cols; ++x)
+      if (row[x] > 0 && row[x + 1] > 0 && below[x] > 0 && below[x + 1] > 0) return;
+  }
+  throw InputError(scene.manifest.depth,
+                   "no 2x2 block of valid depth pixels in the " + std::to_string(depth.cols) + "x" +
+                       std::to_string(depth.rows) + " map (" + std::to_string(scene.depth_stats.valid) +
+                       " valid): a mesh face needs one, the mesh would be empty");
+}
+
 }  // namespace
 
 int runMeshFromDepth(const MeshFromDepthOptions& options) {
   const Scene scene = loadScene(options.scene);
+  requireAFaceOfDepth(scene);
   cv::Mat uncertain;
   if (options.uncertain) {
     uncertain = readLabels(*options.uncertain);
@@ -84,7 +101,10 @@ int runMeshFromDepth(const MeshFromDepthOptions& options) {
       meshFromScene(scene.depth_m, scene.camera, instances, uncertain, options.cleanup, stage, true_depth, true_normals);
   stage.add("street_light_pixels_relabelled", street_light_pixels);
   const Stopwatch clock;
-  writeMesh(options.output, toTriangleMesh(mesh.mesh));
+  const TriangleMesh triangles = toTriangleMesh(mesh.mesh);
+  if (triangles.faces.empty())
+    throw InputError(scene.manifest.depth, "the mesh has no face after the clean-up: nothing to write");
+  writeMesh(options.output, triangles);
   stage.add("seconds_write", clock.seconds(), "s");
   stage.seconds += clock.seconds();
   printStage(stage);

@@ -12,10 +12,8 @@
 #include <solo/post/post_process.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cctype>
 #include <iostream>
-#include <stdexcept>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -49,36 +47,6 @@ cv::Mat readThreeChannels(const fs::path& file, StageReport* report) {
   return raw;
 }
 
-/// Refuses post-process options the flags cannot check alone, naming the flag.
-void checkPostOptions(const PostProcessOptions& options) {
-  const FogGlareOptions& glare = options.glare_options;
-  if (!std::isfinite(glare.threshold)) throw InputError("--glare-threshold", "must be a number (-1: what clips)");
-  if (!(glare.scatter_fraction > 0 && glare.scatter_fraction <= 1)) throw InputError("--glare-scatter", "must be in (0, 1]");
-  if (glare.size < 2 || glare.size > 11) throw InputError("--glare-size", "must be between 2 and 11");
-  if (const std::optional<CameraExposure>& camera = options.exposure_options.camera) {
-    if (!(camera->shutter_s > 0)) throw InputError("--shutter", "must be a positive time in seconds");
-    if (!(camera->f_number > 0)) throw InputError("--f-number", "must be positive");
-  }
-  const SensorNoiseOptions& noise = options.noise_options;
-  try {
-    noiseCalibrationAtIso(noise.iso);
-  } catch (const std::invalid_argument& e) {
-    throw InputError("--iso", e.what());
-  }
-  if (!(noise.std_scale >= 0)) throw InputError("--noise-scale", "must be 0 or more");
-  if (!(noise.chroma_denoise_sigma_px >= 0 && noise.chroma_denoise_sigma_px <= 100))
-    throw InputError("--chroma-denoise", "must be a Gaussian sigma of 0 to 100 px");
-  if (!(noise.chroma_denoise_strength >= 0 && noise.chroma_denoise_strength <= 1))
-    throw InputError("--chroma-denoise-strength", "must be between 0 and 1");
-  const ColourEncodingOptions& encoding = options.encoding_options;
-  if (!(encoding.highlight_knee >= 0 && encoding.highlight_knee <= 1))
-    throw InputError("--highlight-knee", "must be between 0 and 1");
-  if (!(encoding.white_clip >= 1 && std::isfinite(encoding.white_clip)))
-    throw InputError("--white-clip", "must be a finite level >= 1");
-  if (!(encoding.knee_point > 0 && encoding.knee_point < 1))
-    throw InputError("--knee-point", "must be between 0 and 1 (exclusive)");
-}
-
 }  // namespace
 
 int runPost(const PostOptions& o) {
@@ -86,7 +54,7 @@ int runPost(const PostOptions& o) {
   PostProcessOptions options = o.post;
   // --iso is the sensor's: the noise calibration's and the camera's.
   if (options.exposure_options.camera) options.exposure_options.camera->iso = options.noise_options.iso;
-  checkPostOptions(options);
+  validatePostProcessOptions(options);
   refuseOutputThatIsAnInput(o.output, {o.input}, "-o");
   if (o.report) refuseOutputThatIsAnInput(*o.report, {o.input}, "--report");
 

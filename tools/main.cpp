@@ -242,7 +242,7 @@ void addNightCommand(CLI::App& app, std::vector<Command>& commands, int argc, ch
       ->capture_default_str()->needs(batch_opt)->configurable(false);
   night_cmd->add_option("--scene-timeout", night_batch.scene_timeout_s,
                         "With --batch: stop a scene after this many seconds and record it failed (0: no limit)")
-      ->capture_default_str()->needs(batch_opt)->configurable(false)->check(CLI::NonNegativeNumber);
+      ->capture_default_str()->needs(batch_opt)->configurable(false);
   night_cmd->add_option("--layout", night_batch.layout,
                         "With --batch: write each night image at its frame's path in the dataset's own layout "
                         "(manifests of solo scenes; docs/datasets.md)")

@@ -43,10 +43,16 @@ double numberValue(const fs::path& manifest, const json& obj, const std::string&
   return v.get<double>();
 }
 
+/// A whole number of pixels from 1 to kMaxCameraSide; anything else (a fraction, a value an
+/// int cannot hold) is refused naming the manifest.
 int intValue(const fs::path& manifest, const json& obj, const std::string& where, const std::string& key) {
+  constexpr long long kMaxCameraSide = 65536;
   const json& v = obj.at(key);
-  if (!v.is_number_integer() || v.get<long long>() <= 0)
-    throw InputError(manifest, "\"" + where + "\".\"" + key + "\" must be a positive integer");
+  // An unsigned JSON value above LLONG_MAX reads as a negative long long: refused too.
+  const bool in_range = v.is_number_integer() && v.get<long long>() >= 1 && v.get<long long>() <= kMaxCameraSide;
+  if (!in_range)
+    throw InputError(manifest, "\"" + where + "\".\"" + key + "\" must be a whole number of pixels from 1 to " +
+                                   std::to_string(kMaxCameraSide) + ", found " + v.dump());
   return v.get<int>();
 }
 

@@ -10,6 +10,9 @@
 #include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <fstream>
 
 namespace fs = std::filesystem;
@@ -37,6 +40,32 @@ bool writeSoup(std::ofstream& out, const std::string& ext, const std::vector<Poi
   return ext == ".obj" ? CGAL::IO::write_OBJ(out, points, polygons, np)
                        : CGAL::IO::write_OFF(out, points, polygons, np);
 }
+
+// A binary STL (84-byte header and count, then 50 bytes a triangle: normal, three corners,
+// attribute) whose corners hold a NaN or infinity is refused here, naming the vertex: the soup
+// reader merges equal points through comparisons a NaN defeats, so the value would vanish into
+// another vertex before the coordinates could be checked. An ASCII STL fails to parse instead.
+void requireFiniteBinaryStlVertices(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  char header[84];
+  if (!in.read(header, sizeof header)) return;
+  std::uint32_t triangles = 0;
+  std::memcpy(&triangles, header + 80, sizeof triangles);
+  std::error_code ec;
+  const std::uintmax_t size_bytes = fs::file_size(file, ec);
+  if (ec || size_bytes != 84 + 50 * static_cast<std::uintmax_t>(triangles)) return;  // not binary: CGAL decides
+  char record[50];
+  for (std::uint32_t t = 0; t < triangles && in.read(record, sizeof record); ++t)
+    for (int corner = 0; corner < 3; ++corner) {
+      float xyz[3];
+      std::memcpy(xyz, record + 12 + 12 * corner, sizeof xyz);
+      if (std::isfinite(xyz[0]) && std::isfinite(xyz[1]) && std::isfinite(xyz[2])) continue;
+      throw InputError(file, "vertex " + std::to_string(3 * std::uint64_t{t} + corner) + " (triangle " +
+                                 std::to_string(t) + ", corner " + std::to_string(corner) +
+                                 ") has a non-finite coordinate (NaN or infinity)");
+    }
+}
+
 }  // namespace
 
 TriangleMesh readMesh(const fs::path& file, MeshReadStats* stats) {
@@ -44,6 +73,7 @@ TriangleMesh readMesh(const fs::path& file, MeshReadStats* stats) {
   requireMeshHeaderFitsFile(file, requireNonEmptyRegularFile(file, "mesh"));
   std::vector<Point> points;
   std::vector<std::vector<std::size_t>> polygons;
+  if (lowercaseExtension(file) == ".stl") requireFiniteBinaryStlVertices(file);
   if (!CGAL::IO::read_polygon_soup(file.string(), points, polygons))
     throw InputError(file, "cannot read as a mesh: malformed or truncated");
   if (points.empty()) throw InputError(file, "mesh has no vertices");
@@ -51,15 +81,21 @@ TriangleMesh readMesh(const fs::path& file, MeshReadStats* stats) {
   TriangleMesh mesh;
   MeshReadStats s;
   mesh.vertices.reserve(points.size());
-  for (const Point& p : points) {
+  for (std::size_t v = 0; v < points.size(); ++v) {
+    const Point& p = points[v];
     if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z()))
-      throw InputError(file, "mesh has a non-finite vertex coordinate");
+      throw InputError(file, "vertex " + std::to_string(v) + " has a non-finite coordinate (NaN or infinity)");
     mesh.vertices.emplace_back(p.x(), p.y(), p.z());
   }
   mesh.faces.reserve(polygons.size());
-  for (const auto& polygon : polygons) {
-    const bool indices_ok = std::all_of(polygon.begin(), polygon.end(), [&](std::size_t i) { return i < points.size(); });
-    if (polygon.size() < 3 || !indices_ok) {
+  for (std::size_t f = 0; f < polygons.size(); ++f) {
+    const std::vector<std::size_t>& polygon = polygons[f];
+    const auto bad = std::find_if(polygon.begin(), polygon.end(), [&](std::size_t i) { return i >= points.size(); });
+    if (bad != polygon.end())
+      throw InputError(file, "face " + std::to_string(f) + " refers to vertex " + std::to_string(*bad) +
+                                 ", but the file has " + std::to_string(points.size()) + " vertices (0 to " +
+                                 std::to_string(points.size() - 1) + ")");
+    if (polygon.size() < 3) {
       ++s.faces_dropped;
       continue;
     }

@@ -3,6 +3,8 @@
 #include "solo/lighting/illuminant_table.h"
 #include "solo/lighting/light_groups.h"
 
+#include <solo/core/option_checks.h>
+
 #include <opencv2/imgproc.hpp>
 
 namespace solo {
@@ -21,7 +23,12 @@ cv::Mat resampleLabels(const cv::Mat& labels, cv::Size size) {
   return out;
 }
 
+void validateLightStageOptions(const LightStageOptions& options) {
+  requireOptionAboveAndAtMost(options.instantiation.ablation_luminance_cd_m2, 0, 1e9, "--ablation-luminance");
+}
+
 LightStageResult runLightStage(const Scene& scene, const cv::Mat& depth_m, const LightStageOptions& options) {
+  validateLightStageOptions(options);
   Stopwatch total;
   LightStageResult result;
   StageReport& report = result.report;

@@ -5,6 +5,7 @@
 
 #include <solo/core/error.h>
 #include <solo/core/image_io.h>
+#include <solo/core/option_checks.h>
 #include <solo/core/report.h>
 #include <solo/core/scene.h>
 #include <solo/geometry/depth_mesh.h>
@@ -171,7 +172,18 @@ std::vector<Field> blanked(std::vector<Field> fields) {
 
 }  // namespace
 
+void validateDepthFilesEvaluationOptions(const DepthFilesEvaluationOptions& o) {
+  if (o.min_depth_m) requireOptionInRange(*o.min_depth_m, 0, 1e9, "--min-depth");
+  if (o.max_depth_m) requireOptionInRange(*o.max_depth_m, 0, 1e9, "--max-depth");
+  if (o.min_depth_m && o.max_depth_m && !(*o.min_depth_m < *o.max_depth_m))
+    throw InputError("--min-depth", "must be below --max-depth, got " + std::to_string(*o.min_depth_m) + " and " +
+                                        std::to_string(*o.max_depth_m) + " m");
+  requireOptionInRange(o.prediction_scale_m_per_unit, 0, 1e6, "--pred-scale");
+  requireOptionInRange(o.ground_truth_scale_m_per_unit, 0, 1e6, "--gt-scale");
+}
+
 EvaluationRecord evaluateDepthFiles(const DepthFilesEvaluationOptions& o) {
+  validateDepthFilesEvaluationOptions(o);
   Stopwatch clock;
   DepthEvaluationInput input;
   input.prediction_m = readDepth(o.prediction, o.prediction_scale_m_per_unit);

@@ -2,6 +2,7 @@
 
 #include <solo/core/atomic_file.h>
 #include <solo/core/error.h>
+#include <solo/core/option_checks.h>
 #include <solo/core/scene.h>
 #include <solo/pipeline/night_job.h>
 
@@ -33,6 +34,9 @@ namespace fs = std::filesystem;
 namespace solo {
 
 namespace {
+
+constexpr int kMaxBatchJobs = 256;            ///< --jobs: child processes at once
+constexpr double kMaxSceneTimeoutS = 1e6;     ///< --scene-timeout: about 11.5 days
 
 // FNV-1a, 64 bit: a fixed, documented hash of the scene name.
 std::uint64_t fnv1a64(const std::string& text) {
@@ -647,6 +651,9 @@ std::uint64_t nightBatchSceneSeed(std::uint64_t batch_seed, const std::string& n
 void checkNightBatchOptions(const NightBatchOptions& options) {
   parseNightBatchShard(options.shard);
   if (options.jobs < 1) throw InputError("--jobs", "must be at least 1, got " + std::to_string(options.jobs));
+  if (options.jobs > kMaxBatchJobs)
+    throw InputError("--jobs", "must be at most " + std::to_string(kMaxBatchJobs) + ", got " + std::to_string(options.jobs));
+  requireOptionInRange(options.scene_timeout_s, 0, kMaxSceneTimeoutS, "--scene-timeout");
   // A scene's child that reads --batch again (from a config file, say) would recurse.
   if (const char* scene = std::getenv("SOLO_BATCH_SCENE"))
     throw InputError("--batch", std::string("given to a batch's scene (") + scene +

@@ -1,5 +1,7 @@
 #include <solo/post/post_process.h>
 
+#include <solo/core/option_checks.h>
+
 #include <atomic>
 #include <cmath>
 #include <stdexcept>
@@ -59,13 +61,41 @@ FogGlareOptions resolvedGlare(const PostProcessOptions& options) {
   return glare;
 }
 
+// The exposure's settings: stops, or the camera's shutter, f-number and ISO.
+void validateExposureOptions(const ExposureOptions& exposure) {
+  requireOptionInRange(exposure.stops, -64, 64, "--stops");
+  if (!exposure.camera) return;
+  requireOptionInRange(exposure.camera->shutter_s, 1e-6, 3600, "--shutter");
+  requireOptionInRange(exposure.camera->f_number, 0.5, 64, "--f-number");
+  requireOptionInRange(exposure.camera->iso, 100, 3200, "--iso");
+}
+
 }  // namespace
+
+void validatePostProcessOptions(const PostProcessOptions& options) {
+  const FogGlareOptions& glare = options.glare_options;
+  requireOptionInRange(glare.size, 2, 11, "--glare-size");
+  requireOptionInRange(glare.threshold, -1e30, 1e30, "--glare-threshold");
+  requireOptionAboveAndAtMost(glare.scatter_fraction, 0, 1, "--glare-scatter");
+  validateExposureOptions(options.exposure_options);
+  const SensorNoiseOptions& noise = options.noise_options;
+  requireOptionInRange(noise.iso, 100, 3200, "--iso");
+  requireOptionInRange(noise.std_scale, 0, 1e6, "--noise-scale");
+  requireOptionInRange(noise.chroma_denoise_sigma_px, 0, 100, "--chroma-denoise");
+  requireOptionInRange(noise.chroma_denoise_strength, 0, 1, "--chroma-denoise-strength");
+  const ColourEncodingOptions& encoding = options.encoding_options;
+  requireOptionInRange(encoding.highlight_knee, 0, 1, "--highlight-knee");
+  requireOptionInRange(encoding.white_clip, 1, 1e6, "--white-clip");
+  if (!(encoding.knee_point > 0 && encoding.knee_point < 1))
+    throw InputError("--knee-point", "must be between 0 and 1 (exclusive), got " + std::to_string(encoding.knee_point));
+}
 
 PostProcessResult postProcess(const cv::Mat& xyz_e, const PostProcessOptions& options) {
   Stopwatch total;
   if (xyz_e.empty() || xyz_e.type() != CV_32FC3)
     throw std::invalid_argument("post-processing needs a non-empty 3-channel float XYZ image");
   // Option errors surface before any work is done.
+  validatePostProcessOptions(options);
   if (options.exposure) exposureStops(options.exposure_options);
   if (options.noise) noiseVarianceCounts(0, options.noise_options);
   if (options.glare) {

@@ -3,6 +3,9 @@
 
 #include "test_support.h"
 
+#include <cstdint>
+#include <limits>
+
 using solo::test::TempDir;
 
 namespace {
@@ -60,6 +63,56 @@ TEST(MeshIo, BadFilesNameTheFile) {
   EXPECT_NE(message(dir / "junk.off").find("junk.off: cannot read as a mesh"), std::string::npos);
   solo::test::writeText(dir / "m.xyz", "1 2 3\n");
   EXPECT_NE(message(dir / "m.xyz").find("unknown mesh format"), std::string::npos);
+}
+
+// The message readMesh refuses `file` with, or "read".
+std::string readError(const std::filesystem::path& file) {
+  try {
+    solo::readMesh(file);
+  } catch (const solo::InputError& e) {
+    return e.what();
+  }
+  return "read";
+}
+
+TEST(MeshIo, ANonFiniteStlVertexIsRefusedBeforeItIsMergedAway) {
+  TempDir dir;
+  // Two triangles sharing two corners; corner 1 of triangle 1 (vertex 4) is NaN, then infinite.
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  for (const float bad : {nan, inf, -inf}) {
+    const float corners[2][9] = {{0, 0, 0, 1, 0, 0, 0, 1, 0}, {1, 0, 0, bad, 1, 0, 0, 1, 0}};
+    std::string bytes(80, '\0');
+    const std::uint32_t count = 2;
+    bytes.append(reinterpret_cast<const char*>(&count), 4);
+    for (const auto& triangle : corners) {
+      bytes.append(12, '\0');  // normal
+      bytes.append(reinterpret_cast<const char*>(triangle), sizeof triangle);
+      bytes.append(2, '\0');  // attribute
+    }
+    solo::test::writeText(dir / "n.stl", bytes);
+    EXPECT_NE(readError(dir / "n.stl").find("n.stl: vertex 4 (triangle 1, corner 1) has a non-finite coordinate"),
+              std::string::npos)
+        << readError(dir / "n.stl");
+  }
+  solo::test::writeText(dir / "n.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 inf 0\n3 0 1 2\n");
+  const std::string off = readError(dir / "n.off");
+  EXPECT_TRUE(off.find("n.off: vertex 2 has a non-finite coordinate") != std::string::npos ||
+              off.find("n.off: cannot read as a mesh") != std::string::npos)
+      << off;
+}
+
+TEST(MeshIo, AFaceReferringToAVertexTheFileLacksIsRefusedNamingBoth) {
+  TempDir dir;
+  solo::test::writeText(dir / "f.ply",
+                        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                        "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                        "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 7 3\n");
+  EXPECT_NE(readError(dir / "f.ply").find("f.ply: face 1 refers to vertex 7, but the file has 4 vertices"),
+            std::string::npos)
+      << readError(dir / "f.ply");
+  solo::test::writeText(dir / "f.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 3\n");
+  // The same in OFF: refused whether by the reader or by the index check, never read.
+  EXPECT_EQ(readError(dir / "f.off").rfind((dir / "f.off").string() + ": ", 0), 0u) << readError(dir / "f.off");
 }
 
 TEST(MeshIo, ReadsTheRealScansWithTheirDocumentedCounts) {

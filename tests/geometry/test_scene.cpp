@@ -166,6 +166,23 @@ TEST(SceneBadInput, EachMalformedManifestGetsAClearMessage) {
   }
 }
 
+TEST(SceneBadInput, CameraWidthAndHeightAreWholePixelCountsThatFitAnInt) {
+  TempDir dir;
+  writeSceneMaps(dir);
+  // 4294967328 is 2^32 + 32: read as an int it wrapped to 32.
+  for (const std::string width : {"4294967328", "18446744073709551615", "-1920", "0", "1920.5", "\"1920\"", "65537"}) {
+    SCOPED_TRACE(width);
+    writeText(dir / "cam.json", R"({"image": "day.png", "depth": {"file": "depth.png", "scale": 0.001}, "camera": )"
+                                R"({"fx": 1780, "fy": 1780, "cx": 959.5, "cy": 539.5, "width": )" +
+                                    width + R"(, "height": 1080}})");
+    const std::string message = loadError(dir / "cam.json");
+    EXPECT_NE(message.find("cam.json: \"camera\".\"width\" must be a whole number of pixels from 1 to 65536, found " +
+                           width),
+              std::string::npos)
+        << message;
+  }
+}
+
 TEST(SceneBadInput, MissingManifestAndDepthWithoutAnyValidPixel) {
   TempDir dir;
   EXPECT_NE(loadError(dir / "nothing.json").find("nothing.json: file not found"), std::string::npos);

@@ -111,7 +111,7 @@ TEST(PostProcess, RejectsBadImagesAndOptionsBeforeWorking) {
   EXPECT_THROW(solo::postProcess(cv::Mat::zeros(4, 4, CV_32FC1), {}), std::invalid_argument);
   solo::PostProcessOptions options;
   options.noise_options.iso = 12800;
-  EXPECT_THROW(solo::postProcess(cv::Mat::zeros(4, 4, CV_32FC3), options), std::invalid_argument);
+  EXPECT_THROW(solo::postProcess(cv::Mat::zeros(4, 4, CV_32FC3), options), solo::InputError);
 }
 
 TEST(PostProcess, RenderNoiseSigmaScalesWithTheSensorWhite) {
@@ -176,5 +176,5 @@ TEST(PostProcess, ANegativeGlareThresholdIsWhatWillClip) {
   EXPECT_EQ(what_clips.linear_rgb.at<cv::Vec3f>(13, 13)[1], 0.f) << "next to the facade, which is below the clip";
 
   options.glare_options.threshold = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_THROW(solo::postProcess(xyz, options), std::invalid_argument);
+  EXPECT_THROW(solo::postProcess(xyz, options), solo::InputError);
 }

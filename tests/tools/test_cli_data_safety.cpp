@@ -14,6 +14,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include <chrono>
+#include <cstdint>
+#include <limits>
 
 namespace fs = std::filesystem;
 using solo::test::readText;
@@ -313,4 +315,83 @@ TEST(CliDataSafety, HeadersClaimingHugeImagesOrMeshesAreRefusedQuicklyAndSmall) 
   EXPECT_LT(raised.peak_resident_mb, 200.0);
   EXPECT_FALSE(fs::exists(dir / "out.exr"));
   EXPECT_FALSE(fs::exists(dir / "out.ply"));
+}
+
+// ------------------------------------------------------------------ values that cannot be used
+
+namespace {
+
+/// An 8x8 scene: a grey day image, the given depth map (float metres) and inline intrinsics with
+/// `camera_size` as its "width" and "height" text.
+void writeSmallScene(const fs::path& folder, const cv::Mat& depth_m, const std::string& camera_size = "") {
+  solo::writeImage(folder / "day.png", cv::Mat(8, 8, CV_8UC3, cv::Scalar::all(128)));
+  solo::writeImage(folder / "depth.exr", depth_m);
+  writeText(folder / "scene.json", R"({"image": "day.png", "depth": "depth.exr", "camera": {"fx": 8, "fy": 8, )"
+                                   R"("cx": 3.5, "cy": 3.5)" +
+                                       camera_size + "}}");
+}
+
+}  // namespace
+
+TEST(CliDataSafety, ACameraWidthBeyondAnIntIsRefusedNamingTheManifest) {
+  TempDir dir;
+  writeSmallScene(dir.path(), cv::Mat(8, 8, CV_32F, cv::Scalar(5)), R"(, "width": 4294967328, "height": 8)");
+  const auto before = entries(dir.path());
+  for (const std::string command : {"info scene.json", "mesh from-depth scene.json -o m.ply"}) {
+    const MeasuredRun r = runMeasured(dir.path(), command);
+    EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.output;
+    EXPECT_NE(r.output.find("scene.json: \"camera\".\"width\" must be a whole number of pixels from 1 to 65536, found "
+                            "4294967328"),
+              std::string::npos)
+        << r.output;
+  }
+  EXPECT_EQ(entries(dir.path()), before);
+}
+
+TEST(CliDataSafety, MeshFromDepthRefusesADepthMapThatFormsNoFace) {
+  TempDir dir;
+  // One valid pixel, then a diagonal of them: no 2x2 block of depths, so no face.
+  cv::Mat one(8, 8, CV_32F, cv::Scalar(0));
+  one.at<float>(3, 3) = 5;
+  cv::Mat diagonal(8, 8, CV_32F, cv::Scalar(0));
+  for (int i = 0; i < 8; ++i) diagonal.at<float>(i, i) = 5;
+  for (const cv::Mat& depth : {one, diagonal}) {
+    writeSmallScene(dir.path(), depth);
+    const auto before = entries(dir.path());
+    const MeasuredRun r = runMeasured(dir.path(), "mesh from-depth scene.json -o m.ply --report r.json");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("depth.exr: no 2x2 block of valid depth pixels in the 8x8 map"), std::string::npos)
+        << r.output;
+    EXPECT_EQ(entries(dir.path()), before);
+  }
+}
+
+TEST(CliDataSafety, MeshCleanRefusesNonFiniteStlVerticesAndOutOfRangePlyFaces) {
+  TempDir dir;
+  std::string stl(80, '\0');
+  const std::uint32_t count = 1;
+  stl.append(reinterpret_cast<const char*>(&count), 4);
+  const float triangle[9] = {0, 0, 0, 1, 0, 0, 0, std::numeric_limits<float>::quiet_NaN(), 0};
+  stl.append(12, '\0');
+  stl.append(reinterpret_cast<const char*>(triangle), sizeof triangle);
+  stl.append(2, '\0');
+  writeText(dir / "nan.stl", stl);
+  writeText(dir / "bad.ply",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+            "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n");
+  const auto before = entries(dir.path());
+  struct Case {
+    std::string arguments, message;
+  };
+  const std::vector<Case> cases = {
+      {"mesh clean nan.stl -o out.ply", "nan.stl: vertex 2 (triangle 0, corner 2) has a non-finite coordinate"},
+      {"mesh clean bad.ply -o out.ply", "bad.ply: face 0 refers to vertex 5, but the file has 3 vertices"},
+      {"eval mesh bad.ply --csv out.csv", "bad.ply: face 0 refers to vertex 5"},
+  };
+  for (const Case& c : cases) {
+    const MeasuredRun r = runMeasured(dir.path(), c.arguments);
+    EXPECT_EQ(r.exit_code, 2) << c.arguments << "\n" << r.output;
+    EXPECT_NE(r.output.find("solo: error: " + c.message), std::string::npos) << r.output;
+  }
+  EXPECT_EQ(entries(dir.path()), before);
 }

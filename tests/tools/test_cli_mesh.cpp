@@ -58,7 +58,7 @@ TEST(CliMesh, CleanRefusesNanCoordinates) {
   solo::writeMesh(dir / "bad.ply", bad);
   const auto r = runSolo("mesh clean " + quoted(dir / "bad.ply") + " -o " + quoted(dir / "out.off"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.output.find("solo: error: " + (dir / "bad.ply").string() + ": mesh has a non-finite vertex coordinate"),
+  EXPECT_NE(r.output.find("solo: error: " + (dir / "bad.ply").string() + ": vertex 2 has a non-finite coordinate"),
             std::string::npos)
       << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "out.off"));

@@ -26,9 +26,13 @@ struct LightStageResult {
   StageReport report;  ///< name "lights": counts, areas, timings; skipped when the scene has no light map
 };
 
+/// Throws InputError naming the option for a setting outside its range: the ablation's
+/// luminance ("--ablation-luminance") must be above 0 and at most 1e9 cd/m^2.
+void validateLightStageOptions(const LightStageOptions& options);
+
 /// `depth_m`: CV_32F metres at the image resolution (the refined depth); empty = the
-/// scene's depth resampled bilinearly ignoring invalid pixels. Throws InputError for a
-/// malformed light map or illuminant table.
+/// scene's depth resampled bilinearly ignoring invalid pixels. Throws InputError for
+/// invalid options (validateLightStageOptions), a malformed light map or illuminant table.
 LightStageResult runLightStage(const Scene& scene, const cv::Mat& depth_m, const LightStageOptions& options);
 
 /// A label map (CV_32S) at `size` by nearest-neighbour resampling (pixel centres kept);

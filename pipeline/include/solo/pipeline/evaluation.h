@@ -23,7 +23,13 @@ struct DepthFilesEvaluationOptions {
   double ground_truth_scale_m_per_unit = 0;  ///< for integer ground-truth files
 };
 
+/// Throws InputError naming the option for a depth bound outside [0, 1e9] m ("--min-depth",
+/// "--max-depth"), a minimum not below the maximum, or a file scale outside [0, 1e6] m/unit
+/// ("--pred-scale", "--gt-scale"; 0: none given).
+void validateDepthFilesEvaluationOptions(const DepthFilesEvaluationOptions& options);
+
 /// "eval depth": the pixel accounting and AbsRel, SqRel, RMSE, RMSElog, delta < 1.25^k.
+/// Validates the options first (validateDepthFilesEvaluationOptions).
 EvaluationRecord evaluateDepthFiles(const DepthFilesEvaluationOptions& options);
 
 /// A normal map against its ground truth.

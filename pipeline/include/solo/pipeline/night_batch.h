@@ -112,7 +112,8 @@ struct NightBatchResult {
   std::filesystem::path summary_file;   ///< the batch summary (JSON): counts, per-scene status
 };
 
-/// Throws InputError for a bad shard ("--shard"), fewer than one job ("--jobs"), or a batch
+/// Throws InputError for a bad shard ("--shard"), jobs outside 1 to 256 ("--jobs"), a scene
+/// timeout that is not a number of seconds from 0 to 1e6 ("--scene-timeout"), or a batch
 /// started by a batch's scene (SOLO_BATCH_SCENE set: its options would recurse).
 void checkNightBatchOptions(const NightBatchOptions& options);
 

@@ -5,6 +5,7 @@
 // out-of-gamut handling -> transfer curve (gamma 2.2). Every step can be switched off and
 // says why when it does not run.
 
+#include <solo/core/error.h>
 #include <solo/core/report.h>
 #include <solo/post/chromatic_adaptation.h>
 #include <solo/post/colour_encoding.h>
@@ -52,10 +53,15 @@ struct PostProcessResult {
   StageReport report;
 };
 
+/// Refuses options outside their documented ranges (docs/pipeline.md, "Option checks"),
+/// whether or not their step is on: InputError naming the `solo post` flag (--stops,
+/// --shutter, --f-number, --iso, --glare-size, ...) with the range and the value.
+void validatePostProcessOptions(const PostProcessOptions& options);
+
 /// xyz_e: CV_32FC3 linear XYZ relative to white E (the renderer's output, 1 = the
 /// reference exposure's unit radiance), any size. Non-finite and negative values are set to
 /// 0 and counted (step "input"). Throws std::invalid_argument for an empty or non-CV_32FC3
-/// image and for invalid options (an ISO outside the noise calibration, ...).
+/// image, and InputError for invalid options (validatePostProcessOptions), before any work.
 PostProcessResult postProcess(const cv::Mat& xyz_e, const PostProcessOptions& options);
 
 /// The standard deviation of the sensor noise the post-process adds, in render units
