@@ -25,6 +25,21 @@ void forChunks(int n, Body body) {
 
 }  // namespace
 
+double tangentLoss(TangentLoss loss, double c, double s, double* first, double* second) {
+  const double c2 = c * c;
+  double value = s, d1 = 1, d2 = 0;
+  if (loss == TangentLoss::Huber && s > c2) {
+    const double root = std::sqrt(s);
+    value = 2 * c * root - c2, d1 = c / root, d2 = -0.5 * d1 / s;
+  } else if (loss == TangentLoss::Cauchy) {
+    const double t = 1 + s / c2;
+    value = c2 * std::log(t), d1 = 1 / t, d2 = -d1 * d1 / c2;
+  }
+  if (first) *first = d1;
+  if (second) *second = d2;
+  return value;
+}
+
 void NormalGuidedObjective::coefficients(const Axis& a, double& after, double& self, double& before) {
   if (a.before >= 0 && a.after >= 0) {
     after = 0.5, self = 0, before = -0.5;
@@ -58,6 +73,8 @@ NormalGuidedObjective::NormalGuidedObjective(const cv::Mat& filtered_depth_m, co
   }
   const int m = unknowns();
   data_weight_ = m > 0 ? options.data_weight / m : 0;
+  loss_ = options.tangent_loss;
+  loss_scale_ = options.tangent_loss_scale > 0 ? options.tangent_loss_scale : 1;
   u_.resize(m), v_.resize(m), tangent_weight_.assign(m, 0.0);
   to_after_u_.resize(m), to_before_u_.resize(m), to_after_v_.resize(m), to_before_v_.resize(m), own_.resize(m);
   for (int i = 0; i < m; ++i) {
@@ -108,19 +125,35 @@ bool NormalGuidedObjective::evaluate(const double* z, ObjectiveValue& value, dou
       own_[i] = 0;
       const double wt = tangent_weight_[i];
       if (wt == 0) continue;
-      double own = 0;
+      // Both axes' residuals first: the loss weighs them by rho'(r_u^2 + r_v^2).
+      double r[2] = {0, 0}, d[2] = {0, 0}, ca[2] = {0, 0}, cs[2] = {0, 0}, cb[2] = {0, 0};
+      bool present[2] = {false, false};
       for (int axis = 0; axis < 2; ++axis) {
         const Axis& a = axis == 0 ? u_[i] : v_[i];
         if (a.before < 0 && a.after < 0) continue;
-        double ca, cs, cb;
-        coefficients(a, ca, cs, cb);
-        const double d = ca * (a.after >= 0 ? z[a.after] : 0.0) + cs * zi + cb * (a.before >= 0 ? z[a.before] : 0.0);
-        const double r = a.offset + a.slope_factor * d / zi;
-        tangent_sum += wt * r * r;
-        const double slope = 2 * wt * r * a.slope_factor / zi;  // d(w r^2) / dD
-        (axis == 0 ? to_after_u_ : to_after_v_)[i] = static_cast<float>(slope * ca);
-        (axis == 0 ? to_before_u_ : to_before_v_)[i] = static_cast<float>(slope * cb);
-        own += slope * (cs - d / zi);
+        coefficients(a, ca[axis], cs[axis], cb[axis]);
+        d[axis] = ca[axis] * (a.after >= 0 ? z[a.after] : 0.0) + cs[axis] * zi +
+                  cb[axis] * (a.before >= 0 ? z[a.before] : 0.0);
+        r[axis] = a.offset + a.slope_factor * d[axis] / zi;
+        present[axis] = true;
+      }
+      double weight = wt;  // wt rho'(s): the squared loss's weight scaled by the loss's slope
+      if (loss_ == TangentLoss::Squared) {
+        for (int axis = 0; axis < 2; ++axis)
+          if (present[axis]) tangent_sum += wt * r[axis] * r[axis];
+      } else {
+        double slope_of_loss = 1;
+        tangent_sum += wt * tangentLoss(loss_, loss_scale_, r[0] * r[0] + r[1] * r[1], &slope_of_loss);
+        weight = wt * slope_of_loss;
+      }
+      double own = 0;
+      for (int axis = 0; axis < 2; ++axis) {
+        if (!present[axis]) continue;
+        const Axis& a = axis == 0 ? u_[i] : v_[i];
+        const double slope = 2 * weight * r[axis] * a.slope_factor / zi;  // d(w rho) / dD
+        (axis == 0 ? to_after_u_ : to_after_v_)[i] = static_cast<float>(slope * ca[axis]);
+        (axis == 0 ? to_before_u_ : to_before_v_)[i] = static_cast<float>(slope * cb[axis]);
+        own += slope * (cs[axis] - d[axis] / zi);
       }
       own_[i] = own;
     }

@@ -203,6 +203,22 @@ class PixelTangentCost final : public ceres::CostFunction {
   int pixel_;
 };
 
+// The tangent loss in Ceres' convention: its cost is 1/2 rho_c(|f|^2) with f = sqrt(2 w) (r_u, r_v),
+// and the objective's is w rho(s), s = |f|^2 / (2 w): rho_c(t) = 2 w rho(t / (2 w)).
+class PixelTangentLoss final : public ceres::LossFunction {
+ public:
+  PixelTangentLoss(TangentLoss loss, double scale, double weight) : loss_(loss), scale_(scale), weight_(weight) {}
+  void Evaluate(double t, double rho[3]) const override {
+    const double s = t / (2 * weight_);
+    rho[0] = 2 * weight_ * tangentLoss(loss_, scale_, s, &rho[1], &rho[2]);
+    rho[2] /= 2 * weight_;
+  }
+
+ private:
+  TangentLoss loss_;
+  double scale_, weight_;
+};
+
 class PixelDataCost final : public ceres::SizedCostFunction<1, 1> {
  public:
   PixelDataCost(double filtered_m, double weight) : filtered_m_(filtered_m), scale_(std::sqrt(2 * weight)) {}
@@ -227,7 +243,11 @@ std::vector<double> solvePerPixel(const NormalGuidedObjective& objective, const 
     if (s.count == 0) continue;
     std::vector<double*> blocks;
     for (int k = 0; k < s.count; ++k) blocks.push_back(&z[s.unknown[k]]);
-    problem.AddResidualBlock(new PixelTangentCost(objective, i, s.count), nullptr, blocks);
+    ceres::LossFunction* loss =
+        objective.loss() == TangentLoss::Squared
+            ? nullptr
+            : new PixelTangentLoss(objective.loss(), objective.lossScale(), objective.tangentWeight(i));
+    problem.AddResidualBlock(new PixelTangentCost(objective, i, s.count), loss, blocks);
   }
   IterationHook hook([&](const ceres::IterationSummary& summary) {
     OptimizationIteration record;

@@ -4,6 +4,10 @@
 // Run (docs/depth-refinement.md):
 //   build/release/tools/solo synth -o /tmp/s1080 --size 1920x1080 --seed 1
 //   build/release/tests/benchmarks/bench_refine /tmp/s1080 docs/data/depth_refinement_1080p.csv
+// Several scenes, the optimisation step only (from the depth refineDepth filters, with its
+// normals and uncertain mask), per solver setting and iteration:
+//   bench_refine --sweep OUT.csv [--config NAME:key=value,...]... SCENE_DIR...
+//   keys: it (iterations), dw (lambda2), tw (lambda1), loss (squared|huber|cauchy), c (loss scale)
 
 #include <solo/geometry/adam_depth_optimizer.h>
 #include <solo/geometry/depth_metrics.h>
@@ -20,10 +24,14 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -88,9 +96,127 @@ class Table {
   std::ofstream csv_;
 };
 
+// ---- --sweep: the optimisation step on several scenes ----
+
+struct SweepConfig {
+  std::string name;
+  solo::NormalGuidedOptimizationOptions options;
+};
+
+// NAME:key=value,... (keys in the file comment) over the default options.
+SweepConfig parseConfig(const std::string& text) {
+  SweepConfig config;
+  const std::size_t colon = text.find(':');
+  config.name = text.substr(0, colon);
+  std::stringstream rest(colon == std::string::npos ? std::string() : text.substr(colon + 1));
+  std::string item;
+  while (std::getline(rest, item, ',')) {
+    const std::size_t eq = item.find('=');
+    const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
+    solo::NormalGuidedOptimizationOptions& o = config.options;
+    if (key == "it") o.max_iterations = std::stoi(value);
+    else if (key == "dw") o.objective.data_weight = std::stod(value);
+    else if (key == "tw") o.objective.tangent_weight = std::stod(value);
+    else if (key == "c") o.objective.tangent_loss_scale = std::stod(value);
+    else if (key == "loss")
+      o.objective.tangent_loss = value == "huber"    ? solo::TangentLoss::Huber
+                                 : value == "cauchy" ? solo::TangentLoss::Cauchy
+                                                     : solo::TangentLoss::Squared;
+    else throw std::runtime_error("unknown config key " + key);
+  }
+  return config;
+}
+
+struct Accuracy {
+  double abs_rel = 0, rmse_m = 0, normal_mean_deg = 0, normal_median_deg = 0;
+};
+
+Accuracy accuracyOf(const cv::Mat& depth_m, const Truth& truth, const solo::PinholeCamera& camera) {
+  Row row{"", ""};
+  measure(row, depth_m, truth, camera);
+  return {row.abs_rel, row.rmse_m, row.normal_mean_deg, row.normal_median_deg};
+}
+
+int sweep(const fs::path& csv_path, const std::vector<SweepConfig>& configs, const std::vector<fs::path>& dirs) {
+  const std::set<int> curve = {0, 1, 2, 3, 5, 7, 10, 15, 20, 30, 40, 60};
+  std::ofstream csv(csv_path);
+  csv << "scene,config,iteration,seconds,objective,abs_rel,rmse_m,normal_mean_deg,normal_median_deg\n";
+  struct Tally {
+    int scenes = 0, depth_kept = 0, normals_better = 0;
+    double abs_rel_ratio = 0, rmse_ratio = 0, normal_gain_deg = 0, seconds = 0;
+  };
+  std::map<std::string, Tally> tally;
+  for (const fs::path& dir : dirs) {
+    const solo::Scene scene = solo::loadScene(dir / "scene.json");
+    const solo::Scene exact = solo::loadScene(dir / "gt" / "scene.json");
+    const Truth truth{exact.depth_m, exact.normals};
+    solo::DepthRefinementOptions steps;
+    steps.optimize = false;
+    const solo::DepthRefinementResult r = solo::refineDepth(scene, steps);
+    const Accuracy f = accuracyOf(r.filtered_depth_m, truth, scene.camera);
+    {
+      solo::NormalEvaluationInput n;
+      n.prediction = r.normals, n.ground_truth = truth.normals;
+      const solo::NormalMetrics nm = solo::evaluateNormals(n);
+      const Accuracy exact_depth = accuracyOf(truth.depth_m, truth, scene.camera);
+      std::printf("against the true normals: predicted normals mean %.3f, median %.3f deg; normals of the true depth "
+                  "mean %.3f, median %.3f deg\n",
+                  nm.mean_deg, nm.median_deg, exact_depth.normal_mean_deg, exact_depth.normal_median_deg);
+    }
+    const std::string name = dir.filename().string();
+    std::printf("\n%s (%s, normals %s)\n%-22s %4s %7s %9s %8s %8s %8s\n", name.c_str(), sizeText(scene.image).c_str(),
+                r.normals_from_depth ? "of the filtered depth" : "estimated", "config", "iter", "seconds", "AbsRel",
+                "RMSE m", "n mean", "n med");
+    std::printf("%-22s %4s %7s %9.5f %8.4f %8.3f %8.3f\n", "filtered", "", "", f.abs_rel, f.rmse_m, f.normal_mean_deg,
+                f.normal_median_deg);
+    csv << name << ",filtered,,," << "," << f.abs_rel << "," << f.rmse_m << "," << f.normal_mean_deg << ","
+        << f.normal_median_deg << "\n";
+    for (const SweepConfig& config : configs) {
+      const solo::NormalGuidedOptimizationResult result = solo::optimizeDepthWithNormals(
+          r.filtered_depth_m, r.normals, r.uncertain, r.maps.instances, scene.camera, config.options,
+          [&](const solo::OptimizationIteration& it, const cv::Mat& depth) {
+            if (!curve.count(it.iteration)) return;
+            const Accuracy a = accuracyOf(depth, truth, scene.camera);
+            csv << name << "," << config.name << "," << it.iteration << "," << it.seconds << "," << it.value.total << ","
+                << a.abs_rel << "," << a.rmse_m << "," << a.normal_mean_deg << "," << a.normal_median_deg << "\n";
+          });
+      const Accuracy a = accuracyOf(result.depth_m, truth, scene.camera);
+      const int iterations = result.trace.empty() ? 0 : result.trace.back().iteration;
+      std::printf("%-22s %4d %7.3f %9.5f %8.4f %8.3f %8.3f\n", config.name.c_str(), iterations, result.report.seconds,
+                  a.abs_rel, a.rmse_m, a.normal_mean_deg, a.normal_median_deg);
+      std::fflush(stdout);
+      Tally& t = tally[config.name];
+      ++t.scenes;
+      t.depth_kept += a.abs_rel <= f.abs_rel && a.rmse_m <= f.rmse_m;
+      t.normals_better += a.normal_mean_deg < f.normal_mean_deg && a.normal_median_deg <= f.normal_median_deg;
+      t.abs_rel_ratio += a.abs_rel / f.abs_rel, t.rmse_ratio += a.rmse_m / f.rmse_m;
+      t.normal_gain_deg += f.normal_mean_deg - a.normal_mean_deg, t.seconds += result.report.seconds;
+    }
+  }
+  std::printf("\n%-22s %6s %12s %14s %10s %10s %12s %9s\n", "config", "scenes", "depth kept", "normals better",
+              "AbsRel x", "RMSE x", "n gain deg", "seconds");
+  for (const SweepConfig& config : configs) {
+    const Tally& t = tally[config.name];
+    const double n = std::max(1, t.scenes);
+    std::printf("%-22s %6d %12d %14d %10.4f %10.4f %12.3f %9.3f\n", config.name.c_str(), t.scenes, t.depth_kept,
+                t.normals_better, t.abs_rel_ratio / n, t.rmse_ratio / n, t.normal_gain_deg / n, t.seconds / n);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 3 && std::string(argv[1]) == "--sweep") {
+    std::vector<SweepConfig> configs;
+    std::vector<fs::path> dirs;
+    for (int i = 3; i < argc; ++i) {
+      if (std::string(argv[i]) == "--config" && i + 1 < argc) configs.push_back(parseConfig(argv[++i]));
+      else dirs.emplace_back(argv[i]);
+    }
+    if (configs.empty()) configs = {parseConfig("default"), parseConfig("paper:loss=squared,dw=1,it=10")};
+    return sweep(argv[2], configs, dirs);
+  }
   if (argc != 3) {
     std::fprintf(stderr, "usage: bench_refine SYNTH_SCENE_DIR OUTPUT.csv\n");
     return 2;

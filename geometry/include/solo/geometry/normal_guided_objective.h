@@ -4,9 +4,10 @@
 // (normal_guided_optimization.h) and the paper's Adam baseline (adam_depth_optimizer.h), so
 // both minimise the same function and their values compare directly.
 //
-//   L(z) = lambda1 / m * sum_p (1 - U(p)) (r_u(p)^2 + r_v(p)^2) + lambda2 / m * sum_p (d~(p) - z(p))^2
+//   L(z) = lambda1 / m * sum_p (1 - U(p)) rho(r_u(p)^2 + r_v(p)^2) + lambda2 / m * sum_p (d~(p) - z(p))^2
 //
-// over the m pixels with a filtered depth d~ > 0 (the unknowns). r_u = n . t_u and
+// over the m pixels with a filtered depth d~ > 0 (the unknowns), rho the tangent loss
+// (TangentLoss; the paper's is rho(s) = s). r_u = n . t_u and
 // r_v = n . t_v are the predicted unit normal n against the surface tangents along the image
 // axes, each divided by the pixel footprint z / f so that they are (1, 0, dz/dx) and
 // (0, 1, dz/dy) at the principal point, with dz/dx = (dz/du) f_x / z:
@@ -30,10 +31,19 @@ namespace solo {
 
 enum class TangentModel { Perspective, PaperGraph };
 
+/// rho(s) applied to each pixel's s = r_u^2 + r_v^2 in the tangent term, c = tangent_loss_scale:
+/// Squared: s (the paper); Huber: s for s <= c^2, else 2 c sqrt(s) - c^2; Cauchy: c^2 log(1 + s / c^2).
+enum class TangentLoss { Squared, Huber, Cauchy };
+
+/// rho(s) of `loss` with scale c; its first and second derivatives by s when not null.
+double tangentLoss(TangentLoss loss, double c, double s, double* first = nullptr, double* second = nullptr);
+
 struct NormalGuidedObjectiveOptions {
   double tangent_weight = 50;  ///< lambda1 (reference: 50)
   double data_weight = 1;      ///< lambda2 (reference: 1)
   TangentModel tangent_model = TangentModel::Perspective;
+  TangentLoss tangent_loss = TangentLoss::Squared;  ///< (reference: squared)
+  double tangent_loss_scale = 0.1;                  ///< c of Huber and Cauchy (a residual, unitless)
 };
 
 /// The objective's parts: total = tangent + data, each already weighted and divided by m.
@@ -66,7 +76,9 @@ class NormalGuidedObjective {
   /// Not thread-safe (it uses scratch buffers); it parallelises internally.
   bool evaluate(const double* z, ObjectiveValue& value, double* gradient = nullptr) const;
 
-  /// Diagonal of the Gauss-Newton matrix 2 J^T J at z (the curvature of L per unknown).
+  /// Diagonal of the Gauss-Newton matrix 2 J^T J at z (the curvature of L per unknown), of the
+  /// squared tangent loss whatever the loss: a robust loss's rho' = 0 would make it the data
+  /// term's alone and the Jacobi-scaled steps huge.
   std::vector<double> gaussNewtonDiagonal(const double* z) const;
 
   /// Depth image (CV_32F, 0 at non-unknowns) of z.
@@ -74,8 +86,8 @@ class NormalGuidedObjective {
   /// Values of a depth image at the unknowns; pixels <= 0 there take d~.
   std::vector<double> fromImage(const cv::Mat& depth_m) const;
 
-  /// One pixel's tangent residuals for residual-block layouts: the unknowns they depend on
-  /// (the pixel itself first, then its stencil neighbours), sqrt(weight) * (r_u, r_v) and
+  /// One pixel's tangent residuals for residual-block layouts (without the loss rho): the
+  /// unknowns they depend on (the pixel itself first, then its stencil neighbours), sqrt(weight) * (r_u, r_v) and
   /// their derivatives by each of those unknowns. count = 0 when the pixel has no tangent term.
   struct PixelStencil {
     int count = 0;
@@ -86,6 +98,10 @@ class NormalGuidedObjective {
   void tangentResiduals(int i, const double* z_stencil, double residuals[2], double jacobian[2][5]) const;
   /// lambda2 / m: the data term is data_weight * sum (z - d~)^2.
   double dataWeight() const { return data_weight_; }
+  /// lambda1 (1 - U) / m of unknown i (0 without a tangent term): its term is weight * rho(s).
+  double tangentWeight(int i) const { return tangent_weight_[i]; }
+  TangentLoss loss() const { return loss_; }
+  double lossScale() const { return loss_scale_; }
 
  private:
   struct Axis {  // one image axis of one unknown's tangent residual
@@ -102,6 +118,8 @@ class NormalGuidedObjective {
   std::vector<Axis> u_, v_;
   std::vector<float> tangent_weight_;  // lambda1 (1 - U) / m, 0 without a normal
   double data_weight_ = 0;
+  TangentLoss loss_ = TangentLoss::Squared;
+  double loss_scale_ = 1;
   int tangent_pixels_ = 0;
   // Scratch of evaluate(): per unknown, the gradient its residuals send to its +1 and -1
   // neighbours along u and v, and to itself.
