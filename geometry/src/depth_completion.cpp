@@ -236,7 +236,7 @@ void fillWithinSegment(CompletionState& s, int id, const Segment& box, double pl
         out.at<float>(y, x) = static_cast<float>(dense.at<float>(y, x) + trend(x, y));
 }
 
-// Step 4: the holes of segments without depth, from every pixel that has one now.
+// Step 4: the holes of segments without depth, from every pixel that has a depth after step 3.
 void fillAcrossSegments(CompletionState& s) {
   cv::Mat weight(s.inverse_depth.size(), CV_32F, cv::Scalar(0));
   for (int y = 0; y < weight.rows; ++y)
