@@ -411,11 +411,7 @@ DepthCompletionResult completeDepth(const cv::Mat& depth_m, const cv::Mat& image
 
   // Back to depth, clamped to the valid depths' range; valid pixels unchanged.
   double min_depth = 0, max_depth = 0;
-  cv::minMaxLoc(depth_m, nullptr, &max_depth, nullptr, nullptr, s.valid);
-  cv::Mat valid_depth;
-  depth_m.copyTo(valid_depth);
-  valid_depth.setTo(std::numeric_limits<float>::max(), ~s.valid);
-  cv::minMaxLoc(valid_depth, &min_depth);
+  cv::minMaxLoc(depth_m, &min_depth, &max_depth, nullptr, nullptr, s.valid);
   result.depth_m = depth_m.clone();
   for (int y = 0; y < depth_m.rows; ++y)
     for (int x = 0; x < depth_m.cols; ++x) {
