@@ -2,6 +2,7 @@
 # Installs every build and test dependency of solo from Debian 12 packages.
 # Idempotent: packages already present are not reinstalled, and apt is not
 # touched at all when nothing is missing. Runs as root, or through sudo.
+# `tools/setup.sh --fuzz` adds the compiler and runtime of the fuzz preset.
 set -euo pipefail
 
 packages=(
@@ -20,7 +21,11 @@ packages=(
   libcli11-dev
   nlohmann-json3-dev
   gnuplot-nox
+  pybind11-dev python3-dev python3-numpy python3-pytest
 )
+if [ "${1:-}" = "--fuzz" ]; then
+  packages+=(clang libclang-rt-14-dev)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
