@@ -5,6 +5,7 @@
 
 #include <solo/core/error.h>
 #include <solo/core/version.h>
+#include <solo/pipeline/large_buffer_allocator.h>
 #include <solo/pipeline/night_job.h>
 
 #include <pybind11/stl.h>
@@ -73,6 +74,9 @@ PYBIND11_MODULE(_solo, m) {
   namespace py = pybind11;
   m.doc() = "solo: day-to-night street scenes with physically based 3D geometry and lighting (docs/python.md)";
   m.attr("__version__") = solo::soloVersion();
+  // As the binary does: freed buffers of the stages stay in the heap for the next stage and run
+  // (large_buffer_allocator.h); without it a conversion spends seconds in page faults.
+  solo::keepFreedLargeBuffersForReuse();
   m.def("versions", [] {
     auto list = solo::pipelineDependencyVersions();
     list.insert(list.begin(), {"solo", solo::soloVersion()});

@@ -353,8 +353,26 @@ void bindSceneClass(py::module_& m) {
       });
 }
 
+/// An image file's pixels in the file's own integer type (uint8, uint16, int32) or float32.
+cv::Mat readStoredImage(const std::filesystem::path& file) {
+  ImageFileInfo info;
+  cv::Mat pixels;
+  {
+    const py::gil_scoped_release release;
+    pixels = readImageRaw(file, &info);
+  }
+  const int depth = info.pixel_type == "uint8"    ? CV_8U
+                    : info.pixel_type == "uint16" ? CV_16U
+                    : info.pixel_type == "int32"  ? CV_32S
+                                                  : -1;
+  if (depth < 0) return pixels;
+  cv::Mat codes;
+  pixels.convertTo(codes, CV_MAKETYPE(depth, pixels.channels()));
+  return codes;
+}
+
 void bindReaders(py::module_& m) {
-  m.def("read_image", [](const py::object& file) { return matToArray(readImageRaw(toPath(file, "file"))); },
+  m.def("read_image", [](const py::object& file) { return matToArray(readStoredImage(toPath(file, "file"))); },
         py::arg("file"), "A PNG, JPEG, TIFF, EXR, PFM or NPY file as stored: HxW or HxWxC, its own dtype, RGB order.");
   m.def("read_depth", [](const py::object& file, double scale) {
           return matToArray(readDepth(toPath(file, "file"), scale));
