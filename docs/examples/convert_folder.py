@@ -25,7 +25,7 @@ import solo
 def progress_bar(done, total, label, width=30):
     """One line redrawn in place: [#####-----] 3/8 label."""
     filled = int(width * done / total) if total else width
-    sys.stderr.write(f"\r[{'#' * filled}{'-' * (width - filled)}] {done}/{total} {label:<32.32}")
+    sys.stderr.write(f"\r[{'#' * filled}{'-' * (width - filled)}] {int(done)}/{total} {label:<32.32}")
     sys.stderr.flush()
 
 
@@ -51,7 +51,7 @@ def convert(manifests, out_dir, preset, seed):
 def evaluate(manifests, out_dir, results):
     """Realism of every night image, and the refined depth against ground truth where there is one."""
     realism = solo.eval_night([str(out_dir / f"{m.parent.name}.png") for m in manifests])
-    print(f"{'scene':<16} {'mean luma':>9} {'clipped':>8} {'noise':>6} {'AbsRel est':>10} {'AbsRel ref':>10} {'s':>6}")
+    print(f"{'scene':<16} {'mean luma':>9} {'clipped':>8} {'noise':>6} {'AbsRel est':>10} {'AbsRel refined':>14} {'s':>6}")
     for manifest, image in zip(manifests, realism["images"]):
         name = manifest.parent.name
         statistics = image["statistics"]
@@ -61,12 +61,13 @@ def evaluate(manifests, out_dir, results):
         if truth.exists():
             gt = solo.read_depth(truth)
             scene = solo.load_scene(manifest)
-            estimated = scene.depth
-            if estimated.shape == gt.shape:
-                abs_rel_est = solo.eval_depth(estimated, gt)["metrics"]["abs_rel"]
+            estimated = scene.depth  # the network's depth, often at a lower resolution: nearest-upsampled
+            rows = np.arange(gt.shape[0]) * estimated.shape[0] // gt.shape[0]
+            cols = np.arange(gt.shape[1]) * estimated.shape[1] // gt.shape[1]
+            abs_rel_est = solo.eval_depth(estimated[np.ix_(rows, cols)], gt)["metrics"]["abs_rel"]
             abs_rel_refined = solo.eval_depth(result["refined_depth"], gt)["metrics"]["abs_rel"]
         print(f"{name:<16} {statistics['mean']:>9.1f} {statistics['clipped']:>8.4f} "
-              f"{statistics['noise'] or float('nan'):>6.2f} {abs_rel_est:>10.4f} {abs_rel_refined:>10.4f} "
+              f"{statistics['noise'] or float('nan'):>6.2f} {abs_rel_est:>10.4f} {abs_rel_refined:>14.4f} "
               f"{result['report']['total_seconds']:>6.1f}")
 
 

@@ -90,6 +90,8 @@ py::dict evalDepth(const py::object& pred, const py::object& gt, const py::objec
     }
     return recordToDict(record);
   }
+  files.prediction = fileName(pred, "pred");  // the arrays' names: the ranges are checked as for files
+  files.ground_truth = fileName(gt, "gt");
   validateDepthFilesEvaluationOptions(files);
   std::vector<py::object> held;
   DepthEvaluationInput input;

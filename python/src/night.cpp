@@ -214,7 +214,9 @@ py::dict nightOptionsBinding(const std::string& preset, const py::kwargs& kwargs
 
 // ---- the conversion ---------------------------------------------------------------------
 
-const std::vector<std::string> kNightStages = {"input", "refine", "mesh", "lights", "render", "denoise", "post"};
+/// The stages a job announces; a conversion of a loaded scene starts at "refine".
+const std::vector<std::string> kJobStages = {"input", "refine", "mesh", "lights", "render", "denoise", "post"};
+const std::vector<std::string> kConversionStages(kJobStages.begin() + 1, kJobStages.end());
 
 NightConversionCallbacks callbacksOf(const Progress& progress, bool render_progress) {
   NightConversionCallbacks callbacks;
@@ -260,7 +262,7 @@ py::dict conversionToDict(NightConversionResult& r, const cv::Mat& image8, const
 py::dict convertNight(const PySceneHandle& scene, const std::string& preset, const py::object& callback,
                       bool render_progress, bool return_mesh, const py::kwargs& kwargs) {
   const NightArguments a = nightArguments(preset, kwargs);
-  const Progress progress(callback, kNightStages);
+  const Progress progress(callback, kConversionStages);
   const NightConversionCallbacks callbacks = callbacksOf(progress, render_progress);
   RunReport report;
   report.command = "night";
@@ -300,7 +302,7 @@ py::dict nightJob(const py::object& scene, const py::object& output, const py::o
   job.sixteen_bit = sixteen_bit;
   job.contact_sheet = toOptionalPath(contact_sheet, "contact_sheet");
   job.preset = preset;
-  const Progress progress(callback, kNightStages);
+  const Progress progress(callback, kJobStages);
   const NightConversionCallbacks callbacks = callbacksOf(progress, render_progress);
   NightJobResult result;
   {
