@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,101 @@ constexpr EvaluatedMapKind kDepthMap{1, "depth needs", "readDepth"};
 
 bool isValidDepth(double d) { return std::isfinite(d) && d > 0; }
 
+/// The error sums of the valid pixels' ground truth g and prediction p.
+DepthErrorSums errorSums(const std::vector<double>& g, const std::vector<double>& p) {
+  DepthErrorSums s;
+  s.count = static_cast<std::int64_t>(g.size());
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    const double diff = g[i] - p[i];
+    s.abs_rel += std::abs(diff) / g[i];
+    s.sq_rel_m += diff * diff / g[i];
+    s.squared_m2 += diff * diff;
+    const double log_diff = std::log(g[i]) - std::log(p[i]);
+    s.squared_log += log_diff * log_diff;
+    s.log_difference -= log_diff;
+    const double ratio = std::max(g[i] / p[i], p[i] / g[i]);
+    s.below1 += ratio < 1.25;
+    s.below2 += ratio < 1.25 * 1.25;
+    s.below3 += ratio < 1.25 * 1.25 * 1.25;
+  }
+  return s;
+}
+
+/// Sets r's metrics (and valid_pixels) to those of `s` (s.count > 0).
+void setMetricsFromSums(DepthMetrics& r, const DepthErrorSums& s) {
+  r.sums = s;
+  r.valid_pixels = s.count;
+  const double n = static_cast<double>(s.count);
+  r.abs_rel = s.abs_rel / n;
+  r.sq_rel_m = s.sq_rel_m / n;
+  r.rmse_m = std::sqrt(s.squared_m2 / n);
+  r.rmse_log = std::sqrt(s.squared_log / n);
+  const double mean_log = s.log_difference / n;
+  // mean(e^2) - mean(e)^2 >= 0 in exact arithmetic; rounding can take it just below.
+  r.silog = std::sqrt(std::max(0.0, s.squared_log / n - mean_log * mean_log));
+  r.delta1 = static_cast<double>(s.below1) / n;
+  r.delta2 = static_cast<double>(s.below2) / n;
+  r.delta3 = static_cast<double>(s.below3) / n;
+}
+
 }  // namespace
+
+DepthErrorSums& DepthErrorSums::operator+=(const DepthErrorSums& o) {
+  count += o.count;
+  abs_rel += o.abs_rel;
+  sq_rel_m += o.sq_rel_m;
+  squared_m2 += o.squared_m2;
+  squared_log += o.squared_log;
+  log_difference += o.log_difference;
+  below1 += o.below1;
+  below2 += o.below2;
+  below3 += o.below3;
+  return *this;
+}
+
+void addDepthPixelAccounting(DepthMetrics& to, const DepthMetrics& other) {
+  to.pixels += other.pixels;
+  to.masked_out += other.masked_out;
+  to.ground_truth_invalid += other.ground_truth_invalid;
+  to.outside_range += other.outside_range;
+  to.prediction_invalid += other.prediction_invalid;
+  to.valid_pixels += other.valid_pixels;
+}
+
+DepthDatasetMetrics combineDepthMetrics(const std::vector<DepthMetrics>& per_image) {
+  if (per_image.empty()) throw std::invalid_argument("no image to combine depth metrics over");
+  DepthMetrics accounting;  // the summed pixel counts
+  DepthErrorSums pooled_sums;
+  double scale_sum = 0;
+  for (const DepthMetrics& m : per_image) {
+    addDepthPixelAccounting(accounting, m);
+    pooled_sums += m.sums;
+    scale_sum += m.scale;
+  }
+  const double n = static_cast<double>(per_image.size());
+  accounting.scale = scale_sum / n;
+  DepthDatasetMetrics d;
+  d.images = static_cast<std::int64_t>(per_image.size());
+  d.pooled = accounting;
+  setMetricsFromSums(d.pooled, pooled_sums);
+
+  DepthMetrics& mean = d.mean_per_image = accounting;
+  mean.sums = pooled_sums;
+  for (const DepthMetrics& m : per_image) {
+    mean.abs_rel += m.abs_rel;
+    mean.sq_rel_m += m.sq_rel_m;
+    mean.rmse_m += m.rmse_m;
+    mean.rmse_log += m.rmse_log;
+    mean.silog += m.silog;
+    mean.delta1 += m.delta1;
+    mean.delta2 += m.delta2;
+    mean.delta3 += m.delta3;
+  }
+  for (double* metric : {&mean.abs_rel, &mean.sq_rel_m, &mean.rmse_m, &mean.rmse_log, &mean.silog, &mean.delta1,
+                         &mean.delta2, &mean.delta3})
+    *metric /= n;
+  return d;
+}
 
 DepthMetrics evaluateDepth(const DepthEvaluationInput& in, const DepthMetricsOptions& options) {
   const cv::Mat pred = evaluatedMapAsDouble(in.prediction_m, kDepthMap, in.prediction_file, "prediction");
@@ -70,28 +165,7 @@ DepthMetrics evaluateDepth(const DepthEvaluationInput& in, const DepthMetricsOpt
   if (options.clamp_prediction)
     for (double& v : p) v = std::clamp(v, std::max(lower, 0.0), upper);
 
-  double abs_rel = 0, sq_rel = 0, squared = 0, squared_log = 0;
-  std::int64_t below1 = 0, below2 = 0, below3 = 0;
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    const double diff = g[i] - p[i];
-    abs_rel += std::abs(diff) / g[i];
-    sq_rel += diff * diff / g[i];
-    squared += diff * diff;
-    const double log_diff = std::log(g[i]) - std::log(p[i]);
-    squared_log += log_diff * log_diff;
-    const double ratio = std::max(g[i] / p[i], p[i] / g[i]);
-    below1 += ratio < 1.25;
-    below2 += ratio < 1.25 * 1.25;
-    below3 += ratio < 1.25 * 1.25 * 1.25;
-  }
-  const double n = static_cast<double>(g.size());
-  r.abs_rel = abs_rel / n;
-  r.sq_rel_m = sq_rel / n;
-  r.rmse_m = std::sqrt(squared / n);
-  r.rmse_log = std::sqrt(squared_log / n);
-  r.delta1 = static_cast<double>(below1) / n;
-  r.delta2 = static_cast<double>(below2) / n;
-  r.delta3 = static_cast<double>(below3) / n;
+  setMetricsFromSums(r, errorSums(g, p));
   return r;
 }
 

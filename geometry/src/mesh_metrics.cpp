@@ -372,25 +372,36 @@ std::vector<Point> samplePoints(const Surface& s, std::int64_t count, std::mt199
 
 struct OneWayDistance {
   double max = 0, mean = 0;
+  double share_within_tau = 0;  ///< share of the random samples closer than tau
 };
 
-/// Distances from `from` (its random samples for the mean; samples and vertices for the max)
-/// to the surface `to`.
-OneWayDistance distanceBetween(const Surface& from, const std::vector<Point>& samples, const Surface& to) {
+/// Distances from `from` (its random samples for the mean and the share within tau; samples and
+/// vertices for the max) to the surface `to`.
+OneWayDistance distanceBetween(const Surface& from, const std::vector<Point>& samples, const Surface& to, double tau) {
   using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Triangle>::const_iterator>;
   using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
   Tree tree(to.triangles.begin(), to.triangles.end());
   tree.accelerate_distance_queries();
   OneWayDistance d;
   double sum = 0;
+  std::int64_t within = 0;
   for (const Point& p : samples) {
     const double distance = std::sqrt(tree.squared_distance(p));
     sum += distance;
+    within += distance < tau;
     d.max = std::max(d.max, distance);
   }
   d.mean = sum / static_cast<double>(samples.size());
+  d.share_within_tau = static_cast<double>(within) / static_cast<double>(samples.size());
   for (const Point& p : from.vertices) d.max = std::max(d.max, std::sqrt(tree.squared_distance(p)));
   return d;
+}
+
+/// Diagonal of the bounding box of a surface's vertices.
+double boundingBoxDiagonal(const Surface& s) {
+  const CGAL::Bbox_3 box = CGAL::bbox_3(s.vertices.begin(), s.vertices.end());
+  return std::sqrt(std::pow(box.xmax() - box.xmin(), 2) + std::pow(box.ymax() - box.ymin(), 2) +
+                   std::pow(box.zmax() - box.zmin(), 2));
 }
 
 }  // namespace
@@ -400,13 +411,17 @@ MeshDistances measureMeshDistances(const TriangleMesh& mesh, const TriangleMesh&
                                    const std::filesystem::path& reference_file) {
   if (options.samples < 1)
     throw std::invalid_argument("mesh distance needs at least one sample, got " + std::to_string(options.samples));
+  if (options.tau && !(std::isfinite(*options.tau) && *options.tau > 0))
+    throw std::invalid_argument("F-score threshold tau must be finite and > 0, got " + std::to_string(*options.tau));
   const Surface mesh_surface = surfaceOf(mesh, mesh_file);
   const Surface reference_surface = surfaceOf(reference, reference_file);
+  const double reference_diagonal = boundingBoxDiagonal(reference_surface);
+  const double tau = options.tau.value_or(kDefaultFScoreTauFraction * reference_diagonal);
   std::mt19937_64 random(options.seed);
   const std::vector<Point> mesh_samples = samplePoints(mesh_surface, options.samples, random);
   const std::vector<Point> reference_samples = samplePoints(reference_surface, options.samples, random);
-  const OneWayDistance to_reference = distanceBetween(mesh_surface, mesh_samples, reference_surface);
-  const OneWayDistance from_reference = distanceBetween(reference_surface, reference_samples, mesh_surface);
+  const OneWayDistance to_reference = distanceBetween(mesh_surface, mesh_samples, reference_surface, tau);
+  const OneWayDistance from_reference = distanceBetween(reference_surface, reference_samples, mesh_surface, tau);
 
   MeshDistances r;
   r.hausdorff_to_reference = to_reference.max;
@@ -418,9 +433,13 @@ MeshDistances measureMeshDistances(const TriangleMesh& mesh, const TriangleMesh&
   r.samples_per_direction = options.samples;
   r.mesh_vertices_checked = static_cast<std::int64_t>(mesh_surface.vertices.size());
   r.reference_vertices_checked = static_cast<std::int64_t>(reference_surface.vertices.size());
-  const CGAL::Bbox_3 box = CGAL::bbox_3(reference_surface.vertices.begin(), reference_surface.vertices.end());
-  r.reference_bbox_diagonal = std::sqrt(std::pow(box.xmax() - box.xmin(), 2) + std::pow(box.ymax() - box.ymin(), 2) +
-                                        std::pow(box.zmax() - box.zmin(), 2));
+  r.reference_bbox_diagonal = reference_diagonal;
+  r.tau = tau;
+  r.tau_given = options.tau.has_value();
+  r.precision = to_reference.share_within_tau;
+  r.recall = from_reference.share_within_tau;
+  const double sum = r.precision + r.recall;
+  r.f_score = sum > 0 ? 2 * r.precision * r.recall / sum : 0;
   return r;
 }
 

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,53 @@ TEST(DepthMetrics, HandComputedCase) {
   EXPECT_DOUBLE_EQ(m.delta2, 0.75);
   EXPECT_DOUBLE_EQ(m.delta3, 0.75);
   EXPECT_DOUBLE_EQ(m.scale, 1.0);
+}
+
+// SILog of the hand case: e = ln p - ln g = -ln 2, 0, -ln 1.25, ln 1.2 over the valid pixels;
+// sqrt(mean(e^2) - mean(e)^2) = 0.327418 (the BTS / KITTI definition before their factor 100).
+// A prediction off by one global factor has SILog 0: it measures the error up to scale.
+TEST(DepthMetrics, ScaleInvariantLogErrorHandComputed) {
+  const solo::DepthMetrics m = evaluate(row({1, 4, 4, 12}), row({2, 4, 5, 10}));
+  const double e[] = {-std::log(2.0), 0.0, -std::log(1.25), std::log(1.2)};
+  double sum = 0, sum_squares = 0;
+  for (const double v : e) {
+    sum += v;
+    sum_squares += v * v;
+  }
+  EXPECT_NEAR(m.silog, std::sqrt(sum_squares / 4 - (sum / 4) * (sum / 4)), 1e-15);
+  EXPECT_NEAR(m.silog, 0.327418, 1e-6);
+  const solo::DepthMetrics scaled = evaluate(row({2.5f, 5, 7.5f, 30}), row({1, 2, 3, 12}));
+  EXPECT_NEAR(scaled.silog, 0.0, 1e-7);
+  EXPECT_GT(scaled.rmse_log, 0.9);  // ln 2.5: RMSElog is not scale invariant
+}
+
+// Two images: A, one pixel, gt 1 and pred 3 (|g-p|/g = 2, (g-p)^2 = 4, ratio 3); B, eight
+// exact pixels. Mean per image: AbsRel (2 + 0) / 2 = 1, RMSE (2 + 0) / 2 = 1, delta1
+// (0 + 1) / 2 = 0.5. Pooled over the 9 pixels: AbsRel 2/9, RMSE sqrt(4/9) = 2/3, delta1 8/9.
+TEST(DepthMetrics, DatasetMeanPerImageAndPooled) {
+  const solo::DepthMetrics a = evaluate(row({3}), row({1}));
+  const solo::DepthMetrics b = evaluate(row({1, 2, 3, 4, 5, 6, 7, 8}), row({1, 2, 3, 4, 5, 6, 7, 8}));
+  const solo::DepthDatasetMetrics d = solo::combineDepthMetrics({a, b});
+  EXPECT_EQ(d.images, 2);
+  EXPECT_DOUBLE_EQ(d.mean_per_image.abs_rel, 1.0);
+  EXPECT_DOUBLE_EQ(d.mean_per_image.rmse_m, 1.0);
+  EXPECT_DOUBLE_EQ(d.mean_per_image.delta1, 0.5);
+  EXPECT_DOUBLE_EQ(d.pooled.abs_rel, 2.0 / 9.0);
+  EXPECT_DOUBLE_EQ(d.pooled.rmse_m, 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(d.pooled.sq_rel_m, 4.0 / 9.0);
+  EXPECT_DOUBLE_EQ(d.pooled.delta1, 8.0 / 9.0);
+  EXPECT_NEAR(d.pooled.rmse_log, std::sqrt(std::log(3.0) * std::log(3.0) / 9), 1e-15);
+  for (const solo::DepthMetrics* m : {&d.mean_per_image, &d.pooled}) {
+    EXPECT_EQ(m->pixels, 9);
+    EXPECT_EQ(m->valid_pixels, 9);
+    EXPECT_EQ(m->sums.count, 9);
+    EXPECT_DOUBLE_EQ(m->scale, 1.0);
+  }
+  // One image: both are that image's metrics.
+  const solo::DepthDatasetMetrics one = solo::combineDepthMetrics({a});
+  EXPECT_DOUBLE_EQ(one.mean_per_image.abs_rel, a.abs_rel);
+  EXPECT_DOUBLE_EQ(one.pooled.rmse_m, a.rmse_m);
+  EXPECT_THROW(solo::combineDepthMetrics({}), std::invalid_argument);
 }
 
 // delta thresholds are 1.25, 1.25^2 = 1.5625 and 1.25^3 = 1.953125, all exact in binary:

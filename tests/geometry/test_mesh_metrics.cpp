@@ -256,6 +256,76 @@ TEST(MeshDistances, MeshWithoutAreaIsAnInputErrorNamingTheFile) {
   EXPECT_THROW(solo::measureMeshDistances(cube(), cube(), no_samples), std::invalid_argument);
 }
 
+/// The square [0, width] x [0, 1] at height z, two triangles with normal +z.
+solo::TriangleMesh square(double width = 1, double z = 0) {
+  return makeMesh({{0, 0, z}, {width, 0, z}, {width, 1, z}, {0, 1, z}}, {{0, 1, 2}, {0, 2, 3}});
+}
+
+// Every point of a square is exactly d = 0.1 from the copy offset by d along the normal (its
+// foot is inside the copy), both ways: P = R = F = 1 for any tau > d and 0 for any tau < d.
+TEST(MeshFScore, SquareAgainstItsOffsetCopyIsAllOrNothingAtTheOffset) {
+  solo::MeshDistanceOptions options;
+  options.samples = 5000;
+  options.tau = 0.1001;
+  const solo::MeshDistances above = solo::measureMeshDistances(square(), square(1, 0.1), options);
+  EXPECT_EQ(above.precision, 1.0);
+  EXPECT_EQ(above.recall, 1.0);
+  EXPECT_EQ(above.f_score, 1.0);
+  EXPECT_EQ(above.tau, 0.1001);
+  EXPECT_TRUE(above.tau_given);
+  options.tau = 0.0999;
+  const solo::MeshDistances below = solo::measureMeshDistances(square(), square(1, 0.1), options);
+  EXPECT_EQ(below.precision, 0.0);
+  EXPECT_EQ(below.recall, 0.0);
+  EXPECT_EQ(below.f_score, 0.0);  // not NaN
+}
+
+// The left half of a square against the whole: every point of the half lies on the reference
+// (P = 1); a reference point is within tau of the half when x < 0.5 + tau, so R = 0.5 + tau.
+// With N = 20000 samples R's standard error is sqrt(0.25 / N) = 0.0035: checked within 4 of it.
+TEST(MeshFScore, HalfCoveredReferenceHasRecallOneHalf) {
+  solo::MeshDistanceOptions options;
+  options.samples = 20000;
+  options.seed = 7;
+  options.tau = 1e-3;
+  const solo::MeshDistances d = solo::measureMeshDistances(square(0.5), square(), options);
+  EXPECT_EQ(d.precision, 1.0);
+  EXPECT_NEAR(d.recall, 0.501, 0.014);
+  EXPECT_DOUBLE_EQ(d.f_score, 2 * d.precision * d.recall / (d.precision + d.recall));
+  // Swapping the roles swaps precision and recall.
+  const solo::MeshDistances swapped = solo::measureMeshDistances(square(), square(0.5), options);
+  EXPECT_NEAR(swapped.precision, 0.501, 0.014);
+  EXPECT_EQ(swapped.recall, 1.0);
+}
+
+// Default tau: 1 % of the reference's bounding-box diagonal, sqrt(3) / 100 for the unit cube.
+// Cube A against B = A shifted by 0.1 along z, tau < 0.1: A's bottom is 0.1 below B (never
+// within); a point of A's top lies inside B, min(x, 1-x, y, 1-y) from B's sides (within on
+// 1 - (1 - 2 tau)^2 of it); a side point at height z is 0.1 - z from B for z < 0.1, on B above
+// (within on 0.9 + tau of it). P = (1 - (1 - 2 tau)^2 + 4 (0.9 + tau)) / 6 = 0.622894, and R
+// the same by symmetry; standard error sqrt(0.62 0.38 / 20000) = 0.0034, checked within 0.015.
+TEST(MeshFScore, DefaultTauIsOnePercentOfTheReferenceDiagonal) {
+  solo::MeshDistanceOptions options;
+  options.samples = 20000;
+  options.seed = 3;
+  const solo::MeshDistances d = solo::measureMeshDistances(cube(), cube(0.1), options);
+  const double tau = std::sqrt(3.0) * solo::kDefaultFScoreTauFraction;
+  EXPECT_NEAR(d.tau, tau, 1e-15);
+  EXPECT_FALSE(d.tau_given);
+  const double expected = (1 - std::pow(1 - 2 * tau, 2) + 4 * (0.9 + tau)) / 6;
+  EXPECT_NEAR(d.precision, expected, 0.015);
+  EXPECT_NEAR(d.recall, expected, 0.015);
+  EXPECT_NEAR(d.f_score, expected, 0.015);
+}
+
+TEST(MeshFScore, TauMustBePositiveAndFinite) {
+  for (const double tau : {0.0, -1.0, std::nan(""), HUGE_VAL}) {
+    solo::MeshDistanceOptions options;
+    options.tau = tau;
+    EXPECT_THROW(solo::measureMeshDistances(square(), square(), options), std::invalid_argument) << tau;
+  }
+}
+
 // Hole counts from ../shared/data/README.md. The Euler characteristic 2 - 2 genus - holes then
 // says the open ones are spheres with holes (genus 0).
 TEST(MeshMetricsSharedData, PigHasSevenHoles) {

@@ -77,6 +77,26 @@ TEST(NormalMetrics, HandComputedAngles) {
 
 // 1e-8 rad between two float vectors: acos(dot) sees dot == 1.0f and returns 0; atan2 of the
 // cross and dot products keeps the angle, 1e-8 rad = 5.7296e-7 deg.
+// A constructed field of 100 angles, 0.15 + 0.4 i degrees (i = 0..99), none within 0.025 deg
+// of a threshold. Below 5: 0.4 i < 4.85, i <= 12 (13); 7.5: i <= 18 (19); 11.25: i <= 27 (28);
+// 22.5: i <= 55 (56); 30: i <= 74 (75). Mean and median 0.15 + 0.4 x 49.5 = 19.95;
+// RMSE^2 = mean((0.15 + 0.4 i)^2) = 0.0225 + 0.12 x 49.5 + 0.16 x 3283.5 = 531.3225.
+TEST(NormalMetrics, ConstructedAngleFieldSharesUnderEachThreshold) {
+  std::vector<cv::Vec3d> truth, prediction;
+  for (int i = 0; i < 100; ++i) {
+    truth.push_back(tilted(0));
+    prediction.push_back(tilted(0.15 + 0.4 * i));
+  }
+  const solo::NormalMetrics m = evaluate(cv::Mat(prediction, true).reshape(3, 10), cv::Mat(truth, true).reshape(3, 10));
+  EXPECT_EQ(m.valid_pixels, 100);
+  const double expected_shares[] = {0.13, 0.19, 0.28, 0.56, 0.75};
+  for (std::size_t t = 0; t < solo::kNormalAngleThresholdsDeg.size(); ++t)
+    EXPECT_DOUBLE_EQ(m.share_under[t], expected_shares[t]) << solo::kNormalAngleThresholdsDeg[t] << " deg";
+  EXPECT_NEAR(m.mean_deg, 19.95, 1e-9);
+  EXPECT_NEAR(m.median_deg, 19.95, 1e-9);
+  EXPECT_NEAR(m.rmse_deg, std::sqrt(531.3225), 1e-9);
+}
+
 TEST(NormalMetrics, TinyAnglesAreResolved) {
   cv::Mat gt(1, 1, CV_32FC3, cv::Scalar(0, 0, 1));
   cv::Mat pred(1, 1, CV_32FC3, cv::Scalar(1e-8, 0, 1));

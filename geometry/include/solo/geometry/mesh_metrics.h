@@ -1,7 +1,8 @@
 #pragma once
 // Mesh evaluation: topology (components, boundary loops, manifoldness), defects
 // (self-intersections, degenerate faces, unreferenced vertices), triangle quality, and the
-// distance to a reference mesh (Hausdorff both ways, Chamfer). Works on any soup,
+// distance to a reference mesh (Hausdorff both ways, Chamfer, and precision, recall and F-score
+// at a distance threshold as Tanks and Temples defines them). Works on any soup,
 // non-manifold ones included. Definitions: docs/evaluation.md. Lengths are in the mesh's
 // units (metres for solo's meshes).
 
@@ -54,9 +55,16 @@ struct MeshMetrics {
 /// when a face refers to a vertex that does not exist.
 MeshMetrics evaluateMesh(const TriangleMesh& mesh);
 
+/// The F-score threshold when none is given, as a fraction of the reference's bounding-box
+/// diagonal (the "F-score at 1 %" of shape reconstruction; docs/evaluation.md says why).
+inline constexpr double kDefaultFScoreTauFraction = 0.01;
+
 struct MeshDistanceOptions {
   std::int64_t samples = 100000;  ///< random surface points per direction (area-uniform), > 0
   std::uint64_t seed = 0;         ///< seeds the sampling (std::mt19937_64)
+  /// Distance threshold of precision, recall and F-score, mesh units, finite and > 0; unset:
+  /// kDefaultFScoreTauFraction times the reference's bounding-box diagonal.
+  std::optional<double> tau;
 };
 
 /// Distances between two surfaces (their non-degenerate faces), in mesh units. d(x, S) is the
@@ -72,13 +80,20 @@ struct MeshDistances {
   std::int64_t mesh_vertices_checked = 0;       ///< mesh vertices added to the maximum's points
   std::int64_t reference_vertices_checked = 0;  ///< reference vertices added likewise
   double reference_bbox_diagonal = 0;           ///< for relative figures (distance / diagonal)
+  // Tanks and Temples (Knapitsch et al. 2017), over the random samples only:
+  double tau = 0;        ///< the distance threshold used, mesh units
+  bool tau_given = false;  ///< false: the default fraction of reference_bbox_diagonal
+  double precision = 0;  ///< share of the mesh's samples x with d(x, reference) < tau
+  double recall = 0;     ///< share of the reference's samples y with d(y, mesh) < tau
+  double f_score = 0;    ///< 2 P R / (P + R), 0 when both are 0
 };
 
 /// Samples each surface (area-uniform random points, seeded) and measures their distance to
 /// the other. The maxima also include every vertex of a non-degenerate face, so a Hausdorff
 /// distance attained at a vertex is exact; the means use the random samples only (an unbiased
-/// estimate of the area-weighted mean). Throws InputError naming the file when either mesh has
-/// no non-degenerate face, std::invalid_argument when options.samples < 1.
+/// estimate of the area-weighted mean), and so do precision, recall and F-score. Throws
+/// InputError naming the file when either mesh has no non-degenerate face,
+/// std::invalid_argument when options.samples < 1 or options.tau is not finite and > 0.
 MeshDistances measureMeshDistances(const TriangleMesh& mesh, const TriangleMesh& reference,
                                    const MeshDistanceOptions& options = {},
                                    const std::filesystem::path& mesh_file = "mesh",
