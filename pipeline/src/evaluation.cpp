@@ -19,6 +19,10 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -60,6 +64,7 @@ std::vector<Field> depthFields(const DepthMetrics& m, const std::string& key_pre
                                       {"sq_rel_m", "SqRel", m.sq_rel_m, "m"},
                                       {"rmse_m", "RMSE", m.rmse_m, "m"},
                                       {"rmse_log", "RMSElog", m.rmse_log, ""},
+                                      {"silog", "SILog", m.silog, ""},
                                       {"delta1", "delta < 1.25", m.delta1, ""},
                                       {"delta2", "delta < 1.25^2", m.delta2, ""},
                                       {"delta3", "delta < 1.25^3", m.delta3, ""}};
@@ -127,6 +132,12 @@ std::vector<Field> meshFields(const MeshMetrics& m, const MeshReadStats& read_st
       {"mean_to_ref", "mean distance mesh -> ref", distance(&MeshDistances::mean_to_reference), ""},
       {"mean_from_ref", "mean distance ref -> mesh", distance(&MeshDistances::mean_from_reference), ""},
       {"chamfer", "Chamfer", distance(&MeshDistances::chamfer), ""},
+      {"fscore_tau", "F-score threshold tau", distance(&MeshDistances::tau), ""},
+      {"fscore_tau_relative", "  tau / ref bounding-box diagonal",
+       d ? FieldValue(d->tau / d->reference_bbox_diagonal) : FieldValue(std::monostate{}), ""},
+      {"precision", "precision (mesh within tau of ref)", distance(&MeshDistances::precision), ""},
+      {"recall", "recall (ref within tau of mesh)", distance(&MeshDistances::recall), ""},
+      {"fscore", "F-score", distance(&MeshDistances::f_score), ""},
       {"ref_bbox_diagonal", "ref bounding-box diagonal", distance(&MeshDistances::reference_bbox_diagonal), ""},
       {"mesh_vertices_checked", "mesh vertices checked", distance(&MeshDistances::mesh_vertices_checked), ""},
       {"ref_vertices_checked", "ref vertices checked", distance(&MeshDistances::reference_vertices_checked), ""}};
@@ -173,6 +184,10 @@ std::vector<Field> blanked(std::vector<Field> fields) {
 }  // namespace
 
 void validateDepthFilesEvaluationOptions(const DepthFilesEvaluationOptions& o) {
+  if (o.list && (!o.prediction.empty() || !o.ground_truth.empty()))
+    throw InputError("--list", "replaces --pred and --gt: give either the list or both of them");
+  if (!o.list && o.prediction.empty()) throw InputError("--pred", "required (or --list)");
+  if (!o.list && o.ground_truth.empty()) throw InputError("--gt", "required (or --list)");
   if (o.min_depth_m) requireOptionInRange(*o.min_depth_m, 0, 1e9, "--min-depth");
   if (o.max_depth_m) requireOptionInRange(*o.max_depth_m, 0, 1e9, "--max-depth");
   if (o.min_depth_m && o.max_depth_m && !(*o.min_depth_m < *o.max_depth_m))
@@ -182,39 +197,259 @@ void validateDepthFilesEvaluationOptions(const DepthFilesEvaluationOptions& o) {
   requireOptionInRange(o.ground_truth_scale_m_per_unit, 0, 1e6, "--gt-scale");
 }
 
-EvaluationRecord evaluateDepthFiles(const DepthFilesEvaluationOptions& o) {
-  validateDepthFilesEvaluationOptions(o);
-  Stopwatch clock;
+namespace {
+
+/// The metrics of one prediction file against one ground-truth file, with the options' range,
+/// scaling and file scales.
+DepthMetrics measureDepthFiles(const DepthFilesEvaluationOptions& o, const fs::path& prediction,
+                               const fs::path& ground_truth, const std::optional<fs::path>& mask) {
   DepthEvaluationInput input;
-  input.prediction_m = readDepth(o.prediction, o.prediction_scale_m_per_unit);
-  input.ground_truth_m = readDepth(o.ground_truth, o.ground_truth_scale_m_per_unit);
-  input.mask = readMask(o.mask);
-  input.prediction_file = o.prediction;
-  input.ground_truth_file = o.ground_truth;
-  if (o.mask) input.mask_file = *o.mask;
+  input.prediction_m = readDepth(prediction, o.prediction_scale_m_per_unit);
+  input.ground_truth_m = readDepth(ground_truth, o.ground_truth_scale_m_per_unit);
+  input.mask = readMask(mask);
+  input.prediction_file = prediction;
+  input.ground_truth_file = ground_truth;
+  if (mask) input.mask_file = *mask;
   DepthMetricsOptions options;
   options.min_depth_m = o.min_depth_m;
   options.max_depth_m = o.max_depth_m;
   options.median_scaling = o.median_scaling;
   options.clamp_prediction = o.clamp_prediction;
-  const DepthMetrics m = evaluateDepth(input, options);
+  return evaluateDepth(input, options);
+}
 
+/// The option fields of a depth evaluation, single or dataset.
+std::vector<Field> depthOptionFields(const DepthFilesEvaluationOptions& o) {
+  return {{"min_depth_m", "min depth (gt >)", optionalNumberValue(o.min_depth_m), "m"},
+          {"max_depth_m", "max depth (gt <)", optionalNumberValue(o.max_depth_m), "m"},
+          {"median_scaling", "median scaling", o.median_scaling, ""},
+          {"clamp_prediction", "clamp prediction", o.clamp_prediction, ""},
+          {"prediction_scale_m_per_unit", "prediction file scale", scaleOption(o.prediction_scale_m_per_unit), "m/unit"},
+          {"ground_truth_scale_m_per_unit", "ground-truth file scale", scaleOption(o.ground_truth_scale_m_per_unit),
+           "m/unit"}};
+}
+
+}  // namespace
+
+EvaluationRecord evaluateDepthFiles(const DepthFilesEvaluationOptions& o) {
+  validateDepthFilesEvaluationOptions(o);
+  Stopwatch clock;
+  const DepthMetrics m = measureDepthFiles(o, o.prediction, o.ground_truth, o.mask);
   EvaluationRecord r;
   r.command = "eval depth";
   r.inputs = {{"prediction", "prediction", o.prediction.string(), ""},
               {"ground_truth", "ground truth", o.ground_truth.string(), ""},
               {"mask", "mask", optionalPathValue(o.mask), ""}};
-  r.options = {
-      {"min_depth_m", "min depth (gt >)", optionalNumberValue(o.min_depth_m), "m"},
-      {"max_depth_m", "max depth (gt <)", optionalNumberValue(o.max_depth_m), "m"},
-      {"median_scaling", "median scaling", o.median_scaling, ""},
-      {"clamp_prediction", "clamp prediction", o.clamp_prediction, ""},
-      {"prediction_scale_m_per_unit", "prediction file scale", scaleOption(o.prediction_scale_m_per_unit), "m/unit"},
-      {"ground_truth_scale_m_per_unit", "ground-truth file scale", scaleOption(o.ground_truth_scale_m_per_unit),
-       "m/unit"}};
+  r.options = depthOptionFields(o);
   r.metrics = depthFields(m, "", "", true);
   r.seconds = clock.seconds();
   return r;
+}
+
+// ---- a depth dataset: two folders or a list of pairs ----------------------------------------
+
+namespace {
+
+/// One image of a dataset: its files, or why they could not be paired.
+struct DepthPair {
+  std::string image;  ///< the ground truth's stem (folders) or LIST:LINE (list)
+  fs::path prediction, ground_truth;
+  std::optional<fs::path> mask;
+  std::string problem;  ///< "<file>: <problem>" when the pair cannot be evaluated; empty otherwise
+};
+
+bool isDepthFileName(const fs::path& file) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".png" || ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".pfm" || ext == ".npy";
+}
+
+/// A folder's depth files (.png .exr .tif .tiff .pfm .npy) by stem, each stem's files sorted.
+std::map<std::string, std::vector<fs::path>> depthFilesByStem(const fs::path& folder) {
+  std::map<std::string, std::vector<fs::path>> files;
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder))
+    if (entry.is_regular_file() && isDepthFileName(entry.path()))
+      files[entry.path().stem().string()].push_back(entry.path());
+  for (auto& [stem, paths] : files) std::sort(paths.begin(), paths.end());
+  return files;
+}
+
+/// The one file of `stem` in `files` (of `folder`), or none with `problem` set.
+std::optional<fs::path> fileOfStem(const std::map<std::string, std::vector<fs::path>>& files, const std::string& stem,
+                                   const fs::path& folder, const char* what, const fs::path& for_file,
+                                   std::string& problem) {
+  const auto found = files.find(stem);
+  if (found == files.end()) {
+    if (problem.empty())
+      problem = for_file.string() + ": no " + what + " named " + stem + ".* in " + folder.string();
+    return std::nullopt;
+  }
+  if (found->second.size() > 1) {
+    if (problem.empty())
+      problem = found->second[0].string() + ": " + found->second[1].string() + " has the same stem (which " + what +
+                " is meant?)";
+    return std::nullopt;
+  }
+  return found->second[0];
+}
+
+/// Pairs from a prediction and a ground-truth folder, matched by stem; every ground-truth file
+/// is an image. Counts the predictions no ground truth has.
+std::vector<DepthPair> pairsFromFolders(const DepthFilesEvaluationOptions& o, std::int64_t& unpaired_predictions) {
+  std::error_code ec;
+  if (!fs::is_directory(o.ground_truth, ec))
+    throw InputError(o.ground_truth, "not a folder, and --pred " + o.prediction.string() + " is one");
+  const auto predictions = depthFilesByStem(o.prediction);
+  const auto truths = depthFilesByStem(o.ground_truth);
+  if (truths.empty()) throw InputError(o.ground_truth, "no depth file (.png .exr .tif .tiff .pfm .npy) in the folder");
+  const bool mask_folder = o.mask && fs::is_directory(*o.mask, ec);
+  const auto masks = mask_folder ? depthFilesByStem(*o.mask) : std::map<std::string, std::vector<fs::path>>{};
+  std::vector<DepthPair> pairs;
+  for (const auto& [stem, files] : truths) {
+    DepthPair pair;
+    pair.image = stem;
+    pair.ground_truth = files[0];
+    if (files.size() > 1)
+      pair.problem = files[0].string() + ": " + files[1].string() + " has the same stem (which ground truth is meant?)";
+    pair.prediction = fileOfStem(predictions, stem, o.prediction, "prediction", files[0], pair.problem)
+                          .value_or(o.prediction / stem);
+    pair.mask = mask_folder ? fileOfStem(masks, stem, *o.mask, "mask", files[0], pair.problem) : o.mask;
+    pairs.push_back(pair);
+  }
+  unpaired_predictions = 0;
+  for (const auto& [stem, files] : predictions) unpaired_predictions += truths.count(stem) ? 0 : 1;
+  return pairs;
+}
+
+/// A list line's fields: split at tabs when it holds one (paths with spaces), else at spaces.
+std::vector<std::string> listFields(const std::string& line) {
+  const char* separators = line.find('\t') != std::string::npos ? "\t\r" : " \t\r";
+  std::vector<std::string> fields;
+  for (std::size_t begin = line.find_first_not_of(separators); begin != std::string::npos;) {
+    const std::size_t end = line.find_first_of(separators, begin);
+    const std::string field = line.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+    const std::size_t first = field.find_first_not_of(' '), last = field.find_last_not_of(' ');
+    if (first != std::string::npos) fields.push_back(field.substr(first, last - first + 1));
+    begin = end == std::string::npos ? end : line.find_first_not_of(separators, end);
+  }
+  return fields;
+}
+
+/// Pairs from a list file: a line "PREDICTION GROUND_TRUTH [MASK]" per image, relative paths
+/// taken from the list's folder, blank lines and lines starting with # skipped. A line with
+/// another number of fields is an InputError naming the list and the line.
+std::vector<DepthPair> pairsFromList(const fs::path& list, const std::optional<fs::path>& mask) {
+  std::ifstream in(list);
+  if (!in) throw InputError(list, "list of depth pairs not found");
+  const auto resolved = [&list](const std::string& path) {
+    const fs::path p = path;
+    return p.is_absolute() ? p : list.parent_path() / p;
+  };
+  std::vector<DepthPair> pairs;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const std::vector<std::string> fields = listFields(line);
+    if (fields.empty() || fields[0][0] == '#') continue;
+    if (fields.size() < 2 || fields.size() > 3)
+      throw InputError(list, "line " + std::to_string(number) + " has " + std::to_string(fields.size()) +
+                                 " fields, expected PREDICTION GROUND_TRUTH [MASK]");
+    DepthPair pair;
+    pair.image = list.string() + ":" + std::to_string(number);
+    pair.prediction = resolved(fields[0]);
+    pair.ground_truth = resolved(fields[1]);
+    pair.mask = fields.size() == 3 ? std::optional<fs::path>(resolved(fields[2])) : mask;
+    pairs.push_back(pair);
+  }
+  if (pairs.empty()) throw InputError(list, "the list names no pair");
+  return pairs;
+}
+
+/// The summary's inputs: the folders or the list, and the mask.
+std::vector<Field> datasetInputFields(const DepthFilesEvaluationOptions& o) {
+  const auto given = [](const fs::path& p) { return p.empty() ? FieldValue(std::monostate{}) : FieldValue(p.string()); };
+  return {{"prediction", "prediction folder", given(o.prediction), ""},
+          {"ground_truth", "ground-truth folder", given(o.ground_truth), ""},
+          {"list", "list of pairs", optionalPathValue(o.list), ""},
+          {"mask", "mask", optionalPathValue(o.mask), ""}};
+}
+
+/// The summary's metrics: counts, the summed pixel accounting, the mean per image and the
+/// pooled metrics (none when no image was evaluated).
+std::vector<Field> datasetMetricFields(const std::vector<DepthMetrics>& evaluated, std::int64_t pairs,
+                                       std::int64_t unpaired_predictions) {
+  const auto count = static_cast<std::int64_t>(evaluated.size());
+  std::vector<Field> fields = {{"images", "images (pairs)", pairs, ""},
+                               {"evaluated", "  evaluated", count, ""},
+                               {"failed", "  failed", pairs - count, ""},
+                               {"unpaired_predictions", "predictions without ground truth", unpaired_predictions, ""}};
+  const DepthDatasetMetrics d = evaluated.empty() ? DepthDatasetMetrics{} : combineDepthMetrics(evaluated);
+  std::vector<Field> accounting = depthFields(d.pooled, "", "", true);
+  accounting.resize(6);  // the pixel counts, before the metrics
+  std::vector<Field> metrics = accounting;
+  const std::vector<Field> mean = depthFields(d.mean_per_image, "mean_", "mean per image: ", false);
+  const std::vector<Field> pooled = depthFields(d.pooled, "pooled_", "pooled over pixels: ", false);
+  metrics.insert(metrics.end(), mean.begin(), mean.end());
+  metrics.insert(metrics.end(), pooled.begin(), pooled.end());
+  if (evaluated.empty()) metrics = blanked(metrics);
+  fields.insert(fields.end(), metrics.begin(), metrics.end());
+  return fields;
+}
+
+/// One image's record: its files, the options, and its metrics or the error that stopped it.
+EvaluationRecord imageRecord(const DepthFilesEvaluationOptions& o, const DepthPair& pair,
+                             const std::optional<DepthMetrics>& m, const std::string& error) {
+  EvaluationRecord r;
+  r.command = "eval depth";
+  r.inputs = {{"image", "image", pair.image, ""},
+              {"prediction", "prediction", pair.prediction.string(), ""},
+              {"ground_truth", "ground truth", pair.ground_truth.string(), ""},
+              {"mask", "mask", optionalPathValue(pair.mask), ""}};
+  r.options = depthOptionFields(o);
+  r.metrics = {{"error", "error", error.empty() ? FieldValue(std::monostate{}) : FieldValue(error), ""}};
+  const std::vector<Field> metrics = m ? depthFields(*m, "", "", true) : blanked(depthFields(DepthMetrics{}, "", "", true));
+  r.metrics.insert(r.metrics.end(), metrics.begin(), metrics.end());
+  return r;
+}
+
+}  // namespace
+
+bool isDepthDataset(const DepthFilesEvaluationOptions& o) {
+  std::error_code ec;
+  return o.list.has_value() || fs::is_directory(o.prediction, ec);
+}
+
+DepthDatasetEvaluation evaluateDepthDataset(const DepthFilesEvaluationOptions& o) {
+  validateDepthFilesEvaluationOptions(o);
+  Stopwatch clock;
+  std::int64_t unpaired_predictions = 0;
+  const std::vector<DepthPair> pairs = o.list ? pairsFromList(*o.list, o.mask) : pairsFromFolders(o, unpaired_predictions);
+  DepthDatasetEvaluation result;
+  std::vector<DepthMetrics> evaluated;
+  for (const DepthPair& pair : pairs) {
+    Stopwatch image_clock;
+    std::optional<DepthMetrics> m;
+    std::string error = pair.problem;
+    if (error.empty()) {
+      try {
+        m = measureDepthFiles(o, pair.prediction, pair.ground_truth, pair.mask);
+        evaluated.push_back(*m);
+      } catch (const InputError& e) {
+        error = e.what();
+      } catch (const fs::filesystem_error& e) {
+        error = (e.path1().empty() ? std::string() : e.path1().string() + ": ") + e.code().message();
+      }
+    }
+    if (!error.empty()) result.failures.push_back(error);
+    result.images.push_back(imageRecord(o, pair, m, error));
+    result.images.back().seconds = image_clock.seconds();
+  }
+  result.summary.command = "eval depth dataset";
+  result.summary.inputs = datasetInputFields(o);
+  result.summary.options = depthOptionFields(o);
+  result.summary.metrics =
+      datasetMetricFields(evaluated, static_cast<std::int64_t>(pairs.size()), unpaired_predictions);
+  result.summary.seconds = clock.seconds();
+  return result;
 }
 
 EvaluationRecord evaluateNormalFiles(const NormalFilesEvaluationOptions& o) {
@@ -239,6 +474,7 @@ EvaluationRecord evaluateNormalFiles(const NormalFilesEvaluationOptions& o) {
 }
 
 EvaluationRecord evaluateMeshFile(const MeshFileEvaluationOptions& o) {
+  if (o.tau_m) requireOptionAboveAndAtMost(*o.tau_m, 0, 1e9, "--tau");
   Stopwatch clock;
   MeshReadStats read_stats;
   const TriangleMesh mesh = readMesh(o.mesh, &read_stats);
@@ -249,13 +485,15 @@ EvaluationRecord evaluateMeshFile(const MeshFileEvaluationOptions& o) {
     MeshDistanceOptions options;
     options.samples = o.samples;
     options.seed = o.seed;
+    options.tau = o.tau_m;
     d = measureMeshDistances(mesh, reference, options, o.mesh, *o.reference);
   }
   EvaluationRecord r;
   r.command = "eval mesh";
   r.inputs = {{"mesh", "mesh", o.mesh.string(), ""}, {"reference", "reference", optionalPathValue(o.reference), ""}};
   r.options = {{"samples", "samples per direction", o.samples, ""},
-               {"seed", "seed", static_cast<std::int64_t>(o.seed), ""}};
+               {"seed", "seed", static_cast<std::int64_t>(o.seed), ""},
+               {"tau_m", "F-score tau (given)", optionalNumberValue(o.tau_m), "m"}};
   r.metrics = meshFields(m, read_stats, d, "", "");
   r.seconds = clock.seconds();
   return r;

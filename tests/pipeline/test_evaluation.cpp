@@ -95,6 +95,99 @@ TEST(Evaluation, DepthFilesHaveTheHandComputedMetrics) {
   EXPECT_DOUBLE_EQ(number(scaled, "abs_rel"), 0.7 / 3);
 }
 
+namespace {
+
+void writeRow(const std::filesystem::path& file, const std::vector<float>& values) {
+  solo::writeImage(file, cv::Mat(values, true).reshape(1, 1));
+}
+
+/// pred/ and gt/ of four images and one extra prediction: a (gt 1, pred 3) and b (eight exact
+/// pixels) evaluate; c has no prediction; d's prediction is not a depth file.
+void writeDepthDataset(const TempDir& dir) {
+  std::filesystem::create_directories(dir / "pred");
+  std::filesystem::create_directories(dir / "gt");
+  writeRow(dir / "gt" / "a.pfm", {1});
+  writeRow(dir / "pred" / "a.pfm", {3});
+  writeRow(dir / "gt" / "b.pfm", {1, 2, 3, 4, 5, 6, 7, 8});
+  writeRow(dir / "pred" / "b.exr", {1, 2, 3, 4, 5, 6, 7, 8});
+  writeRow(dir / "gt" / "c.pfm", {1});
+  writeRow(dir / "gt" / "d.pfm", {1});
+  solo::test::writeText(dir / "pred" / "d.pfm", "not a depth map");
+  writeRow(dir / "pred" / "extra.pfm", {1});
+  solo::test::writeText(dir / "gt" / "README.txt", "not a depth file: ignored");
+}
+
+}  // namespace
+
+// Mean per image: AbsRel (2 + 0) / 2 = 1, RMSE (2 + 0) / 2 = 1; pooled over the 9 pixels:
+// AbsRel 2/9, RMSE sqrt(4/9) = 2/3 (test_depth_metrics' hand case).
+TEST(Evaluation, DepthDatasetFromFoldersKeepsGoingPastBadPairs) {
+  TempDir dir;
+  writeDepthDataset(dir);
+  solo::DepthFilesEvaluationOptions o;
+  o.prediction = dir / "pred";
+  o.ground_truth = dir / "gt";
+  ASSERT_TRUE(solo::isDepthDataset(o));
+  const solo::DepthDatasetEvaluation d = solo::evaluateDepthDataset(o);
+  const EvaluationRecord& s = d.summary;
+  EXPECT_EQ(s.command, "eval depth dataset");
+  EXPECT_EQ(integer(s, "images"), 4);
+  EXPECT_EQ(integer(s, "evaluated"), 2);
+  EXPECT_EQ(integer(s, "failed"), 2);
+  EXPECT_EQ(integer(s, "unpaired_predictions"), 1);
+  EXPECT_EQ(integer(s, "valid_pixels"), 9);
+  EXPECT_DOUBLE_EQ(number(s, "mean_abs_rel"), 1.0);
+  EXPECT_DOUBLE_EQ(number(s, "mean_rmse_m"), 1.0);
+  EXPECT_DOUBLE_EQ(number(s, "pooled_abs_rel"), 2.0 / 9.0);
+  EXPECT_DOUBLE_EQ(number(s, "pooled_rmse_m"), 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(number(s, "pooled_delta1"), 8.0 / 9.0);
+
+  ASSERT_EQ(d.images.size(), 4u);
+  EXPECT_EQ(text(d.images[0], "image"), "a");
+  EXPECT_TRUE(isNone(d.images[0], "error"));
+  EXPECT_DOUBLE_EQ(number(d.images[0], "abs_rel"), 2.0);
+  EXPECT_EQ(text(d.images[1], "prediction"), (dir / "pred" / "b.exr").string());
+  EXPECT_DOUBLE_EQ(number(d.images[1], "abs_rel"), 0.0);
+  EXPECT_NE(text(d.images[2], "error").find((dir / "gt" / "c.pfm").string() + ": no prediction named c.*"),
+            std::string::npos)
+      << text(d.images[2], "error");
+  EXPECT_TRUE(isNone(d.images[2], "abs_rel"));
+  EXPECT_NE(text(d.images[3], "error").find((dir / "pred" / "d.pfm").string()), std::string::npos)
+      << text(d.images[3], "error");
+  ASSERT_EQ(d.failures.size(), 2u);
+  EXPECT_EQ(d.failures[0], text(d.images[2], "error"));
+  for (const EvaluationRecord& image : d.images)
+    EXPECT_EQ(solo::evaluationCsvHeader(image), solo::evaluationCsvHeader(d.images[0])) << "one CSV header";
+}
+
+TEST(Evaluation, DepthDatasetFromAListAndItsErrors) {
+  TempDir dir;
+  writeDepthDataset(dir);
+  solo::test::writeText(dir / "pairs.txt",
+                        "# prediction ground truth\n\npred/a.pfm gt/a.pfm\n" + (dir / "pred" / "b.exr").string() +
+                            "\tgt/b.pfm\n");
+  solo::DepthFilesEvaluationOptions o;
+  o.list = dir / "pairs.txt";
+  ASSERT_TRUE(solo::isDepthDataset(o));
+  const solo::DepthDatasetEvaluation d = solo::evaluateDepthDataset(o);
+  EXPECT_EQ(integer(d.summary, "evaluated"), 2);
+  EXPECT_TRUE(d.failures.empty());
+  EXPECT_DOUBLE_EQ(number(d.summary, "pooled_abs_rel"), 2.0 / 9.0);
+  EXPECT_EQ(text(d.images[0], "image"), (dir / "pairs.txt").string() + ":3");
+
+  solo::test::writeText(dir / "bad.txt", "pred/a.pfm\n");
+  o.list = dir / "bad.txt";
+  try {
+    solo::evaluateDepthDataset(o);
+    ADD_FAILURE() << "no error";
+  } catch (const solo::InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              (dir / "bad.txt").string() + ": line 1 has 1 fields, expected PREDICTION GROUND_TRUTH [MASK]");
+  }
+  o.prediction = dir / "pred";
+  EXPECT_THROW(solo::evaluateDepthDataset(o), solo::InputError) << "--list with --pred";
+}
+
 TEST(Evaluation, NormalFilesHaveTheHandComputedAngles) {
   TempDir dir;
   // gt (0,0,-1) twice; pred equal, then (1,0,0): angles 0 and 90 degrees.
@@ -135,6 +228,23 @@ TEST(Evaluation, MeshFileWithAndWithoutReference) {
   // Parallel squares 0.25 apart: every distance is 0.25.
   EXPECT_NEAR(number(r, "hausdorff"), 0.25, 1e-12);
   EXPECT_NEAR(number(r, "chamfer"), 0.25, 1e-12);
+  // Default tau: 1 % of the unit square's diagonal, far below 0.25: nothing within it.
+  EXPECT_TRUE(isNone(r, "tau_m"));
+  EXPECT_NEAR(number(r, "fscore_tau"), 0.01 * std::sqrt(2.0), 1e-15);
+  EXPECT_NEAR(number(r, "fscore_tau_relative"), 0.01, 1e-15);
+  EXPECT_EQ(number(r, "precision"), 0.0);
+  EXPECT_EQ(number(r, "fscore"), 0.0);
+  // tau above the offset: everything within it.
+  o.tau_m = 0.3;
+  const EvaluationRecord wide = solo::evaluateMeshFile(o);
+  EXPECT_EQ(number(wide, "tau_m"), 0.3);
+  EXPECT_EQ(number(wide, "fscore_tau"), 0.3);
+  EXPECT_EQ(number(wide, "precision"), 1.0);
+  EXPECT_EQ(number(wide, "recall"), 1.0);
+  EXPECT_EQ(number(wide, "fscore"), 1.0);
+  o.tau_m = 0;
+  EXPECT_THROW(solo::evaluateMeshFile(o), solo::InputError);
+  o.tau_m.reset();
 
   o.reference.reset();
   const EvaluationRecord alone = solo::evaluateMeshFile(o);
