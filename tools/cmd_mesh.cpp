@@ -125,6 +125,7 @@ int runMeshClean(const MeshCleanOptions& options) {
   stage.add("seconds_write", clock.seconds(), "s");
   stage.seconds += read_seconds + clock.seconds();
   printStage(stage);
+  for (const std::string& w : stage.warnings) std::cerr << "solo: warning: " << w << "\n";
   writeReport(options.report, "mesh clean", options.input.string(), stage);
   return 0;
 }

@@ -453,7 +453,7 @@ void addMeshCommands(CLI::App& app, std::vector<Command>& commands) {
   mesh_from_depth_cmd->add_flag("!--no-evaluation", mesh_from_depth.cleanup.evaluate,
                                 "Skip the final topology and self-intersection counts");
   CLI::App* mesh_clean_cmd =
-      mesh_cmd->add_subcommand("clean", "Repair a triangle mesh and fill its holes; report self-intersections");
+      mesh_cmd->add_subcommand("clean", "Repair a triangle mesh, fill its holes, remove self-intersections or wrap it");
   mesh_clean_cmd->add_option("input", mesh_clean.input, "Mesh to read (PLY, OBJ, OFF, STL)")->required();
   mesh_clean_cmd->add_option("-o,--output", mesh_clean.output, "Mesh to write")->required();
   mesh_clean_cmd->add_option("--report", mesh_clean.report, "Report JSON to write");
@@ -463,6 +463,34 @@ void addMeshCommands(CLI::App& app, std::vector<Command>& commands) {
 
 // The camera on the post-process options: the one --shutter or --f-number made, or a new one.
 CameraExposure& postCamera(PostProcessOptions& post) {
+  const CLI::Validator positive_finite(
+      [](std::string& text) {
+        double value = 0;
+        try {
+          value = std::stod(text);
+        } catch (const std::exception&) {
+          return std::string("not a number: ") + text;
+        }
+        return std::isfinite(value) && value > 0 ? std::string() : "must be finite and > 0: " + text;
+      },
+      "POSITIVE");
+  mesh_clean_cmd->add_flag("!--no-repair-intersections", mesh_clean.cleanup.repair_intersections,
+                           "Leave self-intersections as they are (reported)");
+  mesh_clean_cmd->add_option("--repair-time-limit", mesh_clean.cleanup.intersection_repair.time_limit_s,
+                             "Seconds the self-intersection repair may take")
+      ->capture_default_str()->check(positive_finite);
+  mesh_clean_cmd->add_flag("--wrap", mesh_clean.cleanup.wrap, "Output the alpha wrap (closed by construction)");
+  mesh_clean_cmd->add_flag("!--no-wrap-fallback", mesh_clean.cleanup.wrap_fallback,
+                           "Do not wrap when the repair leaves the mesh not closed");
+  mesh_clean_cmd->add_option("--wrap-alpha", mesh_clean.cleanup.wrapping.alpha_fraction,
+                             "Wrap alpha, fraction of the bounding-box diagonal")
+      ->capture_default_str()->check(positive_finite);
+  mesh_clean_cmd->add_option("--wrap-offset", mesh_clean.cleanup.wrapping.offset_fraction,
+                             "Wrap offset, fraction of the bounding-box diagonal")
+      ->capture_default_str()->check(positive_finite);
+  mesh_clean_cmd->add_option("--wrap-time-limit", mesh_clean.cleanup.wrapping.time_limit_s,
+                             "Seconds the alpha wrap may take")
+      ->capture_default_str()->check(positive_finite);
   std::optional<CameraExposure>& camera = post.exposure_options.camera;
   if (!camera) camera.emplace();
   return *camera;

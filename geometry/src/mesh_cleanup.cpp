@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace solo {
 namespace {
@@ -289,7 +290,7 @@ void addMeshCounts(StageReport& report, const std::string& prefix, const MeshMet
   report.add(prefix + "non_manifold_vertices", m.non_manifold_vertices);
   report.add(prefix + "self_intersecting_pairs", m.self_intersecting_pairs);
   report.add(prefix + "degenerate_faces", m.degenerate_faces);
-  report.add(prefix + "closed", m.closed);
+  report.add(prefix + "closed", isWatertight(m));
 }
 
 StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& instances, const cv::Mat& uncertain,
@@ -387,17 +388,167 @@ DepthMesh meshFromScene(const cv::Mat& depth_m, const PinholeCamera& camera, con
   return mesh;
 }
 
-TriangleMesh cleanMesh(const TriangleMesh& input, const MeshCleanupOptions& options, StageReport& report,
-                       const std::filesystem::path& source) {
-  report = StageReport{};
-  report.name = "mesh clean";
-  const Stopwatch total;
+namespace {
+
+// Refuses a non-finite coordinate or a face index out of range, naming the file.
+void checkMeshInput(const TriangleMesh& input, const std::filesystem::path& source) {
   for (const auto& v : input.vertices)
     if (!std::isfinite(v.x()) || !std::isfinite(v.y()) || !std::isfinite(v.z()))
       throw InputError(source, "mesh has a non-finite vertex coordinate");
   for (const auto& f : input.faces)
     for (const auto i : f)
       if (i >= input.vertices.size()) throw InputError(source, "a face refers to a vertex that does not exist");
+}
+
+void addSoupRepairCounts(StageReport& report, const SoupRepair& repair) {
+  report.add("duplicate_points_merged", repair.duplicate_points_merged);
+  report.add("coincident_corners_merged", repair.coincident_corners_merged);
+  report.add("faces_with_repeated_corner_removed", repair.faces_with_repeated_corner_removed);
+  report.add("duplicate_faces_removed", repair.duplicate_faces_removed);
+  report.add("unreferenced_vertices_removed", repair.unreferenced_vertices_removed);
+  report.add("faces_reoriented", repair.faces_reoriented);
+  report.add("non_manifold_points_duplicated", repair.non_manifold_points_duplicated);
+  report.add("coincident_boundary_vertices_merged", repair.coincident_boundary_vertices_merged);
+  report.add("non_manifold_faces_removed", repair.non_manifold_faces_removed);
+  report.add("degenerate_faces_flipped", repair.degenerate_faces_flipped);
+  report.add("degenerate_faces_removed", repair.degenerate_faces_removed);
+}
+
+// Fills every boundary loop of a general mesh; the notes name the method of the 100 largest holes.
+void fillMeshHoles(StageReport& report, SurfaceMesh& mesh, const MeshCleanupOptions& options) {
+  const std::vector<VertexLoop> loops = findBoundaryLoops(mesh);
+  report.add("holes_found", static_cast<std::int64_t>(loops.size()));
+  if (!options.fill_holes) {
+    report.notes.push_back("hole filling off: " + std::to_string(loops.size()) + " holes left open");
+    return;
+  }
+  const HoleClosing closing = closeHoles(mesh, loops, options.hole_filling, std::nullopt, options.large_holes);
+  addHoleCounts(report, closing);
+  report.add("holes_filled_membrane", closing.by_membrane);
+  report.add("holes_filled_chord_split", closing.by_chord_split);
+  std::vector<std::size_t> order(loops.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return loops[a].size() > loops[b].size(); });
+  for (std::size_t k = 0; k < order.size() && k < 100; ++k)
+    report.notes.push_back("hole of " + std::to_string(loops[order[k]].size()) +
+                           " boundary vertices: " + closing.hole_methods[order[k]]);
+  collectGarbage(mesh);
+}
+
+// A number as printf's %.3g writes it.
+std::string fraction(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", value);
+  return buffer;
+}
+
+// Removes the self-intersections of `mesh` (repairSelfIntersections) and reports the step.
+void repairIntersectionsStep(StageReport& report, TriangleMesh& mesh, const MeshCleanupOptions& options) {
+  const Stopwatch step;
+  const IntersectionRepair r = repairSelfIntersections(mesh, options.intersection_repair);
+  report.add("intersection_repair_pairs_before", r.pairs_before);
+  report.add("intersection_repair_pairs_after", r.pairs_after);
+  report.add("intersection_repair_rounds_kept", static_cast<std::int64_t>(r.rounds_kept));
+  report.add("intersection_repair_rounds_refused", static_cast<std::int64_t>(r.rounds_refused));
+  report.add("intersection_repair_faces_before", r.faces_before);
+  report.add("intersection_repair_faces_after", r.faces_after);
+  report.add("intersection_repair_time_limit_hit", r.time_limit_hit);
+  report.add("seconds_intersection_repair", step.seconds(), "s");
+  if (r.time_limit_hit)
+    report.warnings.push_back("self-intersection repair stopped at its time limit of " +
+                              fraction(options.intersection_repair.time_limit_s) + " s with " +
+                              std::to_string(r.pairs_after) + " intersecting pairs left");
+  else if (!r.repaired)
+    report.notes.push_back("self-intersection repair: " + std::to_string(r.pairs_after) + " of " +
+                           std::to_string(r.pairs_before) + " intersecting pairs left (" + r.failure + ")");
+}
+
+// Replaces `mesh` by its alpha wrap; false (mesh unchanged, a warning) when the wrap hit its limit.
+bool wrapStep(StageReport& report, TriangleMesh& mesh, const MeshCleanupOptions& options) {
+  const Wrap w = wrapMesh(mesh, options.wrapping);
+  report.add("wrap_alpha", w.alpha).add("wrap_offset", w.offset);
+  report.add("wrap_alpha_fraction", options.wrapping.alpha_fraction);
+  report.add("wrap_offset_fraction", options.wrapping.offset_fraction);
+  report.add("wrap_faces_in", w.faces_used);
+  report.add("wrap_time_limit_hit", w.time_limit_hit);
+  report.add("seconds_wrap", w.seconds, "s");
+  if (w.time_limit_hit || w.mesh.faces.empty()) {
+    report.warnings.push_back("the alpha wrap stopped at its time limit of " + fraction(options.wrapping.time_limit_s) +
+                              " s: the mesh is written unwrapped");
+    return false;
+  }
+  mesh = w.mesh;
+  return true;
+}
+
+// How far (fraction of the bounding-box diagonal) a point of the input may end up from the
+// output before a warning says so.
+constexpr double kMaxSurfaceMoveFraction = 1e-3;
+
+// One-sided and symmetric Hausdorff distances between input and output, as fractions of the
+// input's bounding-box diagonal (measureMeshDistances, seeded).
+void addSurfaceDistances(StageReport& report, const TriangleMesh& input, const TriangleMesh& output,
+                         const MeshCleanupOptions& options) {
+  const Stopwatch step;
+  MeshDistanceOptions sampling;
+  sampling.samples = options.distance_samples;
+  sampling.seed = options.distance_seed;
+  try {
+    const MeshDistances d = measureMeshDistances(output, input, sampling, "output", "input");
+    const double diagonal = d.reference_bbox_diagonal > 0 ? d.reference_bbox_diagonal : 1.0;
+    report.add("input_bbox_diagonal", d.reference_bbox_diagonal);
+    report.add("hausdorff_input_to_output_fraction", d.hausdorff_from_reference / diagonal);
+    report.add("hausdorff_output_to_input_fraction", d.hausdorff_to_reference / diagonal);
+    report.add("hausdorff_symmetric_fraction", d.hausdorff / diagonal);
+    report.add("distance_samples_per_direction", d.samples_per_direction);
+    if (d.hausdorff_from_reference > kMaxSurfaceMoveFraction * diagonal)
+      report.warnings.push_back("the output departs from the input surface by up to " +
+                                fraction(100 * d.hausdorff_from_reference / diagonal) +
+                                " % of the bounding-box diagonal (parts removed or bridged: see the counts)");
+  } catch (const InputError& e) {
+    report.notes.push_back(std::string("input/output distances not measured: ") + e.what());
+  }
+  report.add("seconds_distances", step.seconds(), "s");
+}
+
+// The verdict: "closed" only for a watertight output, otherwise a warning naming what remains.
+void addVerdict(StageReport& report, const MeshMetrics& after, const std::string& output_kind) {
+  if (isWatertight(after)) {
+    report.notes.push_back("result: closed, 2-manifold, free of self-intersections and degenerate faces (" +
+                           output_kind + ")");
+    return;
+  }
+  report.warnings.push_back("the result is NOT closed: " + watertightDefects(after) + " (" + output_kind + ")");
+}
+
+}  // namespace
+
+bool isWatertight(const MeshMetrics& m) {
+  return m.faces > 0 && m.closed && m.boundary_edges == 0 && m.non_manifold_edges == 0 &&
+         m.non_manifold_vertices == 0 && m.self_intersecting_pairs == 0 && m.degenerate_faces == 0;
+}
+
+std::string watertightDefects(const MeshMetrics& m) {
+  std::string out;
+  const auto add = [&out](std::int64_t n, const char* what) {
+    if (n > 0) out += (out.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+  };
+  if (m.faces == 0) return "no face";
+  add(m.boundary_loops, "boundary loops");
+  if (m.boundary_loops == 0) add(m.boundary_edges, "boundary edges");
+  add(m.non_manifold_edges, "non-manifold edges");
+  add(m.non_manifold_vertices, "non-manifold vertices");
+  add(m.self_intersecting_pairs, "self-intersecting face pairs");
+  add(m.degenerate_faces, "degenerate faces");
+  return out;
+}
+
+TriangleMesh cleanMesh(const TriangleMesh& input, const MeshCleanupOptions& options, StageReport& report,
+                       const std::filesystem::path& source) {
+  report = StageReport{};
+  report.name = "mesh clean";
+  const Stopwatch total;
+  checkMeshInput(input, source);
   if (input.faces.empty()) {
     report.skipped = true;
     report.skip_reason = "the mesh has no face: nothing to repair or close";
@@ -407,51 +558,51 @@ TriangleMesh cleanMesh(const TriangleMesh& input, const MeshCleanupOptions& opti
   }
 
   Stopwatch step;
-  addMeshCounts(report, "before_", evaluateMesh(input));
+  const MeshMetrics before = evaluateMesh(input);
+  addMeshCounts(report, "before_", before);
   report.add("seconds_evaluation_before", step.seconds(), "s");
 
   step = Stopwatch();
   SoupRepair repair;
   SurfaceMesh mesh = repairSoup(input, &repair);
-  report.add("duplicate_points_merged", repair.duplicate_points_merged);
-  report.add("faces_with_repeated_corner_removed", repair.faces_with_repeated_corner_removed);
-  report.add("duplicate_faces_removed", repair.duplicate_faces_removed);
-  report.add("unreferenced_vertices_removed", repair.unreferenced_vertices_removed);
-  report.add("coincident_boundary_vertices_merged", repair.coincident_boundary_vertices_merged);
-  report.add("non_manifold_faces_removed", repair.non_manifold_faces_removed);
-  report.add("degenerate_faces_flipped", repair.degenerate_faces_flipped);
-  report.add("degenerate_faces_removed", repair.degenerate_faces_removed);
+  addSoupRepairCounts(report, repair);
   report.add("seconds_repair", step.seconds(), "s");
+  if (mesh.n_faces() == 0)
+    throw InputError(source, "none of the " + std::to_string(input.faces.size()) +
+                                 " faces has an area (all repeated-corner, collinear or duplicate): no surface to repair");
 
   step = Stopwatch();
-  const std::vector<VertexLoop> loops = findBoundaryLoops(mesh);
-  report.add("holes_found", static_cast<std::int64_t>(loops.size()));
-  if (options.fill_holes) {
-    const HoleClosing closing = closeHoles(mesh, loops, options.hole_filling, std::nullopt, options.large_holes);
-    addHoleCounts(report, closing);
-    report.add("holes_filled_membrane", closing.by_membrane);
-    report.add("holes_filled_chord_split", closing.by_chord_split);
-    // Which method closed each hole (the first 100), largest first.
-    std::vector<std::size_t> order(loops.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return loops[a].size() > loops[b].size(); });
-    for (std::size_t k = 0; k < order.size() && k < 100; ++k)
-      report.notes.push_back("hole of " + std::to_string(loops[order[k]].size()) +
-                             " boundary vertices: " + closing.hole_methods[order[k]]);
-    collectGarbage(mesh);
-  } else {
-    report.notes.push_back("hole filling off: " + std::to_string(loops.size()) + " holes left open");
-  }
+  fillMeshHoles(report, mesh, options);
   report.add("seconds_hole_filling", step.seconds(), "s");
 
-  step = Stopwatch();
   TriangleMesh output = toTriangleMesh(mesh);
-  const MeshMetrics after = evaluateMesh(output);
+  std::string output_kind = "repaired";
+  bool wrapped = false;
+  if (options.wrap) {
+    wrapped = wrapStep(report, output, options);
+    output_kind = wrapped ? "alpha wrap, as asked" : "the wrap asked for did not finish";
+  } else if (options.repair_intersections) {
+    repairIntersectionsStep(report, output, options);
+  } else {
+    report.notes.push_back("self-intersection repair off");
+  }
+
+  step = Stopwatch();
+  MeshMetrics after = evaluateMesh(output);
+  if (!wrapped && !options.wrap && !isWatertight(after) && options.wrap_fallback && options.fill_holes) {
+    const std::string defects = watertightDefects(after);
+    if (wrapStep(report, output, options)) {
+      wrapped = true;
+      output_kind = "alpha wrap, because the repaired mesh had " + defects;
+      report.warnings.push_back("repair left " + defects + ": the output is the alpha wrap of the repaired mesh");
+      after = evaluateMesh(output);
+    }
+  }
+  report.add("wrapped", wrapped);
   addMeshCounts(report, "after_", after);
   report.add("seconds_evaluation_after", step.seconds(), "s");
-  if (after.self_intersecting_pairs > 0)
-    report.notes.push_back(std::to_string(after.self_intersecting_pairs) +
-                           " self-intersecting face pairs remain (reported, not repaired)");
+  addSurfaceDistances(report, input, output, options);
+  addVerdict(report, after, output_kind);
   report.seconds = total.seconds();
   return output;
 }

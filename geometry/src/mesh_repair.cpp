@@ -1,6 +1,7 @@
 #include "solo/geometry/mesh_repair.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
 
@@ -77,6 +78,56 @@ Polygons mergedInto(const Polygons& polygons, const std::vector<std::vector<std:
   return out;
 }
 
+/// Unites corners of one face that lie at exactly one position (zero-length edges: the copies of
+/// a pole in a fan of degenerate faces, a collapsed quad's two ends) and renames them in every
+/// face; returns the number of vertices merged away. Such corners never are seams: no proper
+/// triangle has two of them.
+std::int64_t mergeCoincidentCorners(const std::vector<Point>& points, Polygons& polygons) {
+  std::vector<std::size_t> parent(points.size());
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  const auto root = [&](std::size_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  std::int64_t merged = 0;
+  for (const auto& f : polygons)
+    for (std::size_t a = 0; a < f.size(); ++a)
+      for (std::size_t b = a + 1; b < f.size(); ++b) {
+        if (f[a] == f[b] || points[f[a]] != points[f[b]]) continue;
+        const std::size_t ra = root(f[a]), rb = root(f[b]);
+        if (ra == rb) continue;
+        parent[std::max(ra, rb)] = std::min(ra, rb);
+        ++merged;
+      }
+  if (merged == 0) return 0;
+  for (auto& f : polygons)
+    for (auto& v : f) v = root(v);
+  return merged;
+}
+
+/// Orients a soup that is not a polygon mesh consistently (CGAL orient_polygon_soup: faces
+/// reversed, points of non-manifold vertices and edges duplicated so that every piece can be
+/// oriented); returns the number of faces reversed.
+std::int64_t orientSoup(std::vector<Point>& points, Polygons& polygons, std::int64_t& points_duplicated) {
+  const Polygons before = polygons;
+  const std::size_t point_count = points.size();
+  PMP::orient_polygon_soup(points, polygons);
+  points_duplicated = static_cast<std::int64_t>(points.size() - point_count);
+  std::int64_t reversed = 0;
+  for (std::size_t i = 0; i < polygons.size() && i < before.size(); ++i) {
+    const auto& a = before[i];
+    const auto& b = polygons[i];
+    // Reversed: b is a read backwards (whatever corner it starts at), up to duplicated points.
+    const auto same = [&](std::size_t p, std::size_t q) { return p == q || points[p] == points[q]; };
+    for (std::size_t k = 0; k < 3; ++k)
+      if (same(a[0], b[k]) && same(a[1], b[(k + 2) % 3]) && same(a[2], b[(k + 1) % 3]) && !same(a[1], a[2])) {
+        ++reversed;
+        break;
+      }
+  }
+  return reversed;
+}
+
 std::int64_t facesRefused(const std::vector<Point>& points, const Polygons& polygons) {
   TriangleMesh soup;
   soup.vertices.resize(points.size(), Eigen::Vector3d::Zero());
@@ -102,12 +153,15 @@ SurfaceMesh repairSoup(const TriangleMesh& soup, SoupRepair* stats) {
   // purpose; merging them would pinch the surface). Other soups (STL-like) get them merged.
   if (!PMP::is_polygon_soup_a_polygon_mesh(polygons))
     s.duplicate_points_merged = static_cast<std::int64_t>(PMP::merge_duplicate_points_in_polygon_soup(points, polygons));
+  s.coincident_corners_merged = mergeCoincidentCorners(points, polygons);
   const std::size_t before = polygons.size();
   polygons.erase(std::remove_if(polygons.begin(), polygons.end(),
                                 [](const std::vector<std::size_t>& f) { return f[0] == f[1] || f[1] == f[2] || f[0] == f[2]; }),
                  polygons.end());
   s.faces_with_repeated_corner_removed = static_cast<std::int64_t>(before - polygons.size());
   s.duplicate_faces_removed = static_cast<std::int64_t>(PMP::merge_duplicate_polygons_in_polygon_soup(points, polygons));
+  if (!PMP::is_polygon_soup_a_polygon_mesh(polygons))
+    s.faces_reoriented = orientSoup(points, polygons, s.non_manifold_points_duplicated);
   // Boundary vertices at one position (kept apart above when the soup was a valid mesh): a hole
   // through such a pinch touches itself there, so no patch over it passes verification, and the
   // faces around the two copies count as intersecting. Merged, the loop splits at the pinch into

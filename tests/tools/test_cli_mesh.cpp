@@ -64,6 +64,110 @@ TEST(CliMesh, CleanRefusesNanCoordinates) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out.off"));
 }
 
+/// Two unit cubes as OFF, each with its own vertices, the second moved by (dx, dy, 0).
+std::string twoCubesOff(double dx, double dy) {
+  std::string off = "OFF\n16 24 0\n";
+  for (int c = 0; c < 2; ++c)
+    for (int i = 0; i < 8; ++i)
+      off += std::to_string((i & 1) + c * dx) + " " + std::to_string(((i >> 1) & 1) + c * dy) + " " +
+             std::to_string((i >> 2) & 1) + "\n";
+  const int faces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                            {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (int c = 0; c < 2; ++c)
+    for (const auto& f : faces)
+      off += "3 " + std::to_string(f[0] + 8 * c) + " " + std::to_string(f[1] + 8 * c) + " " + std::to_string(f[2] + 8 * c) + "\n";
+  return off;
+}
+
+bool watertight(const solo::MeshMetrics& m) {
+  return m.closed && m.non_manifold_edges == 0 && m.non_manifold_vertices == 0 && m.self_intersecting_pairs == 0 &&
+         m.degenerate_faces == 0;
+}
+
+TEST(CliMesh, CubesTouchingAtAnEdgeComeOutClosedOrSaySo) {
+  TempDir dir;
+  writeText(dir / "cubes.off", twoCubesOff(1, 1));
+  const auto r = runSolo("mesh clean " + quoted(dir / "cubes.off") + " -o " + quoted(dir / "out.ply") + " --report " +
+                         quoted(dir / "r.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const solo::MeshMetrics m = solo::evaluateMesh(solo::readMesh(dir / "out.ply"));
+  EXPECT_TRUE(watertight(m)) << r.output;
+  EXPECT_NE(r.output.find("result: closed"), std::string::npos) << r.output;
+  const nlohmann::json report = nlohmann::json::parse(readText(dir / "r.json"));
+  EXPECT_GT(metric(report, "before_self_intersecting_pairs")->get<int>(), 0);
+  EXPECT_EQ(*metric(report, "after_self_intersecting_pairs"), 0);
+  ASSERT_NE(metric(report, "hausdorff_symmetric_fraction"), nullptr);
+}
+
+TEST(CliMesh, WithoutRepairOrWrapTheIntersectionsAreNamedAndClosedIsNotPrinted) {
+  TempDir dir;
+  // Overlapping cubes: each closed, the pair intersecting.
+  writeText(dir / "cubes.off", twoCubesOff(0.5, 0.5));
+  const auto r = runSolo("mesh clean " + quoted(dir / "cubes.off") + " -o " + quoted(dir / "out.ply") +
+                         " --no-repair-intersections --no-wrap-fallback --report " + quoted(dir / "r.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("result: closed"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("solo: warning: the result is NOT closed:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("self-intersecting face pairs"), std::string::npos) << r.output;
+  const nlohmann::json report = nlohmann::json::parse(readText(dir / "r.json"));
+  EXPECT_EQ(*metric(report, "after_closed"), false);
+}
+
+TEST(CliMesh, WrapWritesAClosedMeshAndItsDistances) {
+  TempDir dir;
+  writeText(dir / "cubes.off", twoCubesOff(0.5, 0.5));
+  const auto r = runSolo("mesh clean " + quoted(dir / "cubes.off") + " -o " + quoted(dir / "out.ply") +
+                         " --wrap --wrap-alpha 0.02 --report " + quoted(dir / "r.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(watertight(solo::evaluateMesh(solo::readMesh(dir / "out.ply")))) << r.output;
+  const nlohmann::json report = nlohmann::json::parse(readText(dir / "r.json"));
+  EXPECT_EQ(*metric(report, "wrapped"), true);
+  EXPECT_DOUBLE_EQ(metric(report, "wrap_alpha_fraction")->get<double>(), 0.02);
+  for (const char* name : {"hausdorff_input_to_output_fraction", "hausdorff_output_to_input_fraction",
+                           "hausdorff_symmetric_fraction"}) {
+    ASSERT_NE(metric(report, name), nullptr) << name;
+    EXPECT_GT(metric(report, name)->get<double>(), 0) << name;
+  }
+  // The wrap lies about the offset outside the input; the cubes' inner parts are far from it.
+  EXPECT_LT(metric(report, "hausdorff_output_to_input_fraction")->get<double>(), 0.02);
+  EXPECT_GT(metric(report, "hausdorff_input_to_output_fraction")->get<double>(), 0.1);
+  EXPECT_NE(r.output.find("departs from the input surface"), std::string::npos) << r.output;
+}
+
+TEST(CliMesh, HemisphereWithARepeatedPoleBecomesOneClosedComponent) {
+  TempDir dir;
+  const int segments = 24, rings = 6;
+  solo::TriangleMesh m;
+  for (int r = 0; r <= rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const double theta = 0.5 * 3.14159265358979 * r / rings, phi = 2 * 3.14159265358979 * s / segments;
+      m.vertices.emplace_back(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+    }
+  const auto at = [&](int r, int s) { return static_cast<std::uint32_t>(r * segments + s % segments); };
+  for (int r = 0; r < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      m.faces.push_back({at(r, s), at(r + 1, s), at(r + 1, s + 1)});
+      m.faces.push_back({at(r, s), at(r + 1, s + 1), at(r, s + 1)});
+    }
+  solo::writeMesh(dir / "dome.ply", m);
+  const auto r = runSolo("mesh clean " + quoted(dir / "dome.ply") + " -o " + quoted(dir / "out.ply"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const solo::MeshMetrics out = solo::evaluateMesh(solo::readMesh(dir / "out.ply"));
+  EXPECT_TRUE(watertight(out)) << r.output;
+  EXPECT_EQ(out.components, 1);
+  EXPECT_NE(r.output.find("result: closed"), std::string::npos) << r.output;
+}
+
+TEST(CliMesh, WrapOptionsMustBeFiniteAndPositive) {
+  TempDir dir;
+  writeText(dir / "cube.off", cubeOff());
+  for (const char* option : {"--wrap-alpha nan", "--wrap-offset 0", "--repair-time-limit -1", "--wrap-time-limit inf"}) {
+    const auto r = runSolo("mesh clean " + quoted(dir / "cube.off") + " -o " + quoted(dir / "out.ply") + " " + option);
+    EXPECT_EQ(r.exit_code, 2) << option << "\n" << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out.ply")) << option;
+  }
+}
+
 TEST(CliMesh, FromDepthScoresAgainstGroundTruthAndRefusesAnotherSize) {
   TempDir dir;
   ASSERT_EQ(runSolo("synth -o " + quoted(dir / "s") + " --size 192x108 --seed 3").exit_code, 0);

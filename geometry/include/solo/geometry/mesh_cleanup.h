@@ -9,6 +9,7 @@
 #include "solo/geometry/foreground_solids.h"
 #include "solo/geometry/hole_filling.h"
 #include "solo/geometry/large_hole_filling.h"
+#include "solo/geometry/mesh_intersection_repair.h"
 #include "solo/geometry/mesh_metrics.h"
 #include "solo/core/report.h"
 #include "solo/geometry/spurious_faces.h"
@@ -52,16 +53,37 @@ struct MeshCleanupOptions {
   bool fill_holes = true;
   HoleFillOptions hole_filling;
   LargeHoleOptions large_holes;  ///< the fallback for holes the CGAL methods cannot close
+  bool repair_intersections = true;  ///< remove self-intersections after hole filling
+  IntersectionRepairOptions intersection_repair;
+  bool wrap = false;           ///< alpha-wrap the closed mesh instead of repairing its intersections
+  bool wrap_fallback = true;   ///< alpha-wrap when the repaired mesh is still not closed (with fill_holes)
+  WrapOptions wrapping;
+  std::int64_t distance_samples = 20000;  ///< random points per direction for the input/output distances
+  std::uint64_t distance_seed = 0;        ///< seeds that sampling
 };
 
-/// Repairs and closes an arbitrary triangle mesh: the soup repair of repairSoup, then every
-/// boundary loop filled (verified, with fallbacks). Self-intersections are reported, not
-/// removed. Throws InputError naming `source` for a mesh with a non-finite coordinate or a
-/// face index out of range.
+/// Repairs and closes an arbitrary triangle mesh: the soup repair of repairSoup, every boundary
+/// loop filled (verified, with fallbacks), self-intersections removed (repairSelfIntersections),
+/// and, with `wrap` or when the result is still not closed, its alpha wrap (wrapMesh). The
+/// report counts what each step removed or changed, the distances between input and output
+/// (fractions of the input's bounding-box diagonal) and says whether the output is closed
+/// (watertight: no boundary, 2-manifold, no self-intersection, no degenerate face) or what
+/// remains; a warning says when the wrap replaced a failed repair or a time limit was hit.
+/// Throws InputError naming `source` for a mesh with a non-finite coordinate, a face index out
+/// of range, or faces none of which has an area.
 TriangleMesh cleanMesh(const TriangleMesh& input, const MeshCleanupOptions& options, StageReport& report,
                        const std::filesystem::path& source = "mesh");
 
-/// Adds the counts of evaluateMesh to a report, each name prefixed ("before_", "after_").
+/// Closed in the strict sense `solo mesh clean` prints: at least one face, no boundary edge, no
+/// non-manifold edge or vertex, no self-intersecting pair, no degenerate face.
+bool isWatertight(const MeshMetrics& metrics);
+
+/// What keeps a mesh from being watertight ("2 boundary loops, 36 self-intersecting pairs"),
+/// empty when it is.
+std::string watertightDefects(const MeshMetrics& metrics);
+
+/// Adds the counts of evaluateMesh to a report, each name prefixed ("before_", "after_");
+/// "closed" is isWatertight.
 void addMeshCounts(StageReport& report, const std::string& prefix, const MeshMetrics& metrics);
 
 }  // namespace solo
