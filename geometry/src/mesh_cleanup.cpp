@@ -580,12 +580,10 @@ TriangleMesh cleanMesh(const TriangleMesh& input, const MeshCleanupOptions& opti
   bool wrapped = false;
   if (options.wrap) {
     wrapped = wrapStep(report, output, options);
-    output_kind = wrapped ? "alpha wrap, as asked" : "the wrap asked for did not finish";
-  } else if (options.repair_intersections) {
-    repairIntersectionsStep(report, output, options);
-  } else {
-    report.notes.push_back("self-intersection repair off");
+    output_kind = wrapped ? "alpha wrap, as asked" : "repaired: the wrap asked for did not finish";
   }
+  if (!wrapped && options.repair_intersections) repairIntersectionsStep(report, output, options);
+  else if (!wrapped) report.notes.push_back("self-intersection repair off");
 
   step = Stopwatch();
   MeshMetrics after = evaluateMesh(output);
