@@ -1,6 +1,7 @@
 // `solo eval depth|normals|mesh|scene`: the record of the library's evaluation
 // (pipeline/evaluation.h) written three ways: a table on the terminal, JSON on stdout (--json),
-// and a row appended to a CSV file (--csv). `solo eval night` measures several images at once
+// and a row appended to a CSV file (--csv). `solo eval depth` over a dataset prints its summary
+// and appends a CSV row per image. `solo eval night` measures several images at once
 // (pipeline/night_evaluation.h): a table row, a JSON object and a CSV row per image.
 
 #include "commands.h"
@@ -35,7 +36,7 @@ nlohmann::ordered_json toJson(const EvaluationValue& v) {
       v);
 }
 
-std::string recordToJson(const EvaluationRecord& r) {
+nlohmann::ordered_json recordJson(const EvaluationRecord& r) {
   nlohmann::ordered_json j;
   j["command"] = r.command;
   for (const auto& [section, fields] :
@@ -44,8 +45,10 @@ std::string recordToJson(const EvaluationRecord& r) {
     for (const EvaluationField& f : *fields) object[f.key] = toJson(f.value);
   }
   j["seconds"] = r.seconds;
-  return j.dump(2) + "\n";
+  return j;
 }
+
+std::string recordToJson(const EvaluationRecord& r) { return recordJson(r).dump(2) + "\n"; }
 
 // ---- output: table --------------------------------------------------------------------
 
@@ -97,7 +100,43 @@ int emit(const EvaluationRecord& r, const EvalOutputOptions& output) {
 
 }  // namespace
 
-int runEvalDepth(const EvalDepthOptions& o) { return emit(evaluateDepthFiles(o), o.output); }
+namespace {
+
+/// A dataset as JSON: the summary record's sections, then "images" (one record's sections per
+/// image) and "failures".
+std::string datasetToJson(const DepthDatasetEvaluation& d) {
+  nlohmann::ordered_json j = recordJson(d.summary);
+  j.erase("seconds");
+  j["images"] = nlohmann::ordered_json::array();
+  for (const EvaluationRecord& image : d.images) {
+    nlohmann::ordered_json object = recordJson(image);
+    object.erase("command");
+    object.erase("options");  // the summary's
+    j["images"].push_back(object);
+  }
+  j["failures"] = d.failures;
+  j["seconds"] = d.summary.seconds;
+  return j.dump(2) + "\n";
+}
+
+/// `solo eval depth` over a dataset: a CSV row per image, the summary on stdout, each failure
+/// named on stderr; exit 2 when an image failed (bad input), 0 otherwise.
+int runEvalDepthDataset(const EvalDepthOptions& o) {
+  const DepthDatasetEvaluation d = evaluateDepthDataset(o);
+  if (o.output.csv)
+    for (const EvaluationRecord& image : d.images) appendEvaluationCsvRow(*o.output.csv, image);
+  std::cout << (o.output.json ? datasetToJson(d) : recordToTable(d.summary));
+  for (const std::string& failure : d.failures) std::cerr << "solo: error: " << failure << "\n";
+  if (d.failures.empty()) return 0;
+  std::cerr << "solo: error: " << d.failures.size() << " of " << d.images.size() << " images failed\n";
+  return 2;
+}
+
+}  // namespace
+
+int runEvalDepth(const EvalDepthOptions& o) {
+  return isDepthDataset(o) ? runEvalDepthDataset(o) : emit(evaluateDepthFiles(o), o.output);
+}
 
 int runEvalNormals(const EvalNormalsOptions& o) { return emit(evaluateNormalFiles(o), o.output); }
 

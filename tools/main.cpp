@@ -307,9 +307,11 @@ void addEvalCommands(CLI::App& app, std::vector<Command>& commands) {
     cmd->add_option("--csv", output.csv, "Append one row of results to this CSV file (header when the file is new)");
   };
   CLI::App* eval_depth_cmd = eval_cmd->add_subcommand("depth", "AbsRel, SqRel, RMSE, RMSElog, delta < 1.25^k");
-  eval_depth_cmd->add_option("--pred", eval_depth.prediction, "Predicted depth map")->required();
-  eval_depth_cmd->add_option("--gt", eval_depth.ground_truth, "Ground-truth depth map")->required();
-  eval_depth_cmd->add_option("--mask", eval_depth.mask, "Mask (8/16-bit or integer): non-zero pixels are evaluated");
+  eval_depth_cmd->add_option("--pred", eval_depth.prediction, "Predicted depth map, or a folder of them");
+  eval_depth_cmd->add_option("--gt", eval_depth.ground_truth, "Ground-truth depth map, or a folder (matched by stem)");
+  eval_depth_cmd->add_option("--list", eval_depth.list, "List file of pairs: a line PRED GT [MASK] per image");
+  eval_depth_cmd->add_option("--mask", eval_depth.mask,
+                             "Mask (8/16-bit or integer): non-zero pixels are evaluated; for folders, a folder by stem");
   eval_depth_cmd->add_option("--min-depth", eval_depth.min_depth_m, "Evaluate only where ground truth > this (m)");
   eval_depth_cmd->add_option("--max-depth", eval_depth.max_depth_m, "Evaluate only where ground truth < this (m)");
   eval_depth_cmd->add_flag("--median-scale", eval_depth.median_scaling,
@@ -338,6 +340,8 @@ void addEvalCommands(CLI::App& app, std::vector<Command>& commands) {
       ->capture_default_str()
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{100000000}));
   eval_mesh_cmd->add_option("--seed", eval_mesh.seed, "Seed of the surface sampling")->capture_default_str()->check(kSeed);
+  eval_mesh_cmd->add_option("--tau", eval_mesh.tau_m,
+                            "F-score distance threshold, m (default: 1 % of the reference's bounding-box diagonal)");
   add_eval_output(eval_mesh_cmd, eval_mesh.output);
 
   CLI::App* eval_scene_cmd = eval_cmd->add_subcommand(

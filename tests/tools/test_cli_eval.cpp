@@ -122,6 +122,73 @@ TEST(CliEval, CsvWithOtherColumnsIsRefused) {
   EXPECT_EQ(readText(dir / "other.csv"), "a,b\n1,2\n");
 }
 
+namespace {
+
+void writeRow(const std::filesystem::path& file, const std::vector<float>& values) {
+  solo::writeImage(file, cv::Mat(values, true).reshape(1, 1));
+}
+
+/// pred/ and gt/: a (gt 1, pred 3) and b (eight exact pixels). Mean per image: AbsRel 1,
+/// RMSE 1; pooled over the 9 pixels: AbsRel 2/9, RMSE 2/3.
+void writeDepthFolders(const TempDir& dir) {
+  std::filesystem::create_directories(dir / "pred");
+  std::filesystem::create_directories(dir / "gt");
+  writeRow(dir / "gt" / "a.pfm", {1});
+  writeRow(dir / "pred" / "a.pfm", {3});
+  writeRow(dir / "gt" / "b.pfm", {1, 2, 3, 4, 5, 6, 7, 8});
+  writeRow(dir / "pred" / "b.pfm", {1, 2, 3, 4, 5, 6, 7, 8});
+}
+
+}  // namespace
+
+TEST(CliEval, DepthDatasetFromFoldersJsonAndCsvRows) {
+  TempDir dir;
+  writeDepthFolders(dir);
+  const auto r = runSolo("eval depth --pred " + quoted(dir / "pred") + " --gt " + quoted(dir / "gt") +
+                         " --json --csv " + quoted(dir / "images.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["command"], "eval depth dataset");
+  EXPECT_EQ(j["metrics"]["evaluated"], 2);
+  EXPECT_EQ(j["metrics"]["failed"], 0);
+  EXPECT_DOUBLE_EQ(j["metrics"]["mean_abs_rel"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(j["metrics"]["mean_rmse_m"].get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(j["metrics"]["pooled_abs_rel"].get<double>(), 2.0 / 9.0);
+  EXPECT_DOUBLE_EQ(j["metrics"]["pooled_rmse_m"].get<double>(), 2.0 / 3.0);
+  ASSERT_EQ(j["images"].size(), 2u);
+  EXPECT_EQ(j["images"][0]["inputs"]["image"], "a");
+  EXPECT_DOUBLE_EQ(j["images"][0]["metrics"]["abs_rel"].get<double>(), 2.0);
+  EXPECT_TRUE(j["images"][1]["metrics"]["error"].is_null());
+  EXPECT_TRUE(j["failures"].empty());
+  const auto rows = readCsv(dir / "images.csv");
+  ASSERT_EQ(rows.size(), 2u) << "a row per image";
+  EXPECT_EQ(rows[0].at("image"), "a");
+  EXPECT_EQ(rows[1].at("image"), "b");
+  EXPECT_EQ(rows[1].at("abs_rel"), "0");
+  EXPECT_EQ(rows[1].at("error"), "");
+}
+
+TEST(CliEval, DepthDatasetNamesEachBadPairGoesOnAndExitsNonZero) {
+  TempDir dir;
+  writeDepthFolders(dir);
+  writeRow(dir / "gt" / "c.pfm", {1});  // no prediction
+  solo::test::writeText(dir / "list.txt", "pred/a.pfm gt/a.pfm\npred/b.pfm gt/b.pfm\npred/c.pfm gt/c.pfm\n");
+  const auto r = runSolo("eval depth --list " + quoted(dir / "list.txt") + " --csv " + quoted(dir / "images.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("solo: error: " + (dir / "pred" / "c.pfm").string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("solo: error: 1 of 3 images failed"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("pooled over pixels: AbsRel"), std::string::npos) << "the summary still printed";
+  const auto rows = readCsv(dir / "images.csv");
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0].at("error"), "");
+  EXPECT_NE(rows[2].at("error").find("c.pfm"), std::string::npos);
+  EXPECT_EQ(rows[2].at("abs_rel"), "");
+  // Neither --pred/--gt nor --list: named.
+  const auto none = runSolo("eval depth");
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.output.find("--pred: required (or --list)"), std::string::npos) << none.output;
+}
+
 TEST(CliEval, DepthErrorsNameTheFilesAndNeverPrintNaN) {
   TempDir dir;
   writeDepthPair(dir);
@@ -202,6 +269,10 @@ TEST(CliEval, MeshJsonWithReferenceAndCsv) {
   // Parallel squares 0.25 apart: every distance is 0.25.
   EXPECT_NEAR(j["metrics"]["hausdorff"].get<double>(), 0.25, 1e-12);
   EXPECT_NEAR(j["metrics"]["chamfer"].get<double>(), 0.25, 1e-12);
+  // Default tau, 1 % of the diagonal sqrt 2, is below the offset 0.25: F-score 0.
+  EXPECT_NEAR(j["metrics"]["fscore_tau"].get<double>(), 0.01 * std::sqrt(2.0), 1e-15);
+  EXPECT_EQ(j["metrics"]["fscore"].get<double>(), 0.0);
+  EXPECT_TRUE(j["options"]["tau_m"].is_null());
   // Without a reference the distance columns stay (empty) so rows line up.
   r = runSolo("eval mesh " + quoted(dir / "square.off") + csv);
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -215,6 +286,37 @@ TEST(CliEval, MeshJsonWithReferenceAndCsv) {
   EXPECT_EQ(rows[1].at("hausdorff"), "");
   EXPECT_EQ(rows[1].at("chamfer"), "");
   EXPECT_EQ(rows[1].at("boundary_edges"), "4");
+}
+
+// The unit square against itself lifted by 0.25: every distance is 0.25, so tau = 0.3 takes
+// all samples (P = R = F = 1) and tau = 0.2 none; the table shows the F-score rows.
+TEST(CliEval, MeshFScoreAtAGivenTau) {
+  TempDir dir;
+  solo::test::writeSquareAndLiftedSquare(dir.path());
+  const std::string base = "eval mesh " + quoted(dir / "square.off") + " --ref " + quoted(dir / "lifted.ply") +
+                           " --samples 1000 --seed 2";
+  auto r = runSolo(base + " --tau 0.3 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["options"]["tau_m"].get<double>(), 0.3);
+  EXPECT_EQ(j["options"]["seed"], 2);
+  EXPECT_EQ(j["metrics"]["precision"].get<double>(), 1.0);
+  EXPECT_EQ(j["metrics"]["recall"].get<double>(), 1.0);
+  EXPECT_EQ(j["metrics"]["fscore"].get<double>(), 1.0);
+  r = runSolo(base + " --tau 0.2");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("F-score threshold tau"), std::string::npos) << r.output;
+  const std::vector<std::string> table = lines(r.output);
+  EXPECT_NE(std::find_if(table.begin(), table.end(),
+                         [](const std::string& line) {
+                           return line.rfind("  F-score ", 0) == 0 && line.size() > 2 &&
+                                  line.compare(line.size() - 2, 2, " 0") == 0;
+                         }),
+            table.end())
+      << r.output;
+  r = runSolo(base + " --tau -1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--tau"), std::string::npos) << r.output;
 }
 
 TEST(CliEval, MeshErrors) {
