@@ -203,6 +203,23 @@ cv::Mat labelMap(const py::array& array, const std::string& name) {
   return labels;
 }
 
+/// Ids held in 64-bit or unsigned 32-bit integers (numpy's default int) as int32, refused
+/// outside its range; other arrays as they are.
+py::object int32Ids(const py::object& value, const std::string& name) {
+  const py::module_ numpy = py::module_::import("numpy");
+  py::array array = numpy.attr("asarray")(value);
+  const char kind = array.dtype().kind();
+  if (!((kind == 'i' && array.dtype().itemsize() == 8) || (kind == 'u' && array.dtype().itemsize() >= 4)))
+    return std::move(array);
+  if (array.size() > 0) {
+    const py::object lo = numpy.attr("min")(array).attr("item")();
+    const py::object hi = numpy.attr("max")(array).attr("item")();
+    if (lo.attr("__lt__")(0).cast<bool>() || hi.attr("__gt__")(INT32_MAX).cast<bool>())
+      throw InputError(name, name + " holds ids outside 0.." + std::to_string(INT32_MAX));
+  }
+  return array.attr("astype")(numpy.attr("int32"));
+}
+
 void checkLightIds(const cv::Mat& lights) {
   for (int y = 0; y < lights.rows; ++y)
     for (int x = 0; x < lights.cols; ++x) {
@@ -271,7 +288,7 @@ struct SceneArrays {
 void setLabelMaps(const SceneArrays& a, PyScene& p) {
   Scene& s = p.scene;
   const auto optional = [&](const py::object& value, const char* name, cv::Mat& out) {
-    if (!value.is_none()) out = labelMap(keepArray(p, value, name), name);
+    if (!value.is_none()) out = labelMap(keepArray(p, int32Ids(value, name), name), name);
   };
   optional(a.instances, "instances", s.instances);
   optional(a.labels, "labels", s.labels);

@@ -68,3 +68,13 @@ def test_scene_views_its_arrays():
     depth[3, 4] = 7.0  # the scene views the array: no copy
     assert scene.depth[3, 4] == 7.0
     assert scene.image.base is not None
+
+
+def test_int64_ids_are_taken():
+    image = np.zeros((20, 30, 3), np.uint8)
+    depth = np.full((20, 30), 4.0, np.float32)
+    instances = np.full((20, 30), 26001, np.int64)  # numpy's default integer
+    scene = solo.scene_from_arrays(image, depth, instances=instances)
+    assert scene.instances.dtype == np.int32 and scene.labels[0, 0] == 26
+    with pytest.raises(solo.InputError, match="instances"):
+        solo.scene_from_arrays(image, depth, instances=np.full((20, 30), 2**40, np.int64))
