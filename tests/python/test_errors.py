@@ -78,3 +78,13 @@ def test_int64_ids_are_taken():
     assert scene.instances.dtype == np.int32 and scene.labels[0, 0] == 26
     with pytest.raises(solo.InputError, match="instances"):
         solo.scene_from_arrays(image, depth, instances=np.full((20, 30), 2**40, np.int64))
+
+
+def test_progress_can_stop_a_run(tmp_path):
+    def stop(stage, fraction):
+        if stage == "mesh":
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        solo.night(output=tmp_path / "night.png", preset="draft", progress=stop)
+    assert list(tmp_path.iterdir()) == []
