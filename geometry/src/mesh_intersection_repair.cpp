@@ -183,12 +183,12 @@ IntersectionRepair repairSelfIntersections(TriangleMesh& mesh, const Intersectio
     r.failure = "the mesh is not a polygon mesh (an edge with more than two faces or faces of opposite orientation)";
     return r;
   }
-  MeshState state = stateOf(current);
-  r.pairs_before = r.pairs_after = state.pairs;
-  if (state.pairs == 0) {
+  r.pairs_before = r.pairs_after = intersectingPairs(current);
+  if (r.pairs_before == 0) {
     r.repaired = true;
     return r;
   }
+  MeshState state = stateOf(current);
   const CGAL::Bbox_3 box = PMP::bbox(current);
   const double envelope = options.envelope_fraction * std::sqrt(CGAL::square(box.xmax() - box.xmin()) +
                                                                 CGAL::square(box.ymax() - box.ymin()) +
