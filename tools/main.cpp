@@ -306,7 +306,8 @@ void addEvalCommands(CLI::App& app, std::vector<Command>& commands) {
     cmd->add_flag("--json", output.json, "Print the results as JSON on stdout instead of a table");
     cmd->add_option("--csv", output.csv, "Append one row of results to this CSV file (header when the file is new)");
   };
-  CLI::App* eval_depth_cmd = eval_cmd->add_subcommand("depth", "AbsRel, SqRel, RMSE, RMSElog, delta < 1.25^k");
+  CLI::App* eval_depth_cmd = eval_cmd->add_subcommand(
+      "depth", "AbsRel, SqRel, RMSE, RMSElog, SILog, delta < 1.25^k of a pair, or of a dataset per image and pooled");
   eval_depth_cmd->add_option("--pred", eval_depth.prediction, "Predicted depth map, or a folder of them");
   eval_depth_cmd->add_option("--gt", eval_depth.ground_truth, "Ground-truth depth map, or a folder (matched by stem)");
   eval_depth_cmd->add_option("--list", eval_depth.list, "List file of pairs: a line PRED GT [MASK] per image");

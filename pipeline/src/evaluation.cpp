@@ -220,13 +220,14 @@ DepthMetrics measureDepthFiles(const DepthFilesEvaluationOptions& o, const fs::p
 
 /// The option fields of a depth evaluation, single or dataset.
 std::vector<Field> depthOptionFields(const DepthFilesEvaluationOptions& o) {
-  return {{"min_depth_m", "min depth (gt >)", optionalNumberValue(o.min_depth_m), "m"},
-          {"max_depth_m", "max depth (gt <)", optionalNumberValue(o.max_depth_m), "m"},
-          {"median_scaling", "median scaling", o.median_scaling, ""},
-          {"clamp_prediction", "clamp prediction", o.clamp_prediction, ""},
-          {"prediction_scale_m_per_unit", "prediction file scale", scaleOption(o.prediction_scale_m_per_unit), "m/unit"},
-          {"ground_truth_scale_m_per_unit", "ground-truth file scale", scaleOption(o.ground_truth_scale_m_per_unit),
-           "m/unit"}};
+  return {
+      {"min_depth_m", "min depth (gt >)", optionalNumberValue(o.min_depth_m), "m"},
+      {"max_depth_m", "max depth (gt <)", optionalNumberValue(o.max_depth_m), "m"},
+      {"median_scaling", "median scaling", o.median_scaling, ""},
+      {"clamp_prediction", "clamp prediction", o.clamp_prediction, ""},
+      {"prediction_scale_m_per_unit", "prediction file scale", scaleOption(o.prediction_scale_m_per_unit), "m/unit"},
+      {"ground_truth_scale_m_per_unit", "ground-truth file scale", scaleOption(o.ground_truth_scale_m_per_unit),
+       "m/unit"}};
 }
 
 }  // namespace
@@ -280,8 +281,7 @@ std::optional<fs::path> fileOfStem(const std::map<std::string, std::vector<fs::p
                                    std::string& problem) {
   const auto found = files.find(stem);
   if (found == files.end()) {
-    if (problem.empty())
-      problem = for_file.string() + ": no " + what + " named " + stem + ".* in " + folder.string();
+    if (problem.empty()) problem = for_file.string() + ": no " + what + " named " + stem + ".* in " + folder.string();
     return std::nullopt;
   }
   if (found->second.size() > 1) {
@@ -311,8 +311,8 @@ std::vector<DepthPair> pairsFromFolders(const DepthFilesEvaluationOptions& o, st
     pair.ground_truth = files[0];
     if (files.size() > 1)
       pair.problem = files[0].string() + ": " + files[1].string() + " has the same stem (which ground truth is meant?)";
-    pair.prediction = fileOfStem(predictions, stem, o.prediction, "prediction", files[0], pair.problem)
-                          .value_or(o.prediction / stem);
+    pair.prediction =
+        fileOfStem(predictions, stem, o.prediction, "prediction", files[0], pair.problem).value_or(o.prediction / stem);
     pair.mask = mask_folder ? fileOfStem(masks, stem, *o.mask, "mask", files[0], pair.problem) : o.mask;
     pairs.push_back(pair);
   }
@@ -366,7 +366,9 @@ std::vector<DepthPair> pairsFromList(const fs::path& list, const std::optional<f
 
 /// The summary's inputs: the folders or the list, and the mask.
 std::vector<Field> datasetInputFields(const DepthFilesEvaluationOptions& o) {
-  const auto given = [](const fs::path& p) { return p.empty() ? FieldValue(std::monostate{}) : FieldValue(p.string()); };
+  const auto given = [](const fs::path& p) {
+    return p.empty() ? FieldValue(std::monostate{}) : FieldValue(p.string());
+  };
   return {{"prediction", "prediction folder", given(o.prediction), ""},
           {"ground_truth", "ground-truth folder", given(o.ground_truth), ""},
           {"list", "list of pairs", optionalPathValue(o.list), ""},
@@ -406,7 +408,8 @@ EvaluationRecord imageRecord(const DepthFilesEvaluationOptions& o, const DepthPa
               {"mask", "mask", optionalPathValue(pair.mask), ""}};
   r.options = depthOptionFields(o);
   r.metrics = {{"error", "error", error.empty() ? FieldValue(std::monostate{}) : FieldValue(error), ""}};
-  const std::vector<Field> metrics = m ? depthFields(*m, "", "", true) : blanked(depthFields(DepthMetrics{}, "", "", true));
+  const std::vector<Field> metrics =
+      m ? depthFields(*m, "", "", true) : blanked(depthFields(DepthMetrics{}, "", "", true));
   r.metrics.insert(r.metrics.end(), metrics.begin(), metrics.end());
   return r;
 }
@@ -422,7 +425,8 @@ DepthDatasetEvaluation evaluateDepthDataset(const DepthFilesEvaluationOptions& o
   validateDepthFilesEvaluationOptions(o);
   Stopwatch clock;
   std::int64_t unpaired_predictions = 0;
-  const std::vector<DepthPair> pairs = o.list ? pairsFromList(*o.list, o.mask) : pairsFromFolders(o, unpaired_predictions);
+  const std::vector<DepthPair> pairs =
+      o.list ? pairsFromList(*o.list, o.mask) : pairsFromFolders(o, unpaired_predictions);
   DepthDatasetEvaluation result;
   std::vector<DepthMetrics> evaluated;
   for (const DepthPair& pair : pairs) {

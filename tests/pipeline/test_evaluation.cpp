@@ -163,9 +163,8 @@ TEST(Evaluation, DepthDatasetFromFoldersKeepsGoingPastBadPairs) {
 TEST(Evaluation, DepthDatasetFromAListAndItsErrors) {
   TempDir dir;
   writeDepthDataset(dir);
-  solo::test::writeText(dir / "pairs.txt",
-                        "# prediction ground truth\n\npred/a.pfm gt/a.pfm\n" + (dir / "pred" / "b.exr").string() +
-                            "\tgt/b.pfm\n");
+  solo::test::writeText(dir / "pairs.txt", "# prediction ground truth\n\npred/a.pfm gt/a.pfm\n" +
+                                               (dir / "pred" / "b.exr").string() + "\tgt/b.pfm\n");
   solo::DepthFilesEvaluationOptions o;
   o.list = dir / "pairs.txt";
   ASSERT_TRUE(solo::isDepthDataset(o));

@@ -293,8 +293,8 @@ TEST(CliEval, MeshJsonWithReferenceAndCsv) {
 TEST(CliEval, MeshFScoreAtAGivenTau) {
   TempDir dir;
   solo::test::writeSquareAndLiftedSquare(dir.path());
-  const std::string base = "eval mesh " + quoted(dir / "square.off") + " --ref " + quoted(dir / "lifted.ply") +
-                           " --samples 1000 --seed 2";
+  const std::string base =
+      "eval mesh " + quoted(dir / "square.off") + " --ref " + quoted(dir / "lifted.ply") + " --samples 1000 --seed 2";
   auto r = runSolo(base + " --tau 0.3 --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   auto j = nlohmann::json::parse(r.output);

@@ -37,12 +37,12 @@ struct DepthMetricsOptions {
 /// The per-pixel error sums every metric is computed from: adding two images' sums gives the
 /// sums of their pixels pooled.
 struct DepthErrorSums {
-  std::int64_t count = 0;     ///< valid pixels
-  double abs_rel = 0;         ///< sum |g - p| / g
-  double sq_rel_m = 0;        ///< sum (g - p)^2 / g
-  double squared_m2 = 0;      ///< sum (g - p)^2
-  double squared_log = 0;     ///< sum (ln g - ln p)^2
-  double log_difference = 0;  ///< sum (ln p - ln g)
+  std::int64_t count = 0;                           ///< valid pixels
+  double abs_rel = 0;                               ///< sum |g - p| / g
+  double sq_rel_m = 0;                              ///< sum (g - p)^2 / g
+  double squared_m2 = 0;                            ///< sum (g - p)^2
+  double squared_log = 0;                           ///< sum (ln g - ln p)^2
+  double log_difference = 0;                        ///< sum (ln p - ln g)
   std::int64_t below1 = 0, below2 = 0, below3 = 0;  ///< pixels with max(g/p, p/g) < 1.25^k
   DepthErrorSums& operator+=(const DepthErrorSums& other);
 };

@@ -81,11 +81,11 @@ struct MeshDistances {
   std::int64_t reference_vertices_checked = 0;  ///< reference vertices added likewise
   double reference_bbox_diagonal = 0;           ///< for relative figures (distance / diagonal)
   // Tanks and Temples (Knapitsch et al. 2017), over the random samples only:
-  double tau = 0;        ///< the distance threshold used, mesh units
+  double tau = 0;          ///< the distance threshold used, mesh units
   bool tau_given = false;  ///< false: the default fraction of reference_bbox_diagonal
-  double precision = 0;  ///< share of the mesh's samples x with d(x, reference) < tau
-  double recall = 0;     ///< share of the reference's samples y with d(y, mesh) < tau
-  double f_score = 0;    ///< 2 P R / (P + R), 0 when both are 0
+  double precision = 0;    ///< share of the mesh's samples x with d(x, reference) < tau
+  double recall = 0;       ///< share of the reference's samples y with d(y, mesh) < tau
+  double f_score = 0;      ///< 2 P R / (P + R), 0 when both are 0
 };
 
 /// Samples each surface (area-uniform random points, seeded) and measures their distance to
