@@ -448,6 +448,7 @@ void repairIntersectionsStep(StageReport& report, TriangleMesh& mesh, const Mesh
   const IntersectionRepair r = repairSelfIntersections(mesh, options.intersection_repair);
   report.add("intersection_repair_pairs_before", r.pairs_before);
   report.add("intersection_repair_pairs_after", r.pairs_after);
+  report.add("intersection_repair_vertices_moved", r.vertices_moved);
   report.add("intersection_repair_rounds_kept", static_cast<std::int64_t>(r.rounds_kept));
   report.add("intersection_repair_rounds_refused", static_cast<std::int64_t>(r.rounds_refused));
   report.add("intersection_repair_faces_before", r.faces_before);

@@ -18,6 +18,7 @@
 #include <CGAL/alpha_wrap_3.h>
 #include <CGAL/boost/graph/helpers.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <functional>
@@ -149,6 +150,84 @@ std::string refusal(const MeshState& before, const MeshState& after) {
   return {};
 }
 
+/// A vertex of one face of an intersecting pair, moved along the other face's normal to just
+/// past that face's plane.
+struct Nudge {
+  double distance = 0;  ///< how far the vertex moves
+  Mesh::Vertex_index vertex;
+  Point target;
+};
+
+/// The moves that take a vertex of `a` not shared with `b` across `b`'s plane, at most max_move.
+void addNudges(const Mesh& mesh, Mesh::Face_index a, Mesh::Face_index b, double max_move, double margin,
+               std::vector<Nudge>& out) {
+  std::vector<Mesh::Vertex_index> corners_b;
+  for (const auto v : CGAL::vertices_around_face(mesh.halfedge(b), mesh)) corners_b.push_back(v);
+  const Point &p0 = mesh.point(corners_b[0]), &p1 = mesh.point(corners_b[1]), &p2 = mesh.point(corners_b[2]);
+  Kernel::Vector_3 normal = CGAL::cross_product(p1 - p0, p2 - p0);
+  const double length = std::sqrt(CGAL::to_double(normal.squared_length()));
+  if (!(length > 0)) return;
+  normal = normal / length;
+  for (const auto v : CGAL::vertices_around_face(mesh.halfedge(a), mesh)) {
+    if (std::find(corners_b.begin(), corners_b.end(), v) != corners_b.end()) continue;
+    const double d = (mesh.point(v) - p0) * normal;
+    const double move = std::abs(d) + margin;
+    if (move > max_move) continue;
+    out.push_back({move, v, mesh.point(v) - (d + (d >= 0 ? margin : -margin)) * normal});
+  }
+}
+
+/// The faces whose boxes meet the box of the faces around `v` (grown by `margin`).
+std::vector<Mesh::Face_index> facesNear(const Mesh& mesh, Mesh::Vertex_index v, double margin) {
+  CGAL::Bbox_3 box = mesh.point(v).bbox();
+  for (const auto f : CGAL::faces_around_target(mesh.halfedge(v), mesh))
+    if (f != Mesh::null_face()) box += PMP::face_bbox(f, mesh);
+  box = CGAL::Bbox_3(box.xmin() - margin, box.ymin() - margin, box.zmin() - margin, box.xmax() + margin,
+                     box.ymax() + margin, box.zmax() + margin);
+  std::vector<Mesh::Face_index> near;
+  for (const auto f : mesh.faces())
+    if (CGAL::do_overlap(box, PMP::face_bbox(f, mesh))) near.push_back(f);
+  return near;
+}
+
+std::int64_t pairsAmong(const std::vector<Mesh::Face_index>& faces, const Mesh& mesh) {
+  std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
+  PMP::self_intersections(faces, mesh, std::back_inserter(pairs));
+  return static_cast<std::int64_t>(pairs.size());
+}
+
+/// Tries the smallest moves of single vertices that clear an intersecting pair (a corner just
+/// on the wrong side of a face): a move is kept when it leaves fewer intersecting pairs around
+/// the vertex and no degenerate face there. Returns the vertices moved; stops at the deadline.
+std::int64_t nudgeVertices(Mesh& mesh, double max_move, const Stopwatch& clock, double limit_s) {
+  std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
+  PMP::self_intersections(mesh, std::back_inserter(pairs));
+  const double margin = 0.05 * max_move;
+  std::int64_t moved = 0;
+  for (const auto& [f, g] : pairs) {
+    if (clock.seconds() > limit_s) break;
+    std::vector<Nudge> nudges;
+    addNudges(mesh, f, g, max_move, margin, nudges);
+    addNudges(mesh, g, f, max_move, margin, nudges);
+    std::sort(nudges.begin(), nudges.end(), [](const Nudge& a, const Nudge& b) { return a.distance < b.distance; });
+    for (const Nudge& n : nudges) {
+      const std::vector<Mesh::Face_index> near = facesNear(mesh, n.vertex, max_move);
+      const std::int64_t before = pairsAmong(near, mesh);
+      const Point old = mesh.point(n.vertex);
+      mesh.point(n.vertex) = n.target;
+      bool degenerate = false;
+      for (const auto h : CGAL::halfedges_around_target(mesh.halfedge(n.vertex), mesh))
+        if (!mesh.is_border(h)) degenerate = degenerate || PMP::is_degenerate_triangle_face(mesh.face(h), mesh);
+      if (!degenerate && pairsAmong(facesNear(mesh, n.vertex, max_move), mesh) < before) {
+        ++moved;
+        break;
+      }
+      mesh.point(n.vertex) = old;
+    }
+  }
+  return moved;
+}
+
 /// One call of CGAL's repair on a copy of `mesh`; false when the deadline passed inside it.
 bool repairRound(const Mesh& mesh, Mesh& trial, double envelope, const Stopwatch& clock, double limit_s) {
   trial = mesh;
@@ -193,6 +272,19 @@ IntersectionRepair repairSelfIntersections(TriangleMesh& mesh, const Intersectio
   const double envelope = options.envelope_fraction * std::sqrt(CGAL::square(box.xmax() - box.xmin()) +
                                                                 CGAL::square(box.ymax() - box.ymin()) +
                                                                 CGAL::square(box.zmax() - box.zmin()));
+  // The smallest repair first: single vertices moved across a face they barely pierce.
+  Mesh nudged = current;
+  r.vertices_moved = nudgeVertices(nudged, envelope, clock, options.time_limit_s);
+  if (r.vertices_moved > 0) {
+    const MeshState after = stateOf(nudged);
+    if (refusal(state, after).empty()) {
+      current = std::move(nudged);
+      state = after;
+      ++r.rounds_kept;
+    } else {
+      r.vertices_moved = 0;
+    }
+  }
   for (int round = 0; round < options.max_rounds && state.pairs > 0; ++round) {
     if (clock.seconds() > options.time_limit_s) {
       r.time_limit_hit = true;

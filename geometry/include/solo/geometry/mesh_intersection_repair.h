@@ -23,14 +23,17 @@ struct IntersectionRepair {
   std::int64_t pairs_before = 0;  ///< self-intersecting face pairs before the repair
   std::int64_t pairs_after = 0;   ///< and after it (the last verified round)
   std::int64_t faces_before = 0, faces_after = 0;
-  int rounds_kept = 0;      ///< rounds that passed verification
+  std::int64_t vertices_moved = 0;  ///< single vertices moved across a face they pierced (at most the envelope)
+  int rounds_kept = 0;      ///< rounds that passed verification (the vertex moves count as one)
   int rounds_refused = 0;   ///< rounds undone (invalid mesh, more boundary edges, non-manifold or degenerate faces, no progress)
   bool time_limit_hit = false;
   bool repaired = false;    ///< no self-intersecting pair left
   std::string failure;      ///< why not, when not repaired
 };
 
-/// Removes the self-intersections of `mesh` in place. Every round is verified on a copy (a valid
+/// Removes the self-intersections of `mesh` in place: first by moving single vertices that lie
+/// just on the wrong side of a face they intersect (by at most the envelope), then by rounds of
+/// CGAL's repair. Every round is verified on a copy (a valid
 /// polygon mesh, no more boundary edges, non-manifold vertices or degenerate faces than before,
 /// fewer intersecting pairs) and undone otherwise; the mesh keeps the last verified round. A
 /// soup that is not a polygon mesh is left as it is (failure says so).
