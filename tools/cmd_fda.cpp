@@ -15,7 +15,9 @@ namespace solo::tools {
 
 int runFda(const FdaCommandOptions& o) {
   Stopwatch total;
-  if (!(o.beta >= 0 && o.beta <= 1)) throw InputError("--beta", "must be in [0, 1]");
+  FdaOptions options;
+  options.beta = o.beta;
+  validateFdaOptions(options);
   refuseOutputThatIsAnInput(o.output, {o.source, o.target}, "-o");
   if (o.report) refuseOutputThatIsAnInput(*o.report, {o.source, o.target}, "--report");
   RunReport report;
@@ -24,8 +26,6 @@ int runFda(const FdaCommandOptions& o) {
   report.versions = dependencyVersions();
   const cv::Mat source = readColorImage(o.source);
   const cv::Mat target = readColorImage(o.target);
-  FdaOptions options;
-  options.beta = o.beta;
   FdaResult result = fourierDomainAdaptation(source, target, options);
   const std::string ext = lowercaseExtension(o.output);
   if (ext == ".exr") {

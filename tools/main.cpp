@@ -3,10 +3,12 @@
 
 #include "commands.h"
 
+#include <solo/core/atomic_file.h>
 #include <solo/core/error.h>
 #include <solo/geometry/depth_refinement.h>
 #include <solo/geometry/normal_guided_objective.h>
 #include <solo/pipeline/large_buffer_allocator.h>
+#include <solo/pipeline/night_batch.h>
 #include <solo/pipeline/night_presets.h>
 #include <solo/post/colour_encoding.h>
 #include <solo/post/fog_glare.h>
@@ -211,8 +213,8 @@ void addNightCameraFlags(CLI::App* night_cmd, NightOptions& night) {
 void addNightCommand(CLI::App& app, std::vector<Command>& commands, int argc, char** argv) {
   auto night_holder = std::make_shared<NightOptions>();
   NightOptions& night = *night_holder;
-  auto batch_holder = std::make_shared<NightBatchOptions>();
-  NightBatchOptions& night_batch = *batch_holder;
+  auto batch_holder = std::make_shared<tools::NightBatchOptions>();
+  tools::NightBatchOptions& night_batch = *batch_holder;
   CLI::App* night_cmd = app.add_subcommand("night", "Convert a day scene to night (default: the embedded scene)");
   addNightSceneFlags(night_cmd, night);
   addNightRenderFlags(night_cmd, night);
@@ -670,6 +672,10 @@ void addBenchCommands(CLI::App& app, std::vector<Command>& commands) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // SIGINT, SIGTERM, SIGHUP remove the hidden temporaries being written; a batch's scene also
+  // stops when the batch process dies.
+  solo::removeTemporariesOnSignals();
+  solo::stopWithBatchParent();
   keepFreedLargeBuffersForReuse();
   CLI::App app{"solo: turns a daytime street photo into a physically based night image"};
   app.require_subcommand(1);

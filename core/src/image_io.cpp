@@ -9,14 +9,19 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <mutex>
 #include <optional>
 #include <sstream>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -115,8 +120,10 @@ NpyHeader parseNpyHeader(const fs::path& file, std::istream& in) {
   std::size_t d = valueAfter("descr");
   if (d == std::string::npos || header[d] != '\'') throw InputError(file, "malformed .npy descr");
   std::size_t d_end = header.find('\'', d + 1);
+  if (d_end == std::string::npos) throw InputError(file, "malformed .npy descr: no closing quote");
   h.descr = header.substr(d + 1, d_end - d - 1);
   std::size_t f = valueAfter("fortran_order");
+  if (f == std::string::npos) throw InputError(file, "malformed .npy header: 'fortran_order' has no value");
   h.fortran_order = header.compare(f, 4, "True") == 0;
   std::size_t s = valueAfter("shape");
   if (s == std::string::npos || header[s] != '(') throw InputError(file, "malformed .npy shape");
@@ -214,13 +221,153 @@ void requireDecodableSize(const fs::path& file, const OIIO::ImageSpec& spec, std
                                std::to_string(data_bytes) + " after its header (truncated or corrupt)");
 }
 
+// True when the file starts with the PNG signature (whatever its extension).
+bool hasPngSignature(const fs::path& file) {
+  static const char kSignature[8] = {'\x89', 'P', 'N', 'G', '\r', '\n', '\x1a', '\n'};
+  char head[8] = {};
+  std::ifstream in(file, std::ios::binary);
+  return in.read(head, sizeof head) && std::memcmp(head, kSignature, sizeof head) == 0;
+}
+
+// libpng's default handlers, which OpenImageIO's PNG reader keeps, print "libpng error: ..."
+// and "libpng warning: ..." on stderr. While a PNG is opened or decoded, stderr (fd 2) goes to
+// a memory file instead, one capture at a time in the process; finish() puts stderr back,
+// returns libpng's lines (their prefix dropped) for solo's own error, and writes any other line
+// (another thread's) to stderr. Inactive: does nothing.
+class LibpngStderrCapture {
+ public:
+  explicit LibpngStderrCapture(bool active) {
+    if (!active) return;
+    lock_ = std::unique_lock<std::mutex>(mutex());
+    std::fflush(stderr);
+    capture_ = ::memfd_create("solo-libpng-stderr", MFD_CLOEXEC);
+    saved_ = capture_ < 0 ? -1 : ::dup(2);
+    if (saved_ < 0 || ::dup2(capture_, 2) < 0) release();
+  }
+  ~LibpngStderrCapture() { finish(); }
+  LibpngStderrCapture(const LibpngStderrCapture&) = delete;
+  LibpngStderrCapture& operator=(const LibpngStderrCapture&) = delete;
+
+  std::vector<std::string> finish() {
+    if (saved_ < 0) {
+      release();
+      return {};
+    }
+    std::fflush(stderr);
+    ::dup2(saved_, 2);
+    std::string text;
+    char buffer[4096];
+    ssize_t n = 0;
+    ::lseek(capture_, 0, SEEK_SET);
+    while ((n = ::read(capture_, buffer, sizeof buffer)) > 0) text.append(buffer, static_cast<std::size_t>(n));
+    release();
+    return libpngLines(text);
+  }
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  // libpng's lines without "libpng error: " / "libpng warning: "; the other lines go to stderr.
+  static std::vector<std::string> libpngLines(const std::string& text) {
+    std::vector<std::string> lines;
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.rfind("libpng", 0) != 0) {
+        std::fprintf(stderr, "%s\n", line.c_str());
+        continue;
+      }
+      const std::size_t colon = line.find(": ");
+      lines.push_back(colon == std::string::npos ? line : line.substr(colon + 2));
+    }
+    return lines;
+  }
+  void release() {
+    if (saved_ >= 0) ::close(saved_);
+    if (capture_ >= 0) ::close(capture_);
+    saved_ = capture_ = -1;
+    if (lock_.owns_lock()) lock_.unlock();
+  }
+
+  std::unique_lock<std::mutex> lock_;
+  int saved_ = -1, capture_ = -1;
+};
+
+// Why a read failed, on one line: libpng's own words when it said something, else
+// OpenImageIO's error lines joined by "; ".
+std::string readFailureReason(const std::string& oiio_error, const std::vector<std::string>& libpng_lines) {
+  std::vector<std::string> parts;
+  std::istringstream in(oiio_error);
+  std::string line;
+  if (libpng_lines.empty()) {
+    while (std::getline(in, line))
+      if (!line.empty() && std::find(parts.begin(), parts.end(), line) == parts.end()) parts.push_back(line);
+  } else {
+    for (const std::string& l : libpng_lines)
+      if (std::find(parts.begin(), parts.end(), l) == parts.end()) parts.push_back(l);
+  }
+  std::string reason;
+  for (const std::string& part : parts) reason += (reason.empty() ? "" : "; ") + part;
+  return reason.empty() ? reason : " (" + reason + ")";
+}
+
+// An OpenEXR file's headers walked before OpenEXR reads them: every attribute (name, type,
+// 4-byte size, value) must fit in the file, or OpenEXR allocates and reads what its size claims
+// (a 135-byte file took 15 s and 1.7 GB). Multi-part files have several headers, each ended by
+// an empty name, and an empty name after the last. Headers are walked in the first 16 MiB;
+// other files pass.
+void requireExrHeadersFitFile(const fs::path& file, std::uintmax_t file_bytes) {
+  static const unsigned char kMagic[4] = {0x76, 0x2f, 0x31, 0x01};
+  constexpr std::uintmax_t kWalkedBytes = 16u << 20;
+  std::ifstream in(file, std::ios::binary);
+  std::vector<unsigned char> bytes(static_cast<std::size_t>(std::min(file_bytes, kWalkedBytes)));
+  in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  bytes.resize(static_cast<std::size_t>(in.gcount()));
+  if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 4) != 0) return;
+  const bool whole_file = bytes.size() == file_bytes;
+  const bool multipart = (bytes[5] & 0x10) != 0;  // version flag 0x1000
+  std::size_t pos = 8;
+  // The null-terminated word at pos (names and types have at most 255 characters); false at the
+  // end of the walked bytes of a larger file.
+  const auto word = [&](const char* what, std::string& text) {
+    const auto begin = bytes.begin() + static_cast<std::ptrdiff_t>(pos);
+    const auto end = std::find(begin, bytes.end(), 0);
+    if (end == bytes.end() && !whole_file && bytes.end() - begin <= 255) return false;
+    if (end == bytes.end() || end - begin > 255)
+      throw InputError(file, std::string("OpenEXR header: ") + what + " without its end (truncated or corrupt)");
+    text.assign(begin, end);
+    pos = static_cast<std::size_t>(end - bytes.begin()) + 1;
+    return true;
+  };
+  std::string name, type;
+  while (word("attribute name", name)) {
+    if (name.empty()) {
+      if (!multipart || (pos < bytes.size() && bytes[pos] == 0)) return;
+      continue;  // the next part's header
+    }
+    if (!word("attribute type", type) || (pos + 4 > bytes.size() && !whole_file)) return;
+    if (pos + 4 > bytes.size()) throw InputError(file, "OpenEXR header: attribute " + name + " has no size (truncated)");
+    std::uint32_t size = 0;
+    for (int b = 3; b >= 0; --b) size = (size << 8) | bytes[pos + static_cast<std::size_t>(b)];
+    pos += 4;
+    if (size > file_bytes - pos)
+      throw InputError(file, "OpenEXR header: attribute " + name + " declares " + std::to_string(size) +
+                                 " bytes, more than the " + std::to_string(file_bytes - pos) +
+                                 " left in the file (truncated or corrupt)");
+    pos += size;
+    if (pos >= bytes.size() && !whole_file) return;
+  }
+}
+
 std::unique_ptr<OIIO::ImageInput> openOiio(const fs::path& file) {
   const std::uintmax_t file_bytes = requireReadableFile(file);
+  requireExrHeadersFitFile(file, file_bytes);
+  LibpngStderrCapture capture(hasPngSignature(file));
   auto in = OIIO::ImageInput::open(file.string());
-  if (!in) {
-    std::string why = OIIO::geterror();
-    throw InputError(file, "cannot read as an image" + (why.empty() ? std::string() : " (" + why + ")"));
-  }
+  const std::vector<std::string> libpng_lines = capture.finish();
+  if (!in) throw InputError(file, "cannot read as an image" + readFailureReason(OIIO::geterror(), libpng_lines));
   requireDecodableSize(file, in->spec(), file_bytes);
   return in;
 }
@@ -253,11 +400,12 @@ cv::Mat readOiioChannels(const fs::path& file, OIIO::ImageInput& in, int ch_begi
     default: break;  // half and float read as float
   }
   cv::Mat out(spec.height, spec.width, CV_MAKETYPE(cv_depth, channels));
-  if (!in.read_image(0, 0, ch_begin, ch_end, want, out.data)) {
-    std::string why = in.geterror();
+  LibpngStderrCapture capture(std::string(in.format_name()) == "png");
+  const bool read = in.read_image(0, 0, ch_begin, ch_end, want, out.data);
+  const std::vector<std::string> libpng_lines = capture.finish();
+  if (!read)
     throw InputError(file, "cannot decode pixels, the file is truncated or corrupt" +
-                               (why.empty() ? std::string() : " (" + why + ")"));
-  }
+                               readFailureReason(in.geterror(), libpng_lines));
   return out;
 }
 

@@ -10,7 +10,12 @@ namespace solo {
 /// For OFF and PLY files (by extension), reads the header and throws InputError naming `file`
 /// when the vertex and face counts it declares need more bytes than `file_size_bytes`, at the
 /// smallest size each element can have in the header's encoding (ASCII or binary). Other
-/// formats, and headers it cannot parse (left to the reader to reject), pass unchecked.
+/// formats, and headers it cannot parse (left to the reader to reject), pass unchecked. Also
+/// refuses what CGAL's readers would dereference or convert with undefined behaviour: a PLY
+/// header with a property before any element, a non-numeric element count, a vertex
+/// coordinate that is not float or double or no end_header in 64 KiB; an OFF variant other than
+/// plain OFF (COFF, NOFF, ...); an ASCII OFF face whose vertex count or index is negative or
+/// beyond 2^53.
 void requireMeshHeaderFitsFile(const std::filesystem::path& file, std::uintmax_t file_size_bytes);
 
 }  // namespace solo

@@ -322,7 +322,7 @@ LightRecord readLightRecord(const std::filesystem::path& file) {
   json j;
   try {
     j = json::parse(in);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number beyond a double
     throw InputError(file, std::string("malformed JSON: ") + e.what());
   }
   try {

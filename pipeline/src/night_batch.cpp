@@ -10,6 +10,7 @@
 
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -37,6 +38,8 @@ namespace {
 
 constexpr int kMaxBatchJobs = 256;            ///< --jobs: child processes at once
 constexpr double kMaxSceneTimeoutS = 1e6;     ///< --scene-timeout: about 11.5 days
+/// The batch's process id in a scene process's environment (stopWithBatchParent).
+constexpr const char* kBatchParentVariable = "SOLO_BATCH_PARENT";
 
 // FNV-1a, 64 bit: a fixed, documented hash of the scene name.
 std::uint64_t fnv1a64(const std::string& text) {
@@ -317,9 +320,13 @@ class BatchRun {
 
   void startScenes();
   void startScene(std::size_t i);
+  fs::path contactSheetOf(std::size_t i) const {
+    return plan_.output_folder / (plan_.scenes[i].name + ".contact-sheet.png");
+  }
+  /// Every output of the scene a run of it may have left a temporary of (a contact sheet's too,
+  /// whether or not this run asks for one).
   void removeTemporariesOf(std::size_t i) const {
-    removeStaleTemporaries(pngOf(i));
-    removeStaleTemporaries(reportOf(i));
+    for (const fs::path& output : {pngOf(i), reportOf(i), contactSheetOf(i)}) removeStaleTemporaries(output);
   }
   std::vector<std::string> sceneArguments(std::size_t i) const;
   int spawnScene(std::size_t i, std::vector<std::string> arguments, pid_t& pid) const;
@@ -433,13 +440,14 @@ std::vector<std::string> BatchRun::sceneArguments(std::size_t i) const {
     args.push_back(a);
   if (options_.contact_sheet) {  // one contact sheet per scene, whatever file was named
     args.push_back("--contact-sheet");
-    args.push_back((plan_.output_folder / (scene.name + ".contact-sheet.png")).string());
+    args.push_back(contactSheetOf(i).string());
   }
   return args;
 }
 
 /// Starts the executable with `arguments`, stdin from /dev/null, stdout and stderr to the
-/// scene's log, SOLO_BATCH_SCENE=<name> in its environment. Returns posix_spawn's error (0: ok).
+/// scene's log, SOLO_BATCH_SCENE=<name> and SOLO_BATCH_PARENT=<this pid> in its environment
+/// (stopWithBatchParent). Returns posix_spawn's error (0: ok).
 int BatchRun::spawnScene(std::size_t i, std::vector<std::string> arguments, pid_t& pid) const {
   std::vector<char*> child_argv;
   std::string argv0 = "solo";
@@ -454,10 +462,14 @@ int BatchRun::spawnScene(std::size_t i, std::vector<std::string> arguments, pid_
   posix_spawn_file_actions_addopen(&files, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&files, 1, 2);
   std::string scene_variable = "SOLO_BATCH_SCENE=" + plan_.scenes[i].name;
+  std::string parent_variable = std::string(kBatchParentVariable) + "=" + std::to_string(::getpid());
   std::vector<char*> child_environment;
   for (char** e = environ; *e; ++e)
-    if (std::strncmp(*e, "SOLO_BATCH_SCENE=", 17) != 0) child_environment.push_back(*e);
+    if (std::strncmp(*e, "SOLO_BATCH_SCENE=", 17) != 0 &&
+        std::strncmp(*e, parent_variable.c_str(), std::strlen(kBatchParentVariable) + 1) != 0)
+      child_environment.push_back(*e);
   child_environment.push_back(scene_variable.data());
+  child_environment.push_back(parent_variable.data());
   child_environment.push_back(nullptr);
   const std::string executable = options_.executable.string();
   const int error =
@@ -731,6 +743,18 @@ NightBatchResult runNightBatch(const NightBatchOptions& options, const NightBatc
   batch.writeFailures();
   writeTextAtomically(result.summary_file, summaryText(options, result, batch.shardText()));
   return result;
+}
+
+void stopWithBatchParent() {
+  const char* parent_text = std::getenv(kBatchParentVariable);
+  if (!parent_text) return;
+  char* end = nullptr;
+  const long parent = std::strtol(parent_text, &end, 10);
+  if (end == parent_text || *end != '\0' || parent <= 1) return;
+  ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+  // The batch may have died between the spawn and the request: then this process has another
+  // parent already, and no death signal will come.
+  if (::getppid() != static_cast<pid_t>(parent)) ::raise(SIGTERM);
 }
 
 }  // namespace solo

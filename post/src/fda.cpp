@@ -1,5 +1,7 @@
 #include <solo/post/fda.h>
 
+#include <solo/core/option_checks.h>
+
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
@@ -15,11 +17,13 @@ int signedFrequency(int i, int n) { return i <= n / 2 ? i : i - n; }
 
 }  // namespace
 
+void validateFdaOptions(const FdaOptions& options) { requireOptionInRange(options.beta, 0, 1, "--beta"); }
+
 FdaResult fourierDomainAdaptation(const cv::Mat& source, const cv::Mat& target, const FdaOptions& options) {
   Stopwatch clock;
   if (source.empty() || source.type() != CV_32FC3 || target.empty() || target.type() != CV_32FC3)
     throw std::invalid_argument("FDA needs two non-empty 3-channel float images");
-  if (!(options.beta >= 0 && options.beta <= 1)) throw std::invalid_argument("FDA beta must be in [0, 1]");
+  validateFdaOptions(options);
   FdaResult result;
   result.report.name = "fda";
   cv::Mat matched = target;

@@ -19,6 +19,7 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <chrono>
 #include <csignal>
@@ -383,4 +384,170 @@ TEST(CheckedWrites, EveryWriterFailsOnAFullDiskNamingTheTargetAndLeavesNothing) 
     EXPECT_GT(fs::file_size(dir / name), 1024u) << name;
     fs::remove(dir / name);
   }
+}
+
+namespace {
+
+// In a child process: removeTemporariesOnSignals, then a writeAtomically whose writer creates
+// its temporary, writes half of it, tells the parent (one byte on `ready`) and waits to be
+// signalled. Returns the child's pid.
+pid_t startWriterThatWaitsForASignal(const fs::path& target, int ready) {
+  const pid_t pid = ::fork();
+  if (pid != 0) return pid;
+  solo::removeTemporariesOnSignals();
+  try {
+    solo::writeAtomically(target, [ready](const fs::path& temporary) {
+      writeText(temporary, "half of a file");
+      const char byte = 1;
+      if (::write(ready, &byte, 1) != 1) ::_exit(3);
+      while (true) ::pause();
+    });
+  } catch (...) {
+    ::_exit(5);
+  }
+  ::_exit(4);
+}
+
+std::vector<std::string> hiddenFiles(const fs::path& folder) {
+  std::vector<std::string> hidden;
+  for (const std::string& name : solo::test::listFolder(folder))
+    if (name[0] == '.') hidden.push_back(name);
+  return hidden;
+}
+
+}  // namespace
+
+TEST(CheckedWrites, ASignalDuringAWriteRemovesTheTemporaryAndEndsByThatSignal) {
+  for (const int signal : {SIGTERM, SIGINT, SIGHUP}) {
+    TempDir dir;
+    int pipe_ends[2];
+    ASSERT_EQ(::pipe(pipe_ends), 0);
+    const pid_t child = startWriterThatWaitsForASignal(dir / "sheet.png", pipe_ends[1]);
+    ::close(pipe_ends[1]);
+    char byte = 0;
+    ASSERT_EQ(::read(pipe_ends[0], &byte, 1), 1) << "the writer started";
+    ::close(pipe_ends[0]);
+    ASSERT_EQ(hiddenFiles(dir.path()).size(), 1u) << "the temporary exists while it is written";
+    ::kill(child, signal);
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal) << "signal " << signal << ", status " << status;
+    EXPECT_TRUE(hiddenFiles(dir.path()).empty()) << "signal " << signal << ": " << hiddenFiles(dir.path())[0];
+    EXPECT_FALSE(fs::exists(dir / "sheet.png"));
+  }
+}
+
+TEST(CheckedWrites, AWriteThatEndedLeavesNothingForTheSignalHandler) {
+  TempDir dir;
+  solo::writeTextAtomically(dir / "a.json", "{}\n");
+  EXPECT_THROW(solo::writeAtomically(dir / "b.json", [](const fs::path& temporary) {
+                 writeText(temporary, "x");
+                 throw solo::InputError(temporary, "failed on purpose");
+               }),
+               solo::InputError);
+  solo::removeLiveTemporaries();  // what a signal would do now: nothing of the finished writes
+  EXPECT_EQ(solo::test::readText(dir / "a.json"), "{}\n");
+  EXPECT_EQ(solo::test::listFolder(dir.path()), std::vector<std::string>{"a.json"});
+}
+
+// ------------------------------------------------------------------ fuzzing findings (tests/fuzz)
+
+TEST(FuzzFindings, APlyPropertyBeforeAnyElementIsRefusedNotDereferenced) {
+  // fuzz_mesh_ply: CGAL's PLY reader took the last element of an empty list (a crash in solo
+  // mesh clean) when a "property" line came before every "element" line.
+  TempDir dir;
+  writeText(dir / "p.ply",
+            "ply\nformat ascii 1.0\nrmat binary_little_endianelement vertex 4\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n");
+  EXPECT_EQ(messageOf([&] { solo::readMesh(dir / "p.ply"); }),
+            (dir / "p.ply").string() +
+                ": cannot read as a mesh: PLY header has a property before any element (corrupt header)");
+  writeText(dir / "long.ply", "ply\nformat ascii 1.0\n" + std::string(70000, 'c') + "\n");
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "long.ply"); }).find("PLY header has no end_header in its first 65536 bytes"),
+            std::string::npos);
+}
+
+TEST(FuzzFindings, NpyHeadersWithoutAValueOrAClosingQuoteAreRefused) {
+  // fuzz_map_npy: 'fortran_order': at the end of the header, with only spaces after it, threw
+  // std::out_of_range from std::string::compare instead of an InputError naming the file.
+  TempDir dir;
+  const auto npy = [](const std::string& header) {
+    return std::string("\x93NUMPY\x01\x00", 8) + static_cast<char>(header.size()) + '\0' + header + std::string(12, '\0');
+  };
+  writeText(dir / "f.npy", npy("{'descr': '|u1', 'shape': (3, 4), 'fortran_order':" + std::string(40, ' ')));
+  EXPECT_EQ(messageOf([&] { solo::readColorImage(dir / "f.npy"); }),
+            (dir / "f.npy").string() + ": malformed .npy header: 'fortran_order' has no value");
+  writeText(dir / "d.npy", npy("{'shape': (3, 4), 'fortran_order': False, 'descr': '|u1\n"));
+  EXPECT_EQ(messageOf([&] { solo::readDepth(dir / "d.npy", 1.0); }),
+            (dir / "d.npy").string() + ": malformed .npy descr: no closing quote");
+}
+
+TEST(FuzzFindings, PlyVertexCoordinatesMustBeFloatScalars) {
+  // fuzz_mesh_ply: a list (or integer) property named x in the vertex element made CGAL's reader
+  // call through a null pointer (a crash in solo mesh clean).
+  TempDir dir;
+  writeText(dir / "list.ply",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float y\nproperty float z\n"
+            "property list uchar int x\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+            "0 0 1 0\n1 0 1 1\n0 1 1 2\n3 0 1 2\n");
+  EXPECT_EQ(messageOf([&] { solo::readMesh(dir / "list.ply"); }),
+            (dir / "list.ply").string() +
+                ": cannot read as a mesh: PLY vertex coordinate x is a list, not a float or double (corrupt header)");
+  writeText(dir / "count.ply", "ply\nformat ascii 1.0\nelement vertex 3x\nproperty float x\nend_header\n0\n1\n2\n");
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "count.ply"); }).find("PLY element vertex has the count \"3x\""),
+            std::string::npos);
+}
+
+TEST(FuzzFindings, OffFacesWithNegativeHugeOrMissingIndicesAndOffVariantsAreRefused) {
+  // fuzz_mesh_off: CGAL converts a face's vertex count and indices from double to size_t
+  // (undefined for -1 or 1e23), sizes the face from the count before reading it (111111111111
+  // corners: 888 GB), and overflows its buffers reading COFF colours.
+  TempDir dir;
+  const std::string vertices = "0 0 0\n1 0 0\n0 1 0\n";
+  writeText(dir / "negative.off", "OFF\n3 1 0\n" + vertices + "3 0 2-1\n");
+  EXPECT_EQ(messageOf([&] { solo::readMesh(dir / "negative.off"); }),
+            (dir / "negative.off").string() +
+                ": cannot read as a mesh: face 0 has -1 as a vertex index, not a number from 0 to 2^53 (corrupt file)");
+  writeText(dir / "huge.off", "OFF\n3 1 0\n" + vertices + "88888888888888888888888 0 1 2\n");
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "huge.off"); }).find("face 0 declares more vertices than its line lists (3)"),
+            std::string::npos);
+  writeText(dir / "counted.off", "OFF\n3 1 0\n" + vertices + "111111111111 0 1 2\n");
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "counted.off"); }).find("face 0 declares more vertices"),
+            std::string::npos);
+  // The counts' line may carry the first vertex, as CGAL reads it.
+  writeText(dir / "shifted.off", "OFF\n3 1 0 0 0 0\n1 0 0\n0 1 0\n-5 0 1 2\n");
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "shifted.off"); }).find("face 0 has -5 as its vertex count"),
+            std::string::npos);
+  writeText(dir / "colour.off", "COFF\n4 4    2301 0 1 3\n3 0 y 03 2\n3\n");
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "colour.off"); }).find("this one with \"COFF\""), std::string::npos);
+  writeText(dir / "glued.off", "OFF$0\n3 5 0\n" + vertices);
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "glued.off"); }).find("this one with \"OFF$0\""), std::string::npos);
+  writeText(dir / "ok.off", "OFF\n# a comment\n3 1 0\n" + vertices + "\n3 0 1 2 # the face\n");
+  EXPECT_EQ(solo::readMesh(dir / "ok.off").faces.size(), 1u);
+}
+
+TEST(FuzzFindings, ALightRecordNumberBeyondADoubleIsMalformedJson) {
+  // fuzz_light_record: nlohmann's out_of_range for "-32.55E3521653077" escaped as a non-InputError.
+  TempDir dir;
+  writeText(dir / "lights.json", "{\"format\": \"solo-lights/1\", \"seed\": -32.55E3521653077}");
+  EXPECT_NE(messageOf([&] { solo::readLightRecord(dir / "lights.json"); }).find("lights.json: malformed JSON"),
+            std::string::npos);
+}
+
+TEST(FuzzFindings, ExrAttributeSizesBeyondTheFileAreRefusedQuickly) {
+  // fuzz_map_exr: a 135-byte header whose attribute sizes claim more than the file took OpenEXR
+  // 15 s and 1.7 GB before it failed.
+  TempDir dir;
+  const std::string header = std::string("\x76\x2f\x31\x01\x02\x00\x00\x00", 8) + "channels" + '\0' + "chlist" + '\0' +
+                             std::string("\xff\xff\xff\x4f", 4) + "Y";
+  writeText(dir / "big.exr", header);
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(messageOf([&] { solo::readDepth(dir / "big.exr", 0); }),
+            (dir / "big.exr").string() +
+                ": OpenEXR header: attribute channels declares 1342177279 bytes, more than the 1 left in the file "
+                "(truncated or corrupt)");
+  writeText(dir / "cut.exr", std::string("\x76\x2f\x31\x01\x02\x00\x00\x00", 8) + "channels");
+  EXPECT_NE(messageOf([&] { solo::readDepth(dir / "cut.exr", 0); }).find("attribute name without its end"),
+            std::string::npos);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2.0);
 }

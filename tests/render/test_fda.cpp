@@ -1,4 +1,5 @@
 #include <solo/post/fda.h>
+#include <solo/core/error.h>
 
 #include "test_support.h"
 
@@ -89,5 +90,5 @@ TEST(Fda, TargetOfAnotherSizeIsResized) {
   const cv::Scalar m2 = cv::mean(solo::fourierDomainAdaptation(source, target, wide).image);
   EXPECT_NEAR(m2[0], 0.1, 1e-5);
   EXPECT_NEAR(m2[2], 0.3, 1e-5);
-  EXPECT_THROW(solo::fourierDomainAdaptation(source, target, solo::FdaOptions{1.5}), std::invalid_argument);
+  EXPECT_THROW(solo::fourierDomainAdaptation(source, target, solo::FdaOptions{1.5}), solo::InputError);
 }

@@ -5,10 +5,17 @@
 
 #include <nlohmann/json.hpp>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <csignal>
 #include <chrono>
 #include <cstdint>
+#include <fstream>
 #include <set>
+#include <sstream>
+#include <thread>
 
 #include "test_support.h"
 
@@ -246,4 +253,93 @@ TEST(CliBatch, ASceneOverTheTimeLimitIsStoppedRecordedAndTheBatchGoesOn) {
   EXPECT_EQ(scenesWithStatus(summary, "failed"), (std::set<std::string>{"big"}));
   for (const std::string& file : solo::test::listFolder(out))
     EXPECT_NE(file[0], '.') << "no temporary file left behind: " << file;
+}
+
+TEST(CliBatch, ARerunRemovesEveryKindOfTemporaryOfItsScenesAndNoOtherFile) {
+  TempDir dir;
+  synth(dir / "scenes" / "small", 1);
+  const fs::path out = dir / "out";
+  fs::create_directories(out);
+  // What killed runs leave: the hidden temporaries of the image, the report and the contact sheet.
+  const std::vector<std::string> stale = {".small.tmp4242_0.png", ".small.report.tmp4242_1.json",
+                                          ".small.contact-sheet.tmp4242_2.png"};
+  // Not the scene's: another name, and a file that only looks alike.
+  const std::vector<std::string> kept = {".smaller.tmp4242_0.png", ".small.tmpx_0.png", "notes.txt"};
+  for (const std::string& name : stale) solo::test::writeText(out / name, "partial");
+  for (const std::string& name : kept) solo::test::writeText(out / name, "keep");
+  const auto r = runSolo("night --batch " + quoted(dir / "scenes") + " -o " + quoted(out) + kFast);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  expectNightImage(out / "small.png");
+  for (const std::string& name : stale) EXPECT_FALSE(fs::exists(out / name)) << name;
+  for (const std::string& name : kept) EXPECT_TRUE(fs::exists(out / name)) << name;
+}
+
+namespace {
+
+/// The pids of the processes whose parent is `parent` (from /proc).
+std::vector<pid_t> childrenOf(pid_t parent) {
+  std::vector<pid_t> children;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator("/proc", ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream stat(entry.path() / "stat");
+    std::string line;
+    if (!std::getline(stat, line)) continue;
+    const std::size_t close = line.rfind(')');  // the command name may hold spaces
+    if (close == std::string::npos) continue;
+    std::istringstream fields(line.substr(close + 2));
+    char state = 0;
+    long ppid = 0;
+    fields >> state >> ppid;
+    if (ppid == parent) children.push_back(static_cast<pid_t>(std::stol(name)));
+  }
+  return children;
+}
+
+/// True while `pid` is a live process (not gone, not a zombie waiting to be reaped).
+bool running(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return false;
+  const std::size_t close = line.rfind(')');
+  return close != std::string::npos && close + 2 < line.size() && line[close + 2] != 'Z' && line[close + 2] != 'X';
+}
+
+}  // namespace
+
+TEST(CliBatch, KillingOnlyTheBatchProcessStopsItsScenes) {
+  TempDir dir;
+  synth(dir / "scenes" / "a", 1);
+  synth(dir / "scenes" / "b", 2);
+  const fs::path out = dir / "out";
+  // The default preset: each scene runs long enough to be caught running.
+  const std::string command = std::string("exec \"") + SOLO_BINARY + "\" night --batch " + quoted(dir / "scenes") +
+                              " -o " + quoted(out) + " --jobs 2 > /dev/null 2>&1";
+  const pid_t batch = ::fork();
+  if (batch == 0) {
+    ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  std::vector<pid_t> scenes;
+  const auto start = std::chrono::steady_clock::now();
+  while (scenes.size() < 2 && std::chrono::steady_clock::now() - start < std::chrono::seconds(20)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    scenes = childrenOf(batch);
+  }
+  ASSERT_FALSE(scenes.empty()) << "the batch started its scenes";
+  ::kill(batch, SIGKILL);
+  int status = 0;
+  ASSERT_EQ(::waitpid(batch, &status, 0), batch);
+  const auto killed = std::chrono::steady_clock::now();
+  bool any_running = true;
+  while (any_running && std::chrono::steady_clock::now() - killed < std::chrono::seconds(5)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    any_running = std::any_of(scenes.begin(), scenes.end(), running);
+  }
+  EXPECT_FALSE(any_running) << "every scene process stops within 5 s of its batch's death";
+  for (const pid_t scene : scenes)
+    if (running(scene)) ::kill(scene, SIGKILL);  // leave nothing behind whatever the outcome
+  for (const std::string& file : solo::test::listFolder(out))
+    EXPECT_NE(file[0], '.') << "the stopped scenes removed their temporaries: " << file;
 }

@@ -15,7 +15,11 @@
 #include <unistd.h>
 #include <chrono>
 #include <cstdint>
+#include <csignal>
+#include <cstdlib>
 #include <limits>
+#include <sstream>
+#include <thread>
 
 namespace fs = std::filesystem;
 using solo::test::readText;
@@ -394,4 +398,142 @@ TEST(CliDataSafety, MeshCleanRefusesNonFiniteStlVerticesAndOutOfRangePlyFaces) {
     EXPECT_NE(r.output.find("solo: error: " + c.message), std::string::npos) << r.output;
   }
   EXPECT_EQ(entries(dir.path()), before);
+}
+
+// ------------------------------------------------------------------ library text on stderr
+
+namespace {
+
+struct SplitRun {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+/// Runs solo with `arguments` in `folder`, stdout and stderr kept apart.
+SplitRun runSplit(const fs::path& folder, const std::string& arguments) {
+  const fs::path out = folder / ".run.out", err = folder / ".run.err";
+  const std::string command = "cd " + shellQuoted(folder) + " && exec \"" + SOLO_BINARY + "\" " + arguments + " > " +
+                              shellQuoted(out) + " 2> " + shellQuoted(err);
+  const int status = std::system(command.c_str());
+  SplitRun run;
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  run.out = readText(out);
+  run.err = readText(err);
+  fs::remove(out);
+  fs::remove(err);
+  return run;
+}
+
+/// The lines of `text`, the last one without its newline.
+std::vector<std::string> linesOf(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) lines.push_back(line);
+  return lines;
+}
+
+/// A copy of the PNG `source` with the byte at `offset` inverted (inside the compressed pixels).
+void writeCorruptCopy(const fs::path& source, const fs::path& target, std::size_t offset) {
+  std::string bytes = readText(source);
+  ASSERT_LT(offset, bytes.size());
+  bytes[offset] = static_cast<char>(~bytes[offset]);
+  writeText(target, bytes);
+}
+
+}  // namespace
+
+TEST(CliDataSafety, ABrokenPngGivesSolosErrorLineOnlyNamingTheFile) {
+  TempDir dir;
+  cv::Mat day(48, 64, CV_8UC3);
+  cv::randu(day, 0, 255);
+  solo::writeImage(dir / "day.png", day);
+  cv::Mat depth(48, 64, CV_16U);
+  cv::randu(depth, 1, 60000);
+  solo::writeImage(dir / "depth.png", depth);
+  const std::size_t day_bytes = fs::file_size(dir / "day.png");
+  solo::test::writeTruncatedCopy(dir / "day.png", dir / "cut.png", day_bytes / 2);
+  writeCorruptCopy(dir / "day.png", dir / "flipped.png", day_bytes / 2);
+  solo::test::writeTruncatedCopy(dir / "depth.png", dir / "cut-depth.png", fs::file_size(dir / "depth.png") / 2);
+  solo::test::writeTruncatedCopy(dir / "day.png", dir / "header-only.png", 40);
+  const std::vector<std::pair<std::string, std::string>> runs = {
+      {"fda --source cut.png --target day.png -o f.png", "cut.png"},
+      {"fda --source flipped.png --target day.png -o f.png", "flipped.png"},
+      {"fda --source day.png --target header-only.png -o f.png", "header-only.png"},
+      {"convert depth cut-depth.png d.exr --input-scale 0.01", "cut-depth.png"}};
+  for (const auto& [arguments, file] : runs) {
+    const SplitRun r = runSplit(dir.path(), arguments);
+    EXPECT_EQ(r.exit_code, 2) << arguments << "\n" << r.err;
+    const std::vector<std::string> lines = linesOf(r.err);
+    ASSERT_EQ(lines.size(), 1u) << arguments << ": one line, solo's own:\n" << r.err;
+    EXPECT_EQ(lines[0].rfind("solo: error: " + file + ": ", 0), 0u) << lines[0];
+    EXPECT_EQ(lines[0].find("libpng error"), std::string::npos) << lines[0];
+    EXPECT_FALSE(fs::exists(dir / "f.png") || fs::exists(dir / "d.exr")) << arguments;
+  }
+}
+
+// ------------------------------------------------------------------ signals
+
+namespace {
+
+/// Starts solo with `arguments` (stdout and stderr to /dev/null); returns its pid.
+pid_t startSolo(const std::vector<std::string>& arguments) {
+  std::vector<std::string> argv = {"solo"};
+  argv.insert(argv.end(), arguments.begin(), arguments.end());
+  const pid_t pid = ::fork();
+  if (pid != 0) return pid;
+  const int null = ::open("/dev/null", O_RDWR);
+  ::dup2(null, 1);
+  ::dup2(null, 2);
+  std::vector<char*> pointers;
+  for (std::string& a : argv) pointers.push_back(a.data());
+  pointers.push_back(nullptr);
+  ::execv(SOLO_BINARY, pointers.data());
+  ::_exit(127);
+}
+
+std::vector<std::string> hiddenEntries(const fs::path& folder) {
+  std::vector<std::string> hidden;
+  for (const std::string& name : entries(folder))
+    if (name[0] == '.') hidden.push_back(name);
+  return hidden;
+}
+
+}  // namespace
+
+TEST(CliDataSafety, NightStoppedBySigtermAtAnyPointLeavesNoHiddenTemporary) {
+  TempDir dir;
+  synth(dir / "s", 8);
+  const fs::path out = dir / "out";
+  const std::vector<std::string> arguments = {
+      "night", (dir / "s" / "scene.json").string(), "-o", (out / "night.png").string(), "--report",
+      (out / "report.json").string(), "--contact-sheet", (out / "sheet.png").string(), "--render-exr",
+      (out / "render.exr").string(), "--preset", "draft", "--seed", "3"};
+  // One whole run: how long the writes take to come.
+  const auto start = std::chrono::steady_clock::now();
+  int status = 0;
+  const pid_t whole = startSolo(arguments);
+  ASSERT_EQ(::waitpid(whole, &status, 0), whole);
+  const double run_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  ASSERT_TRUE(fs::exists(out / "sheet.png"));
+  // Then SIGTERM at 16 points spread over the run, the last ones among the writes at its end.
+  constexpr int kPoints = 16;
+  int killed = 0;
+  for (int k = 1; k <= kPoints; ++k) {
+    fs::remove_all(out);
+    const double delay_s = run_s * (0.3 + 0.7 * k / (kPoints + 1.0));
+    const pid_t pid = startSolo(arguments);
+    std::this_thread::sleep_for(std::chrono::duration<double>(delay_s));
+    ::kill(pid, SIGTERM);
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    const bool ended_by_sigterm = WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM;
+    killed += ended_by_sigterm;
+    EXPECT_TRUE(ended_by_sigterm || (WIFEXITED(status) && WEXITSTATUS(status) == 0))
+        << "at " << delay_s << " s: status " << status;
+    if (fs::exists(out)) {
+      EXPECT_EQ(hiddenEntries(out), std::vector<std::string>{}) << "SIGTERM at " << delay_s << " s of " << run_s;
+    }
+  }
+  EXPECT_GT(killed, kPoints / 2) << "most runs were stopped mid-way";
 }

@@ -81,7 +81,7 @@ TEST(CliOptions, PostExposureSettingsAreFiniteAndInRange) {
 
 TEST(CliOptions, FdaBetaIsAShareFromZeroToOne) {
   for (const std::string beta : {"nan", "-0.1", "1.5", "inf"})
-    expectRefused("fda --source a.png --target b.png --beta " + beta, "--beta: must be in [0, 1]");
+    expectRefused("fda --source a.png --target b.png --beta " + beta, "solo: error: --beta: must be within [0, 1]");
 }
 
 TEST(CliOptions, LightsAblationLuminanceIsPositiveAndFinite) {

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <string>
 
 namespace solo {
 
@@ -17,5 +18,15 @@ void writeAtomically(const std::filesystem::path& target,
 
 /// Writes `text` to `target` atomically.
 void writeTextAtomically(const std::filesystem::path& target, const std::string& text);
+
+/// Removes every hidden temporary writeAtomically is writing at this moment. Async-signal-safe
+/// (unlink only): for signal handlers.
+void removeLiveTemporaries() noexcept;
+
+/// Installs handlers for SIGINT, SIGTERM and SIGHUP (those not ignored) that remove the live
+/// temporaries, then end the process by the same signal with its default action, so the exit
+/// status still says which signal it was. A handler installed later (the batch's) takes over
+/// until it restores this one.
+void removeTemporariesOnSignals();
 
 }  // namespace solo

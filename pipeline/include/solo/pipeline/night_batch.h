@@ -150,4 +150,11 @@ ForwardedSceneArguments forwardedSceneArguments(const std::vector<std::string>& 
 /// options or scene lists.
 NightBatchResult runNightBatch(const NightBatchOptions& options, const NightBatchProgress& progress = {});
 
+/// In a batch's scene process (SOLO_BATCH_PARENT=<the batch's pid> in its environment): asks the
+/// kernel for SIGTERM when the batch process dies (even by SIGKILL), and sends it at once when
+/// the batch died before that request took effect (the process was already reparented). Call
+/// after removeTemporariesOnSignals, so the scene removes its temporaries. Does nothing outside a
+/// batch.
+void stopWithBatchParent();
+
 }  // namespace solo

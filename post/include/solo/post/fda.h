@@ -21,10 +21,14 @@ struct FdaResult {
   StageReport report;  ///< "fda": band half-size, swapped frequencies, share of values outside [0, 1]
 };
 
+/// Throws InputError("--beta", ...) unless 0 <= beta <= 1 (NaN fails): the option check the
+/// library and `solo fda` share, made before any image is read.
+void validateFdaOptions(const FdaOptions& options);
+
 /// source, target: CV_32FC3 (any values; images as read, e.g. sRGB-encoded in [0, 1]).
 /// A target of another size is resized to the source's (area averaging when shrinking,
 /// bilinear when enlarging) and the report notes it. Throws std::invalid_argument for
-/// empty or non-CV_32FC3 images and for beta outside [0, 1].
+/// empty or non-CV_32FC3 images, InputError for beta outside [0, 1] (validateFdaOptions).
 FdaResult fourierDomainAdaptation(const cv::Mat& source, const cv::Mat& target, const FdaOptions& options);
 
 }  // namespace solo
