@@ -464,12 +464,6 @@ void addMeshCommands(CLI::App& app, std::vector<Command>& commands) {
   mesh_clean_cmd->add_option("input", mesh_clean.input, "Mesh to read (PLY, OBJ, OFF, STL)")->required();
   mesh_clean_cmd->add_option("-o,--output", mesh_clean.output, "Mesh to write")->required();
   mesh_clean_cmd->add_option("--report", mesh_clean.report, "Report JSON to write");
-  commands.push_back({mesh_from_depth_cmd, [mesh_from_depth_holder] { return runMeshFromDepth(*mesh_from_depth_holder); }});
-  commands.push_back({mesh_clean_cmd, [mesh_clean_holder] { return runMeshClean(*mesh_clean_holder); }});
-}
-
-// The camera on the post-process options: the one --shutter or --f-number made, or a new one.
-CameraExposure& postCamera(PostProcessOptions& post) {
   const CLI::Validator positive_finite(
       [](std::string& text) {
         double value = 0;
@@ -498,6 +492,12 @@ CameraExposure& postCamera(PostProcessOptions& post) {
   mesh_clean_cmd->add_option("--wrap-time-limit", mesh_clean.cleanup.wrapping.time_limit_s,
                              "Seconds the alpha wrap may take")
       ->capture_default_str()->check(positive_finite);
+  commands.push_back({mesh_from_depth_cmd, [mesh_from_depth_holder] { return runMeshFromDepth(*mesh_from_depth_holder); }});
+  commands.push_back({mesh_clean_cmd, [mesh_clean_holder] { return runMeshClean(*mesh_clean_holder); }});
+}
+
+// The camera on the post-process options: the one --shutter or --f-number made, or a new one.
+CameraExposure& postCamera(PostProcessOptions& post) {
   std::optional<CameraExposure>& camera = post.exposure_options.camera;
   if (!camera) camera.emplace();
   return *camera;
