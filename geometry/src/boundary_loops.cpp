@@ -260,6 +260,8 @@ struct RunChainer {
                              const std::vector<std::uint8_t>& in_chain) const {
     for (int dv = -1; dv <= 1; ++dv)
       for (int du = -1; du <= 1; ++du) {
+        // Off the image a pixel's key would name a pixel on the opposite side.
+        if (p[0] + du < 0 || p[0] + du >= image.w || p[1] + dv < 0 || p[1] + dv >= image.h) continue;
         const auto found = first_at.find(image.key(OpenMesh::Vec2i(p[0] + du, p[1] + dv)));
         if (found == first_at.end()) continue;
         const std::size_t target = found->second;

@@ -252,8 +252,12 @@ SpuriousFaceResult findSpuriousFaces(const DepthMesh& m, const cv::Mat& depth_m,
           // The mask marks where the depth is unreliable, not where surfaces part: a face in it
           // goes only when one of its edges also jumps (the footprint test alone, since the
           // extrapolation and step tests need the reliable depth the mask says is missing).
-          for (int k = 0; k < 3 && !inside_one_thing && !is_uncertain; ++k)
-            is_uncertain = jumps.exceedsFootprints(fp.pixel[k], fp.pixel[(k + 1) % 3], options.uncertain_jump_factor);
+          for (int k = 0; k < 3 && !inside_one_thing && !is_uncertain; ++k) {
+            const bool between_classes = instances.empty() || options.uncertain_within_class ||
+                                         cityscapesClassOfInstance(ids[k]) != cityscapesClassOfInstance(ids[(k + 1) % 3]);
+            is_uncertain = between_classes &&
+                           jumps.exceedsFootprints(fp.pixel[k], fp.pixel[(k + 1) % 3], options.uncertain_jump_factor);
+          }
         }
       }
 

@@ -266,12 +266,19 @@ class WaveTracer {
  public:
   WaveTracer(const Context& c, std::vector<RecordedRay>* log) : c_(c), log_(log) {}
 
-  // A path from the camera through (px, py), sample `rng` already started.
+  // A path from the camera through (px, py), sample `rng` already started. With
+  // film_within_pixel_centres the position is kept kFrameInset_px inside the outermost pixel
+  // centres (off the depth mesh's boundary edge, where a hit is a matter of rounding).
   static Path cameraPath(const Context& c, float px, float py, Sampler& rng, FirstHit* first) {
+    constexpr float kFrameInset_px = 1.f / 64.f;
     Path p;
     p.rng = &rng;
     p.first = first;
     const PinholeCamera& cam = c.camera;
+    if (c.options.film_within_pixel_centres) {
+      px = std::clamp(px, kFrameInset_px, std::max(kFrameInset_px, static_cast<float>(cam.width - 1) - kFrameInset_px));
+      py = std::clamp(py, kFrameInset_px, std::max(kFrameInset_px, static_cast<float>(cam.height - 1) - kFrameInset_px));
+    }
     p.direction = {static_cast<float>((px - cam.cx) / cam.fx), static_cast<float>((py - cam.cy) / cam.fy), 1.f};
     p.z_per_distance = 1.f / p.direction.norm();
     p.direction.normalize();

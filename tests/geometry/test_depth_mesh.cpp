@@ -106,6 +106,50 @@ TEST(SpuriousFaces, GrazingRoadAndItsCreaseWithAWallAreKept) {
   EXPECT_GT(solo::findSpuriousFaces(m, depth, {}, {}, plain).by_depth_jump, 100);
 }
 
+TEST(SpuriousFaces, UncertainMaskCutsNoFaceInsideOneClassOfAGrazingRoad) {
+  // The road and wall above, the whole image uncertain (as the 10 px band around a car's foot
+  // is): the far road changes depth by up to 17 footprints per row, over the mask's 8. Labelled
+  // road throughout, it keeps every face; with the wall labelled building, the mask cuts only
+  // faces with an edge between the classes that jumps; with uncertain_within_class, every face
+  // with a jumping edge goes, which left bands without a surface at the foot of every car.
+  const solo::PinholeCamera camera{400.0, 400.0, 31.5, 9.5, 64, 48};
+  const cv::Mat depth = roadAndWall(camera, 60.0);
+  const solo::DepthMesh m = solo::meshFromDepth(depth, camera);
+  const cv::Mat uncertain(depth.size(), CV_8U, cv::Scalar(1));
+  cv::Mat road(depth.size(), CV_32S, cv::Scalar(7));
+  EXPECT_EQ(solo::findSpuriousFaces(m, depth, road, uncertain).removed, 0);
+
+  cv::Mat road_and_wall = road.clone();
+  road_and_wall.setTo(11, depth >= 59.99f);
+  const solo::SpuriousFaceResult between = solo::findSpuriousFaces(m, depth, road_and_wall, uncertain);
+  solo::SpuriousFaceOptions within_too;
+  within_too.uncertain_within_class = true;
+  const solo::SpuriousFaceResult within = solo::findSpuriousFaces(m, depth, road_and_wall, uncertain, within_too);
+  const solo::SpuriousFaceResult unlabelled = solo::findSpuriousFaces(m, depth, {}, uncertain);
+  std::int64_t jumping = 0, jumping_between = 0;
+  for (const auto f : m.mesh.faces()) {
+    std::vector<OpenMesh::Vec2i> px;
+    for (const auto v : m.mesh.fv_range(f)) px.push_back(m.mesh.property(m.properties.pixel, v));
+    bool jumps = false, jumps_between = false;
+    for (int k = 0; k < 3; ++k) {
+      const OpenMesh::Vec2i a = px[k], b = px[(k + 1) % 3];
+      const double za = depth.at<float>(a[1], a[0]), zb = depth.at<float>(b[1], b[0]);
+      const double length_px = std::hypot(double(a[0] - b[0]), double(a[1] - b[1]));
+      const bool edge_jumps = std::abs(za - zb) > 8.0 * std::min(za, zb) / camera.fx * length_px;
+      jumps = jumps || edge_jumps;
+      jumps_between = jumps_between || (edge_jumps && road_and_wall.at<int>(a[1], a[0]) != road_and_wall.at<int>(b[1], b[0]));
+    }
+    jumping += jumps;
+    jumping_between += jumps_between;
+    EXPECT_EQ((between.criteria[f.idx()] & solo::kUncertain) != 0, jumps_between) << "face " << f.idx();
+  }
+  EXPECT_GT(jumping_between, 0);
+  EXPECT_GT(jumping, 4 * jumping_between);
+  EXPECT_EQ(between.by_uncertain, jumping_between);
+  EXPECT_EQ(within.by_uncertain, jumping);
+  EXPECT_EQ(unlabelled.by_uncertain, jumping);  // without labels every edge counts
+}
+
 TEST(SpuriousFaces, OcclusionStepIsCutExactlyAlongItsEdge) {
   // A 10 m wall with a 4 m wide frontal board at 5 m covering columns 10..19: every face touching
   // both depths bridges the occlusion, and only those.

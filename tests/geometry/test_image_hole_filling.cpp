@@ -859,8 +859,9 @@ TEST(ImageHoleFilling, BackdropsCloseMostFrameHolesOfRandomBlockScenesWithoutSel
   // ones, occluders rising into the sky, patchworks at the frame. Cleaned with and without
   // backdrops (which also take the frame holes whose own patch met the mesh; floating sheets
   // become slabs either way, and a backdrop leaves them room). Measured: 94
-  // frame loops left without, 19 with (56 backdrops, 27 frame holes retried as one); no
-  // self-intersection either way.
+  // frame loops left without, 5 with (56 backdrops, 27 frame holes retried as one); no
+  // self-intersection either way. A backdrop trace that looked for a run's start beside a
+  // frame pixel off the image (whose key named a pixel at the opposite frame) left 19.
   cv::RNG rng(12345);
   std::int64_t left[2] = {0, 0}, pairs[2] = {0, 0}, backdrops = 0, retried = 0;
   for (int trial = 0; trial < 150; ++trial) {
@@ -896,7 +897,7 @@ TEST(ImageHoleFilling, BackdropsCloseMostFrameHolesOfRandomBlockScenesWithoutSel
   EXPECT_EQ(pairs[1], 0);
   EXPECT_GT(backdrops, 20);
   EXPECT_GT(retried, 0);
-  EXPECT_LE(4 * left[1], left[0]);  // at most a quarter left
+  EXPECT_LE(left[1], 5);
 }
 
 }  // namespace

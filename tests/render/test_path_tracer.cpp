@@ -568,6 +568,33 @@ TEST(PathTracer, EmitterCoverageIsTheShareOfAPixelThatSeesAnEmitter) {
   }
 }
 
+TEST(PathTracer, FramePixelsSeeTheSurfaceThatEndsAtTheirCentres) {
+  // A depth mesh ends at the outermost pixel centres. An emitting quad at z = 2 spanning exactly
+  // the rays through the centres of pixels 0 and 3 (4x4 camera, principal point 1.5): every
+  // camera sample, also the outer half of each frame pixel, sees it.
+  solo::RenderScene s;
+  s.camera = camera(4, 400);
+  s.emitters.push_back({Eigen::Vector3f(1.f, 1.f, 1.f), false, 7});
+  const float half_span = 1.5f / 400.f * 2.f;
+  addQuad(s, {-half_span, -half_span, 2}, {0, 2 * half_span, 0}, {2 * half_span, 0, 0}, 0.f, 0);
+  solo::PathTracerOptions o;
+  o.min_samples = o.max_samples = 64;
+  o.progress = false;
+  const auto out = solo::renderPathTraced(s, o);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) {
+      EXPECT_FLOAT_EQ(out.emitter_coverage.at<float>(y, x), 1.f) << x << "," << y;
+      EXPECT_NEAR(out.depth_m.at<float>(y, x), 2.f, 1e-3f) << x << "," << y;
+    }
+  // Over the whole pixel the frame pixels see the quad over half their area, the corners a quarter.
+  o.film_within_pixel_centres = false;
+  const auto whole = solo::renderPathTraced(s, o);
+  EXPECT_NEAR(whole.emitter_coverage.at<float>(0, 0), 0.25f, 0.06f);
+  EXPECT_NEAR(whole.emitter_coverage.at<float>(0, 1), 0.5f, 0.06f);
+  EXPECT_NEAR(whole.emitter_coverage.at<float>(2, 3), 0.5f, 0.06f);
+  EXPECT_FLOAT_EQ(whole.emitter_coverage.at<float>(1, 2), 1.f);
+}
+
 TEST(PathTracer, SamplersAgreeAndPmfsMatchPicks) {
   // Many lights of different power: all three samplers estimate the same image.
   solo::RenderScene s;
@@ -843,6 +870,7 @@ TEST(PathTracer, NoiseMatchedTargetStopsAtThePredictedSampleCount) {
   o.noise_factor = 0.5;
   o.noise_sigma = [](double) { return 0.02; };
   o.progress = false;
+  o.film_within_pixel_centres = false;  // the whole pixel, beyond its centre too
   // Stratified samples are not independent: with the Sobol sampler the edge, at the dyadic
   // jitter 1/2, splits every replicate's 8-point net exactly in half, so the first check sees
   // two equal replicate means (an exact pixel) and stops at min_samples with exactly 1/2.
@@ -988,6 +1016,7 @@ ErrorCalibration calibrate(const solo::RenderScene& scene, solo::SamplerKind sam
   o.min_samples = 16;
   o.max_samples = 32;
   o.progress = false;
+  o.film_within_pixel_centres = false;  // pixel 0's edge lies at its centre
   double sum[2] = {0, 0}, squares[2] = {0, 0}, estimated[2] = {0, 0};
   for (int seed = 1; seed <= seeds; ++seed) {
     o.seed = static_cast<std::uint64_t>(seed);

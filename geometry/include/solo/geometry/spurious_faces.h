@@ -24,10 +24,11 @@
 //    Where a side has no pixel behind it (frame, sky) only jumps over `edge_of_data_factor`
 //    times the criterion are cut.
 //  - grazing: the face normal is more than `grazing_angle_deg` from the viewing ray;
-//  - uncertain: a vertex lies in the uncertain mask (depth refinement) and an edge jumps by
-//    more than `uncertain_jump_factor` pixel footprints (without the extrapolation and step
-//    tests, which the unreliable depth there defeats), except inside one thing instance whose
-//    depth span is at most `uncertain_same_object_span_m` (as the reference implementation does);
+//  - uncertain: a vertex lies in the uncertain mask (depth refinement) and an edge between two
+//    semantic classes jumps by more than `uncertain_jump_factor` pixel footprints (without the
+//    extrapolation and step tests, which the unreliable depth there defeats), except inside one
+//    thing instance whose depth span is at most `uncertain_same_object_span_m` (as the reference
+//    implementation does);
 //  - instance boundary: the vertices carry different instance ids and one of them is a
 //    foreground thing (vehicle, person, pole, sign, traffic light), so that the thing becomes
 //    a separate sheet that can be closed into a solid. This is a segmentation cut, not an
@@ -86,6 +87,11 @@ struct SpuriousFaceOptions {
   /// than this many pixel footprints (the footprint test alone): the mask by itself removed
   /// ~100 000 faces of the default scene's refined mesh that bridge nothing (docs/mesh.md).
   double uncertain_jump_factor = 8.0;
+  /// The uncertain criterion also cuts edges inside one semantic class. Off: a road or facade
+  /// seen at grazing inside the mask (10 px around every object's outline) changes depth by
+  /// more than 8 footprints per pixel and is still one surface; cutting it left bands without
+  /// a surface at the foot of every car (docs/mesh.md). Without an instance map every edge counts.
+  bool uncertain_within_class = false;
   bool cut_instance_boundaries = true;
 };
 

@@ -34,6 +34,9 @@ struct RecordedRay {
 /// (pipeline/night_conversion.h: 2 to 8 spp to the sensor noise, power light sampling, seed 0).
 struct PathTracerOptions {
   int min_samples = 16;   ///< per pixel before the error estimate is trusted; at least 2 are taken
+  /// Camera samples stay within the outermost pixel centres (1/64 px inside): a depth mesh ends
+  /// there, and the outer half of each frame pixel would otherwise see nothing behind it.
+  bool film_within_pixel_centres = true;
   int max_samples = 256;  ///< per pixel
   /// Stop a pixel when the standard error of its mean luminance (Y) is below
   /// max(relative_error * mean, absolute_error[pixel], noise_factor * noise_sigma(mean)).
