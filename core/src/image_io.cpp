@@ -4,13 +4,11 @@
 #include "solo/core/error.h"
 #include "solo/core/image_limits.h"
 #include "solo/core/output_path.h"
+#include "solo/core/stderr_capture.h"
 #include "solo/core/input_file.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
-
-#include <sys/mman.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -18,7 +16,6 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <mutex>
 #include <optional>
 #include <sstream>
 #include <vector>
@@ -230,86 +227,39 @@ bool hasPngSignature(const fs::path& file) {
 }
 
 // libpng's default handlers, which OpenImageIO's PNG reader keeps, print "libpng error: ..."
-// and "libpng warning: ..." on stderr. While a PNG is opened or decoded, stderr (fd 2) goes to
-// a memory file instead, one capture at a time in the process; finish() puts stderr back,
-// returns libpng's lines (their prefix dropped) for solo's own error, and writes any other line
-// (another thread's) to stderr. Inactive: does nothing.
+// and "libpng warning: ..." on stderr. While a PNG is opened or decoded, stderr is captured
+// (StderrCapture); finish() returns libpng's lines (their prefix dropped) for solo's own error
+// and writes any other line (another thread's) back to stderr. Inactive: does nothing.
 class LibpngStderrCapture {
  public:
-  explicit LibpngStderrCapture(bool active) {
-    if (!active) return;
-    lock_ = std::unique_lock<std::mutex>(mutex());
-    std::fflush(stderr);
-    capture_ = ::memfd_create("solo-libpng-stderr", MFD_CLOEXEC);
-    saved_ = capture_ < 0 ? -1 : ::dup(2);
-    if (saved_ < 0 || ::dup2(capture_, 2) < 0) release();
-  }
-  ~LibpngStderrCapture() { finish(); }
-  LibpngStderrCapture(const LibpngStderrCapture&) = delete;
-  LibpngStderrCapture& operator=(const LibpngStderrCapture&) = delete;
+  explicit LibpngStderrCapture(bool active) : capture_(active) {}
 
   std::vector<std::string> finish() {
-    if (saved_ < 0) {
-      release();
-      return {};
-    }
-    std::fflush(stderr);
-    ::dup2(saved_, 2);
-    std::string text;
-    char buffer[4096];
-    ssize_t n = 0;
-    ::lseek(capture_, 0, SEEK_SET);
-    while ((n = ::read(capture_, buffer, sizeof buffer)) > 0) text.append(buffer, static_cast<std::size_t>(n));
-    release();
-    return libpngLines(text);
-  }
-
- private:
-  static std::mutex& mutex() {
-    static std::mutex m;
-    return m;
-  }
-  // libpng's lines without "libpng error: " / "libpng warning: "; the other lines go to stderr.
-  static std::vector<std::string> libpngLines(const std::string& text) {
-    std::vector<std::string> lines;
-    std::istringstream in(text);
-    std::string line;
-    while (std::getline(in, line)) {
+    std::vector<std::string> libpng_lines;
+    for (const std::string& line : capture_.finish()) {
       if (line.rfind("libpng", 0) != 0) {
         std::fprintf(stderr, "%s\n", line.c_str());
         continue;
       }
       const std::size_t colon = line.find(": ");
-      lines.push_back(colon == std::string::npos ? line : line.substr(colon + 2));
+      libpng_lines.push_back(colon == std::string::npos ? line : line.substr(colon + 2));
     }
-    return lines;
-  }
-  void release() {
-    if (saved_ >= 0) ::close(saved_);
-    if (capture_ >= 0) ::close(capture_);
-    saved_ = capture_ = -1;
-    if (lock_.owns_lock()) lock_.unlock();
+    return libpng_lines;
   }
 
-  std::unique_lock<std::mutex> lock_;
-  int saved_ = -1, capture_ = -1;
+ private:
+  StderrCapture capture_;
 };
 
 // Why a read failed, on one line: libpng's own words when it said something, else
 // OpenImageIO's error lines joined by "; ".
 std::string readFailureReason(const std::string& oiio_error, const std::vector<std::string>& libpng_lines) {
-  std::vector<std::string> parts;
+  std::vector<std::string> oiio_lines;
   std::istringstream in(oiio_error);
   std::string line;
-  if (libpng_lines.empty()) {
-    while (std::getline(in, line))
-      if (!line.empty() && std::find(parts.begin(), parts.end(), line) == parts.end()) parts.push_back(line);
-  } else {
-    for (const std::string& l : libpng_lines)
-      if (std::find(parts.begin(), parts.end(), l) == parts.end()) parts.push_back(l);
-  }
-  std::string reason;
-  for (const std::string& part : parts) reason += (reason.empty() ? "" : "; ") + part;
+  while (std::getline(in, line))
+    if (!line.empty()) oiio_lines.push_back(line);
+  const std::string reason = joinedLines(libpng_lines.empty() ? oiio_lines : libpng_lines);
   return reason.empty() ? reason : " (" + reason + ")";
 }
 

@@ -162,9 +162,16 @@ void requireFloatCoordinate(const fs::path& file, bool list, const std::string& 
 std::vector<ElementBound> plyBounds(const fs::path& file, const std::string& header) {
   std::istringstream lines(header);
   std::string line, word;
-  if (!std::getline(lines, line) || line.rfind("ply", 0) != 0) return {};
+  if (!std::getline(lines, line) || !(std::istringstream(line) >> word) || word != "ply") return {};  // " ply" too, as CGAL
   bool binary = false, ended = false, vertex_element = false;
   std::vector<ElementBound> elements;
+  // The second line is the format line whatever it holds, as CGAL reads it.
+  if (std::getline(lines, line)) {
+    std::istringstream words(line);
+    std::string format;
+    words >> word >> format;
+    binary = format != "ascii";
+  }
   while (std::getline(lines, line)) {
     std::istringstream words(line);
     word.clear();
@@ -173,10 +180,7 @@ std::vector<ElementBound> plyBounds(const fs::path& file, const std::string& hea
       ended = true;
       break;
     }
-    if (word == "format") {
-      words >> word;
-      binary = word != "ascii";
-    } else if (word == "element") {
+    if (word == "element") {
       ElementBound element;
       std::string count;
       words >> element.name >> count;

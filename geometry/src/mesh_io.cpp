@@ -2,6 +2,7 @@
 #include <solo/core/output_path.h>
 #include "solo/core/error.h"
 #include "solo/core/input_file.h"
+#include "solo/core/stderr_capture.h"
 #include "solo/geometry/triangle_mesh.h"
 
 #include "mesh_header_bounds.h"
@@ -74,8 +75,13 @@ TriangleMesh readMesh(const fs::path& file, MeshReadStats* stats) {
   std::vector<Point> points;
   std::vector<std::vector<std::size_t>> polygons;
   if (lowercaseExtension(file) == ".stl") requireFiniteBinaryStlVertices(file);
-  if (!CGAL::IO::read_polygon_soup(file.string(), points, polygons))
-    throw InputError(file, "cannot read as a mesh: malformed or truncated");
+  // CGAL prints some of its parse errors on stderr: they become part of solo's one error line.
+  StderrCapture capture;
+  const bool read = CGAL::IO::read_polygon_soup(file.string(), points, polygons);
+  const std::string cgal_text = joinedLines(capture.finish());
+  if (!read)
+    throw InputError(file, "cannot read as a mesh: malformed or truncated" +
+                               (cgal_text.empty() ? std::string() : " (" + cgal_text + ")"));
   if (points.empty()) throw InputError(file, "mesh has no vertices");
 
   TriangleMesh mesh;

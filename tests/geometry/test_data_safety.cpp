@@ -493,6 +493,13 @@ TEST(FuzzFindings, PlyVertexCoordinatesMustBeFloatScalars) {
   EXPECT_EQ(messageOf([&] { solo::readMesh(dir / "list.ply"); }),
             (dir / "list.ply").string() +
                 ": cannot read as a mesh: PLY vertex coordinate x is a list, not a float or double (corrupt header)");
+  // CGAL takes " ply" as the signature and the second line as the format line, whatever it holds.
+  writeText(dir / "spaced.ply", " ply\nformat binary_little_endian 1.0\nproperty float x\nend_header\n");
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "spaced.ply"); }).find("PLY header has a property before any element"),
+            std::string::npos);
+  writeText(dir / "second.ply", "ply\nelement vertex 1\nproperty float x\nend_header\n0\n");
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "second.ply"); }).find("PLY header has a property before any element"),
+            std::string::npos);
   writeText(dir / "count.ply", "ply\nformat ascii 1.0\nelement vertex 3x\nproperty float x\nend_header\n0\n1\n2\n");
   EXPECT_NE(messageOf([&] { solo::readMesh(dir / "count.ply"); }).find("PLY element vertex has the count \"3x\""),
             std::string::npos);

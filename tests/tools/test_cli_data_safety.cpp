@@ -472,6 +472,20 @@ TEST(CliDataSafety, ABrokenPngGivesSolosErrorLineOnlyNamingTheFile) {
   }
 }
 
+TEST(CliDataSafety, AMalformedMeshGivesSolosErrorLineOnlyWithCgalsWords) {
+  TempDir dir;
+  writeText(dir / "not.ply", "plx\nformat ascii 1.0\n");
+  writeText(dir / "list.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar\nend_header\n");
+  for (const std::string file : {"not.ply", "list.ply"}) {
+    const SplitRun r = runSplit(dir.path(), "mesh clean " + file + " -o out.ply");
+    EXPECT_EQ(r.exit_code, 2) << file << "\n" << r.err;
+    const std::vector<std::string> lines = linesOf(r.err);
+    ASSERT_EQ(lines.size(), 1u) << file << ": one line, solo's own:\n" << r.err;
+    EXPECT_EQ(lines[0].rfind("solo: error: " + file + ": cannot read as a mesh: malformed or truncated (Error", 0), 0u)
+        << lines[0];
+  }
+}
+
 // ------------------------------------------------------------------ signals
 
 namespace {
