@@ -137,6 +137,8 @@ void addNightSceneFlags(CLI::App* night_cmd, NightOptions& night) {
   night_cmd->add_flag("--ablation", night.conversion.lights.instantiation.ablation, "The paper's ablation: every light on, white, one strength");
   night_cmd->add_option("--lights", night.conversion.light_record, "Use this (edited) light record instead of a new draw");
   night_cmd->add_flag("--headlights,!--no-headlights", night.conversion.night_scene.headlights, "Ego-vehicle headlights (default on)");
+  night_cmd->add_flag("--shading-normals,!--no-shading-normals", night.conversion.night_scene.shading_normals,
+                      "Shade faces made from pixels with the normal map's normals (default on)");
   night_cmd->add_option("--headlight-flux", night.conversion.night_scene.headlight_flux_lm, "Flux of each headlight, lm")->capture_default_str();
 }
 

@@ -253,7 +253,7 @@ struct AccuracySweep::Impl {
       const DepthRefinementResult& r = defaultRefinement();
       const DepthMesh& m = defaultMesh();
       const LightStageResult lights = runLightStage(scene, r.depth_m, lightOptions());
-      night = buildNightScene(m, r.maps.albedo, r.maps.roughness, scene.image, lights.record);
+      night = buildNightScene(m, r.maps.albedo, r.maps.roughness, scene.image, lights.record, {}, r.normals);
     }
     return *night;
   }
@@ -561,7 +561,8 @@ struct AccuracySweep::Impl {
                                                      meshOptions(true, HoleFillOptions{}.max_fair_vertices, true), ignored);
     const LightStageResult truth_lights = runLightStage(scene, truth.depth_m, lightOptions());
     const NightScene truth_night =
-        buildNightScene(truth_depth_mesh, p.maps.albedo, p.maps.roughness, scene.image, truth_lights.record);
+        buildNightScene(truth_depth_mesh, p.maps.albedo, p.maps.roughness, scene.image, truth_lights.record, {},
+                        truth.normals);
     EndToEndReference ref;
     ref.image = reference(truth_night.scene, ref.seconds);
     ref.self = radianceError(ref.image, ref.image);

@@ -343,7 +343,8 @@ NightScene runNightSceneStages(const Scene& scene, const NightConversionOptions&
   runLightsStage(scene, o, r);
   // scene for the renderer
   NightScene night =
-      buildNightScene(r.mesh, r.refined.maps.albedo, r.refined.maps.roughness, scene.image, r.record, o.night_scene);
+      buildNightScene(r.mesh, r.refined.maps.albedo, r.refined.maps.roughness, scene.image, r.record, o.night_scene,
+                      r.refined.normals);
   r.stages.push_back(night.report);
   return night;
 }

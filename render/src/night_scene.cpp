@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 #include <limits>
 #include <map>
 
@@ -32,19 +33,21 @@ struct FaceVertices {
   std::array<std::uint32_t, 3> face{};
   double u = 0, v = 0;  // sums of the vertices' pixel coordinates (mesh grid)
   int with_pixel = 0;   // vertices that have a pixel
+  std::array<OpenMesh::Vec2i, 3> pixels{};  // of the first with_pixel vertices (mesh grid)
   bool behind = false;  // a closed solid's back or an input vertex: never emits
   bool filled = false;  // a vertex added by hole filling
 };
 
 // The scene under construction, and what one step of buildNightScene hands to the next.
 struct NightSceneBuilder {
-  NightSceneBuilder(const DepthMesh& depth_mesh_, const cv::Mat& roughness_, const LightRecord& record_,
-                    const NightSceneOptions& options_, NightScene& out)
-      : depth_mesh(depth_mesh_), roughness(roughness_), record(record_), options(options_), scene(out.scene),
-        report(out.report) {}
+  NightSceneBuilder(const DepthMesh& depth_mesh_, const cv::Mat& roughness_, const cv::Mat& normals_,
+                    const LightRecord& record_, const NightSceneOptions& options_, NightScene& out)
+      : depth_mesh(depth_mesh_), roughness(roughness_), normals(normals_), record(record_), options(options_),
+        scene(out.scene), report(out.report) {}
 
   const DepthMesh& depth_mesh;
   const cv::Mat& roughness;
+  const cv::Mat& normals;  // CV_32FC3 at the maps' resolution, or empty
   const LightRecord& record;
   const NightSceneOptions& options;
   RenderScene& scene;
@@ -61,6 +64,7 @@ struct NightSceneBuilder {
   std::vector<double> seen_area_m2;  // per light, the area of the faces that emit it
   std::vector<int> emitter_of_light;  // per light, index into scene.emitters, -1 = none
 
+  std::int64_t faces_with_shading_normal = 0;
   std::int64_t hidden_faces_under_lights = 0, faces_seen_edge_on = 0, emitting_faces = 0, faces_without_pixel = 0,
                faces_off_light_depth = 0;
   std::map<std::string, std::int64_t> lights_on_by_category;
@@ -72,6 +76,7 @@ struct NightSceneBuilder {
   void prepareReflectance(const cv::Mat& albedo, const cv::Mat& day_image);
   void mapLights();
   void addMeshFaces();
+  Eigen::Vector3f shadingNormal(const FaceVertices& fv, double scale_x, double scale_y) const;
   FaceVertices addFaceVertices(SurfaceMesh::FaceHandle f, const std::optional<ImageVertexProperties>& props,
                                std::vector<int>& index_of_vertex);
   void noteLightFace(const std::array<std::uint32_t, 3>& face, int light, int x, int y, bool filled);
@@ -166,7 +171,7 @@ FaceVertices NightSceneBuilder::addFaceVertices(SurfaceMesh::FaceHandle f,
       if (pixel[0] >= 0 && pixel[1] >= 0) {
         out.u += pixel[0];
         out.v += pixel[1];
-        ++out.with_pixel;
+        out.pixels[static_cast<std::size_t>(out.with_pixel++)] = pixel;
       }
     }
   }
@@ -190,6 +195,28 @@ void NightSceneBuilder::noteLightFace(const std::array<std::uint32_t, 3>& face, 
       {scene.faces.size() - 1, depth, 0.5 * normal.norm(), y * width + x, filled, edge_on});
   float& nearest = nearest_depth_m.at<float>(y, x);
   nearest = std::min(nearest, depth);
+}
+
+// The normal map's mean over the face's three pixels, when all three have one, the face is no
+// solid's back (whose pixels show its front) and that mean faces the camera; else zero (the
+// face's own normal). Hole fills take it too: where they are seen, their pixels show them.
+Eigen::Vector3f NightSceneBuilder::shadingNormal(const FaceVertices& fv, double scale_x, double scale_y) const {
+  if (!options.shading_normals || normals.empty() || normals.cols != width || normals.rows != height ||
+      fv.with_pixel != 3 || fv.behind)
+    return Eigen::Vector3f::Zero();
+  Eigen::Vector3f sum = Eigen::Vector3f::Zero(), centroid = Eigen::Vector3f::Zero();
+  for (int k = 0; k < 3; ++k) {
+    const OpenMesh::Vec2i& p = fv.pixels[static_cast<std::size_t>(k)];
+    const int x = std::clamp(static_cast<int>(std::lround((p[0] + 0.5) * scale_x - 0.5)), 0, width - 1);
+    const int y = std::clamp(static_cast<int>(std::lround((p[1] + 0.5) * scale_y - 0.5)), 0, height - 1);
+    const cv::Vec3f n = normals.at<cv::Vec3f>(y, x);
+    sum += Eigen::Vector3f(n[0], n[1], n[2]);
+    centroid += scene.vertices[fv.face[static_cast<std::size_t>(k)]];
+  }
+  const float length = sum.norm();
+  if (!std::isfinite(length) || !(length > 1.5f)) return Eigen::Vector3f::Zero();  // invalid or disagreeing pixels
+  const Eigen::Vector3f n = sum / length;
+  return n.dot(centroid) < 0.f ? n : Eigen::Vector3f::Zero();
 }
 
 // Geometry, and per face the material and the light of the pixel under its vertices' mean
@@ -238,6 +265,10 @@ void NightSceneBuilder::addMeshFaces() {
     scene.face_reflectance.push_back(reflectanceFromLinearSrgb(rgb));
     if (!roughness.empty()) scene.face_roughness.push_back(rough);
     light_of_face.push_back(shown_light);
+    if (options.shading_normals && !normals.empty()) {
+      scene.face_shading_normal.push_back(shadingNormal(fv, scale_x, scale_y));
+      faces_with_shading_normal += scene.face_shading_normal.back().squaredNorm() > 0.f;
+    }
   }
 }
 
@@ -427,6 +458,7 @@ void NightSceneBuilder::writeReport() {
   report.add("emitting_faces", emitting_faces);
   report.add("emitters", static_cast<std::int64_t>(scene.emitters.size()));
   report.add("faces_without_pixel", faces_without_pixel);
+  report.add("faces_with_shading_normal", faces_with_shading_normal);
   report.add("hidden_faces_under_lights", hidden_faces_under_lights);
   report.add("faces_off_light_depth", faces_off_light_depth);
   report.add("flux_light_faces_edge_on", faces_seen_edge_on);
@@ -455,11 +487,14 @@ void NightSceneBuilder::writeReport() {
 }  // namespace
 
 NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, const cv::Mat& roughness,
-                           const cv::Mat& day_image, const LightRecord& record, const NightSceneOptions& options) {
+                           const cv::Mat& day_image, const LightRecord& record, const NightSceneOptions& options,
+                           const cv::Mat& normals) {
+  if (!normals.empty() && normals.type() != CV_32FC3)
+    throw std::invalid_argument("buildNightScene: normals must be CV_32FC3");
   Stopwatch clock;
   NightScene out;
   out.report.name = "scene";
-  NightSceneBuilder builder(depth_mesh, roughness, record, options, out);
+  NightSceneBuilder builder(depth_mesh, roughness, normals, record, options, out);
   builder.chooseResolution(albedo);
   builder.prepareReflectance(albedo, day_image);
   builder.mapLights();

@@ -33,7 +33,12 @@ std::vector<QuadShading> buildSlotShading(const RenderScene& scene, const std::v
                                       .cast<double>()
                                       .cross((scene.vertices[f[2]] - scene.vertices[f[0]]).cast<double>());
     const double norm = cross.norm();
-    const Eigen::Vector3f normal = norm > 0 ? Eigen::Vector3f((cross / norm).cast<float>()) : Eigen::Vector3f::UnitZ();
+    Eigen::Vector3f normal = norm > 0 ? Eigen::Vector3f((cross / norm).cast<float>()) : Eigen::Vector3f::UnitZ();
+    if (face < scene.face_shading_normal.size()) {
+      const Eigen::Vector3f& shading = scene.face_shading_normal[face];
+      const float length = shading.norm();
+      if (std::isfinite(length) && length > 0.5f) normal = shading / length;
+    }
     SlotShading& s = table[slot / 2].half[slot % 2];
     s.reflectance = scene.face_reflectance[face];
     s.roughness = has_roughness ? scene.face_roughness[face] : 0.5f;

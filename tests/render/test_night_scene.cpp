@@ -506,3 +506,40 @@ TEST(NightScene, AProxyAKilometreAwayKeepsItsFluxAndFiniteCorners) {
                       solo::profileProjectedSolidAngle(solo::EmissionProfile::CosineLobe);
   EXPECT_NEAR(flux, 6000.0, 6000.0 * 1e-4);
 }
+
+TEST(NightScene, FacesShadeWithTheNormalMapsMeanNormalWhereItFacesTheCamera) {
+  // A plane 4 m away with depth noise that folds it (column 3 one metre nearer): the normal map
+  // says the plane faces the camera, (0, 0, -1), except in row 0, whose normals face away.
+  cv::Mat depth(4, 6, CV_32F, cv::Scalar(4.f));
+  depth.col(3).setTo(3.7f);
+  const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
+  cv::Mat normals(4, 6, CV_32FC3, cv::Scalar(0.f, 0.f, -1.f));
+  normals.row(0).setTo(cv::Scalar(0.f, 0.f, 1.f));
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, solo::LightRecord{}, options, normals);
+  const auto& shading = night.scene.face_shading_normal;
+  ASSERT_EQ(shading.size(), night.scene.faces.size());
+  std::int64_t with_map = 0;
+  for (std::size_t f = 0; f < shading.size(); ++f) {
+    bool touches_row0 = false;
+    for (const std::uint32_t v : night.scene.faces[f]) {
+      const Eigen::Vector3f& p = night.scene.vertices[v];
+      touches_row0 = touches_row0 || std::abs(p.y() / p.z() * 10.f + 1.5f) < 1e-3f;  // v = 0
+    }
+    if (touches_row0) {
+      // Mean of (0,0,1) and (0,0,-1) normals: too short (disagreeing), or facing away.
+      EXPECT_EQ(shading[f], Eigen::Vector3f::Zero()) << "face " << f;
+    } else {
+      EXPECT_NEAR((shading[f] - Eigen::Vector3f(0.f, 0.f, -1.f)).norm(), 0.f, 1e-6f) << "face " << f;
+      ++with_map;
+    }
+  }
+  EXPECT_EQ(with_map, 2 * 5 * 2);  // rows 1-3: two rows of five quads
+  EXPECT_EQ(countMetric(night.report, "faces_with_shading_normal"), with_map);
+  // Off, or without a normal map: no shading normals.
+  options.shading_normals = false;
+  EXPECT_TRUE(solo::buildNightScene(mesh, {}, {}, {}, solo::LightRecord{}, options, normals).scene.face_shading_normal.empty());
+  options.shading_normals = true;
+  EXPECT_TRUE(solo::buildNightScene(mesh, {}, {}, {}, solo::LightRecord{}, options).scene.face_shading_normal.empty());
+}

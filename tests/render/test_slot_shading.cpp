@@ -84,3 +84,20 @@ TEST(SlotShading, EachSlotCarriesItsTrianglesData) {
   }
   EXPECT_THROW(solo::buildSlotShading(scene, {0, 1, 5, 5}, {-1, -1, -1}), std::invalid_argument);
 }
+
+// A shading normal replaces the face's own normal in its slot; a zero or non-finite one, or a
+// face beyond the list's end, keeps the face's.
+TEST(SlotShading, AShadingNormalReplacesTheFacesOwn) {
+  solo::RenderScene scene;
+  scene.vertices = {{0, 0, 5}, {1, 0, 5}, {0, 1, 5}};  // normal (0, 0, 1)
+  scene.faces = {{0, 1, 2}, {0, 1, 2}, {0, 1, 2}, {0, 1, 2}};
+  scene.face_reflectance.assign(4, Eigen::Vector3f::Constant(0.5f));
+  const Eigen::Vector3f tilted = Eigen::Vector3f(0.f, -0.6f, -0.8f);
+  scene.face_shading_normal = {tilted * 2.f, Eigen::Vector3f::Zero(),
+                               Eigen::Vector3f(std::nanf(""), 0.f, 1.f)};
+  const std::vector<solo::QuadShading> table =
+      solo::buildSlotShading(scene, {0, 1, 2, 3}, std::vector<int>(4, -1));
+  EXPECT_LT(angleBetween(solo::decodeOctahedral(table[0].half[0].normal), tilted), 1e-6);
+  for (const auto& s : {table[0].half[1], table[1].half[0], table[1].half[1]})
+    EXPECT_LT(angleBetween(solo::decodeOctahedral(s.normal), Eigen::Vector3f::UnitZ()), 1e-6);
+}

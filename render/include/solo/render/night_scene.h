@@ -24,6 +24,10 @@ struct NightSceneOptions {
   /// A flux light (a compact lamp) whose mesh faces cover more than this many times the area
   /// its record measured emits from its pixels on the record's plane instead (night_scene.cpp).
   double max_flux_area_ratio = 2.0;
+  /// Faces made from pixels shade with the normal map's mean normal at their three pixels
+  /// (where it faces the camera) instead of their own: depth noise folds a surface seen at
+  /// grazing, and a fold's face turned from the lamps rendered as a black speck.
+  bool shading_normals = true;
 };
 
 struct NightScene {
@@ -37,8 +41,10 @@ struct NightScene {
 /// emit nothing. The render camera is at the albedo's (else the record's, else the mesh's)
 /// resolution; the mesh may come from a depth map downsampled by an integer factor (its pixel
 /// coordinates are scaled to the maps). Units: emitted luminance in cd/m^2 = render units
-/// (docs/lighting.md).
+/// (docs/lighting.md). normals: CV_32FC3 unit camera-frame normals at the maps' resolution
+/// (the refined depth's predicted normals), or empty: the faces shade with their own normals.
 NightScene buildNightScene(const DepthMesh& mesh, const cv::Mat& albedo, const cv::Mat& roughness,
-                           const cv::Mat& day_image, const LightRecord& record, const NightSceneOptions& options = {});
+                           const cv::Mat& day_image, const LightRecord& record, const NightSceneOptions& options = {},
+                           const cv::Mat& normals = cv::Mat());
 
 }  // namespace solo

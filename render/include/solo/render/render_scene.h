@@ -51,6 +51,10 @@ struct RenderScene {
   std::vector<Eigen::Vector3f> face_reflectance;    ///< per face, XYZ relative to E, each in [0, 1]
   std::vector<float> face_roughness;                ///< per face in [0, 1]; empty = no roughness map
   std::vector<std::int32_t> face_emitter;           ///< per face: index into emitters, or -1; empty = none
+  /// Per face, a unit shading normal used instead of the face's own (its geometry is unchanged:
+  /// rays still hit the face); a zero or non-finite entry, or a face beyond the vector's end,
+  /// keeps the face's normal.
+  std::vector<Eigen::Vector3f> face_shading_normal;
   std::vector<Emitter> emitters;
   std::vector<RectangleLight> rectangle_lights;
   Eigen::Vector3f sky_radiance{0.f, 0.f, 0.f};      ///< seen by rays that leave the scene; 0 = black sky
