@@ -221,7 +221,9 @@ void requireMeshHeaderFitsFile(const fs::path& file, std::uintmax_t file_size_by
   std::uint64_t need_bytes = 0;
   for (const ElementBound& element : elements) {
     std::uint64_t element_bytes = 0;
-    if (__builtin_mul_overflow(element.count, element.min_bytes, &element_bytes) ||
+    // An element without properties takes no bytes, yet CGAL's reader loops over its count.
+    const std::uint64_t item_bytes = std::max<std::uint64_t>(element.min_bytes, 1);
+    if (__builtin_mul_overflow(element.count, item_bytes, &element_bytes) ||
         __builtin_add_overflow(need_bytes, element_bytes, &need_bytes) || need_bytes > file_size_bytes)
       throw InputError(file, "cannot read as a mesh: header declares " + std::to_string(element.count) + " " +
                                  element.name + ", more than the file's " + std::to_string(file_size_bytes) +

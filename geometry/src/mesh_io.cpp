@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <stdexcept>
 
 namespace fs = std::filesystem;
 
@@ -77,7 +78,12 @@ TriangleMesh readMesh(const fs::path& file, MeshReadStats* stats) {
   if (lowercaseExtension(file) == ".stl") requireFiniteBinaryStlVertices(file);
   // CGAL prints some of its parse errors on stderr: they become part of solo's one error line.
   StderrCapture capture;
-  const bool read = CGAL::IO::read_polygon_soup(file.string(), points, polygons);
+  bool read = false;
+  try {
+    read = CGAL::IO::read_polygon_soup(file.string(), points, polygons);
+  } catch (const std::length_error&) {  // a PLY list whose (signed) size reads negative
+    throw InputError(file, "cannot read as a mesh: a list declares a negative or impossible size (corrupt file)");
+  }
   const std::string cgal_text = joinedLines(capture.finish());
   if (!read)
     throw InputError(file, "cannot read as a mesh: malformed or truncated" +

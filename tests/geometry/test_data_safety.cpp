@@ -500,6 +500,22 @@ TEST(FuzzFindings, PlyVertexCoordinatesMustBeFloatScalars) {
   writeText(dir / "second.ply", "ply\nelement vertex 1\nproperty float x\nend_header\n0\n");
   EXPECT_NE(messageOf([&] { solo::readMesh(dir / "second.ply"); }).find("PLY header has a property before any element"),
             std::string::npos);
+  // fuzz_mesh_ply: an element without properties and a count of 8888888884 kept CGAL looping.
+  writeText(dir / "empty.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                               "property float z\nelement e 8888888884\nend_header\n0 0 0\n1 0 0\n0 1 0\n");
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "empty.ply"); }).find("header declares 8888888884 e, more than"),
+            std::string::npos);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2.0);
+  // fuzz_mesh_ply: a face list whose signed short size reads -15984 made CGAL resize a vector
+  // to 2^64 - 15984 items (std::length_error escaping the reader).
+  std::string negative = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                         "property float y\nproperty float z\nelement face 1\n"
+                         "property list short int vertex_indices\nend_header\n" + std::string(36, '\0');
+  negative += std::string("\x90\xc1", 2) + std::string(12, '\0');
+  writeText(dir / "negative.ply", negative);
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "negative.ply"); }).find("a list declares a negative or impossible size"),
+            std::string::npos);
   writeText(dir / "count.ply", "ply\nformat ascii 1.0\nelement vertex 3x\nproperty float x\nend_header\n0\n1\n2\n");
   EXPECT_NE(messageOf([&] { solo::readMesh(dir / "count.ply"); }).find("PLY element vertex has the count \"3x\""),
             std::string::npos);
