@@ -59,6 +59,7 @@ std::string nightConfigText(const NightOptions& options) {
   flag("ablation", o.lights.instantiation.ablation);
   if (o.light_record) path("lights", *o.light_record);
   flag("headlights", o.night_scene.headlights);
+  flag("shading-normals", o.night_scene.shading_normals);
   line("headlight-flux", number(o.night_scene.headlight_flux_lm));
   line("light-sampler", quoted("light-sampler", lightSamplerName(o.render.light_sampler)));
   line("sampler", quoted("sampler", samplerKindName(o.render.sampler)));
