@@ -1,4 +1,5 @@
 #include "solo/core/image_io.h"
+#include "solo/core/scene_from_arrays.h"
 
 #include "solo/core/atomic_file.h"
 #include "solo/core/error.h"
@@ -666,11 +667,10 @@ cv::Mat readDepth(const fs::path& file, double scale_m_per_unit, DepthReadStats*
   return depth;
 }
 
-cv::Mat readNormals(const fs::path& file, NormalReadStats* stats, ImageFileInfo* info) {
-  ImageFileInfo local;
-  cv::Mat native = readNative(file, local);
+cv::Mat decodeNormals(const cv::Mat& native_in, const fs::path& source, NormalReadStats& s) {
+  cv::Mat native = native_in;
   if (native.channels() != 3 && native.channels() != 4)
-    throw InputError(file, "normals need 3 channels (x, y, z), found " + std::to_string(native.channels()));
+    throw InputError(source, "normals need 3 channels (x, y, z), found " + std::to_string(native.channels()));
   if (native.channels() == 4) {
     std::vector<cv::Mat> planes;
     cv::split(native, planes);
@@ -679,7 +679,7 @@ cv::Mat readNormals(const fs::path& file, NormalReadStats* stats, ImageFileInfo*
   }
   const bool encoded = native.depth() == CV_8U || native.depth() == CV_16U;
   if (!encoded && native.depth() != CV_32F && native.depth() != CV_64F)
-    throw InputError(file, "normals must be 8/16-bit or float, found " + local.pixel_type);
+    throw InputError(source, "normals must be 8/16-bit or float");
   const double code_max = maxCode(native.depth());
   // Length tolerance: quantisation of the format, or float rounding for float files.
   const double tolerance = encoded ? 2.0 * std::sqrt(3.0) / code_max : 1e-3;
@@ -687,7 +687,6 @@ cv::Mat readNormals(const fs::path& file, NormalReadStats* stats, ImageFileInfo*
   cv::Mat values;
   native.convertTo(values, CV_64FC3);
   cv::Mat normals(values.rows, values.cols, CV_32FC3);
-  NormalReadStats s;
   for (int y = 0; y < values.rows; ++y) {
     const cv::Vec3d* src = values.ptr<cv::Vec3d>(y);
     cv::Vec3f* dst = normals.ptr<cv::Vec3f>(y);
@@ -716,6 +715,18 @@ cv::Mat readNormals(const fs::path& file, NormalReadStats* stats, ImageFileInfo*
       dst[x] = cv::Vec3f(static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]));
     }
   }
+  return normals;
+}
+
+cv::Mat readNormals(const fs::path& file, NormalReadStats* stats, ImageFileInfo* info) {
+  ImageFileInfo local;
+  const cv::Mat native = readNative(file, local);
+  const bool known_depth = native.depth() == CV_8U || native.depth() == CV_16U || native.depth() == CV_32F ||
+                           native.depth() == CV_64F;
+  if ((native.channels() == 3 || native.channels() == 4) && !known_depth)
+    throw InputError(file, "normals must be 8/16-bit or float, found " + local.pixel_type);
+  NormalReadStats s;
+  cv::Mat normals = decodeNormals(native, file, s);
   if (stats) *stats = s;
   if (info) *info = local;
   return normals;

@@ -1,4 +1,5 @@
 #include "solo/core/scene.h"
+#include "solo/core/scene_from_arrays.h"
 
 #include "solo/core/error.h"
 #include "solo/core/input_file.h"
@@ -290,40 +291,9 @@ void setSceneCamera(const SceneManifest& m, Scene& s) {
   } else {
     camera = defaultSceneCamera(s.image.cols, s.image.rows);
     s.camera_is_default = true;
-    std::ostringstream warning;
-    warning << "no camera given: square pixels with ACDC's horizontal field of view of " << std::fixed
-            << std::setprecision(1) << kDefaultHorizontalFovRad * 180.0 / std::acos(-1.0) << " degrees (fx = fy = "
-            << std::setprecision(2) << camera.fx << " px), principal point at the image centre";
-    s.warnings.push_back(warning.str());
+    s.warnings.push_back(defaultCameraWarning(camera));
   }
-  if (camera.width <= 0) {
-    camera.width = s.image.cols;
-    camera.height = s.image.rows;
-  }
-  validateCamera(camera, camera_source);
-  if (camera.width != s.image.cols || camera.height != s.image.rows) {
-    const double a = static_cast<double>(camera.width) / camera.height;
-    const double b = static_cast<double>(s.image.cols) / s.image.rows;
-    if (std::abs(a / b - 1.0) > 0.01)
-      s.warnings.push_back("camera intrinsics are for " + sizeText(camera.width, camera.height) +
-                           ", a different aspect ratio than the image: scaled per axis");
-    camera = camera.scaledTo(s.image.cols, s.image.rows);
-  }
-  s.camera = camera;
-}
-
-/// Valid normals facing away from the camera: visible surfaces have n . (K^-1 (u, v, 1)) < 0,
-/// taken at the normal map's own resolution.
-std::int64_t countBackFacingNormals(const cv::Mat& normals, const PinholeCamera& camera) {
-  const PinholeCamera at_map = camera.scaledTo(normals.cols, normals.rows);
-  std::int64_t back_facing = 0;
-  for (int y = 0; y < normals.rows; ++y)
-    for (int x = 0; x < normals.cols; ++x) {
-      const cv::Vec3f n = normals.at<cv::Vec3f>(y, x);
-      const double along_ray = n[0] * (x - at_map.cx) / at_map.fx + n[1] * (y - at_map.cy) / at_map.fy + n[2];
-      if ((n[0] != 0 || n[1] != 0 || n[2] != 0) && along_ray > 0) ++back_facing;
-    }
-  return back_facing;
+  setCameraForImage(camera, camera_source, s);
 }
 
 // Sets every NaN or infinite value of a float map to 0; returns how many there were. A single
@@ -526,6 +496,44 @@ fs::path groundTruthManifest(const fs::path& manifest_file) {
   if (!m.ground_truth)
     throw InputError(manifest_file, "has no \"ground_truth\" entry: not a synthetic scene (`solo synth` writes one)");
   return *m.ground_truth;
+}
+
+
+std::string defaultCameraWarning(const PinholeCamera& camera) {
+  std::ostringstream warning;
+  warning << "no camera given: square pixels with ACDC's horizontal field of view of " << std::fixed
+          << std::setprecision(1) << kDefaultHorizontalFovRad * 180.0 / std::acos(-1.0) << " degrees (fx = fy = "
+          << std::setprecision(2) << camera.fx << " px), principal point at the image centre";
+  return warning.str();
+}
+
+void setCameraForImage(PinholeCamera camera, const fs::path& source, Scene& s) {
+  if (camera.width <= 0) {
+    camera.width = s.image.cols;
+    camera.height = s.image.rows;
+  }
+  validateCamera(camera, source);
+  if (camera.width != s.image.cols || camera.height != s.image.rows) {
+    const double a = static_cast<double>(camera.width) / camera.height;
+    const double b = static_cast<double>(s.image.cols) / s.image.rows;
+    if (std::abs(a / b - 1.0) > 0.01)
+      s.warnings.push_back("camera intrinsics are for " + sizeText(camera.width, camera.height) +
+                           ", a different aspect ratio than the image: scaled per axis");
+    camera = camera.scaledTo(s.image.cols, s.image.rows);
+  }
+  s.camera = camera;
+}
+
+std::int64_t countBackFacingNormals(const cv::Mat& normals, const PinholeCamera& camera) {
+  const PinholeCamera at_map = camera.scaledTo(normals.cols, normals.rows);
+  std::int64_t back_facing = 0;
+  for (int y = 0; y < normals.rows; ++y)
+    for (int x = 0; x < normals.cols; ++x) {
+      const cv::Vec3f n = normals.at<cv::Vec3f>(y, x);
+      const double along_ray = n[0] * (x - at_map.cx) / at_map.fx + n[1] * (y - at_map.cy) / at_map.fy + n[2];
+      if ((n[0] != 0 || n[1] != 0 || n[2] != 0) && along_ray > 0) ++back_facing;
+    }
+  return back_facing;
 }
 
 }  // namespace solo

@@ -5,6 +5,7 @@
 
 #include <solo/core/error.h>
 #include <solo/core/image_io.h>
+#include <solo/core/scene_from_arrays.h>
 #include <solo/pipeline/data_dir.h>
 #include <solo/pipeline/night_job.h>
 
@@ -129,52 +130,7 @@ cv::Mat depthMap(const py::array& array, double scale_m_per_unit, DepthReadStats
 /// Unit normals as readNormals makes them: 8/16-bit codes v / max * 2 - 1 ((0,0,0) invalid),
 /// float vectors as given; every valid vector renormalised, invalid ones (0,0,0). Always a copy.
 cv::Mat normalMap(const py::array& array, NormalReadStats& s) {
-  cv::Mat native = arrayToMat(array, "normals");
-  if (native.channels() != 3 && native.channels() != 4)
-    throw InputError("normals", "normals need 3 channels (x, y, z), found " + std::to_string(native.channels()));
-  if (native.channels() == 4) {
-    std::vector<cv::Mat> planes;
-    cv::split(native, planes);
-    planes.resize(3);
-    cv::merge(planes, native);
-  }
-  const bool encoded = native.depth() == CV_8U || native.depth() == CV_16U;
-  if (!encoded && native.depth() != CV_32F && native.depth() != CV_64F)
-    throw InputError("normals", "normals must be 8/16-bit or float");
-  const double code_max = maxCode(native.depth());
-  const double tolerance = encoded ? 2.0 * std::sqrt(3.0) / code_max : 1e-3;
-  cv::Mat values;
-  native.convertTo(values, CV_64FC3);
-  cv::Mat normals(values.rows, values.cols, CV_32FC3);
-  for (int y = 0; y < values.rows; ++y) {
-    const cv::Vec3d* src = values.ptr<cv::Vec3d>(y);
-    cv::Vec3f* dst = normals.ptr<cv::Vec3f>(y);
-    for (int x = 0; x < values.cols; ++x) {
-      cv::Vec3d v = src[x];
-      dst[x] = cv::Vec3f(0, 0, 0);
-      if (encoded) {
-        if (v[0] == 0 && v[1] == 0 && v[2] == 0) {
-          ++s.invalid;
-          continue;
-        }
-        v = v * (2.0 / code_max) - cv::Vec3d(1, 1, 1);
-      }
-      if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
-        ++s.invalid;
-        continue;
-      }
-      const double length = cv::norm(v);
-      if (length < 1e-6) {
-        ++s.invalid;
-        continue;
-      }
-      if (std::abs(length - 1.0) > tolerance) ++s.renormalised;
-      v /= length;
-      ++s.valid;
-      dst[x] = cv::Vec3f(static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]));
-    }
-  }
-  return normals;
+  return decodeNormals(arrayToMat(array, "normals"), "normals", s);
 }
 
 /// A scalar map (roughness) as readScalarMap makes it: CV_32F, integer codes divided by their
@@ -236,47 +192,16 @@ void checkLightIds(const cv::Mat& lights) {
 /// The camera of the scene: the dict's (resolution 0: the image's), validated and scaled to the
 /// image, or defaultSceneCamera with loadScene's warning.
 void setCamera(const py::handle& camera, Scene& s) {
-  PinholeCamera c;
   if (camera.is_none()) {
-    c = defaultSceneCamera(s.image.cols, s.image.rows);
+    const PinholeCamera c = defaultSceneCamera(s.image.cols, s.image.rows);
     s.camera_is_default = true;
-    char warning[256];
-    std::snprintf(warning, sizeof warning,
-                  "no camera given: square pixels with ACDC's horizontal field of view of %.1f degrees (fx = fy = "
-                  "%.2f px), principal point at the image centre",
-                  kDefaultHorizontalFovRad * 180.0 / std::acos(-1.0), c.fx);
-    s.warnings.push_back(warning);
+    s.warnings.push_back(defaultCameraWarning(c));
+    setCameraForImage(c, "camera", s);
   } else {
-    c = cameraFromDict(camera, "camera");
+    setCameraForImage(cameraFromDict(camera, "camera"), "camera", s);
   }
-  if (c.width <= 0) {
-    c.width = s.image.cols;
-    c.height = s.image.rows;
-  }
-  validateCamera(c, "camera");
-  if (c.width != s.image.cols || c.height != s.image.rows) {
-    const double a = static_cast<double>(c.width) / c.height;
-    const double b = static_cast<double>(s.image.cols) / s.image.rows;
-    if (std::abs(a / b - 1.0) > 0.01)
-      s.warnings.push_back("camera intrinsics are for " + sizeText(c.width, c.height) +
-                           ", a different aspect ratio than the image: scaled per axis");
-    c = c.scaledTo(s.image.cols, s.image.rows);
-  }
-  s.camera = c;
 }
 
-/// Valid normals facing away from the camera (loadScene's count), at the normal map's resolution.
-std::int64_t countBackFacingNormals(const cv::Mat& normals, const PinholeCamera& camera) {
-  const PinholeCamera at_map = camera.scaledTo(normals.cols, normals.rows);
-  std::int64_t back_facing = 0;
-  for (int y = 0; y < normals.rows; ++y)
-    for (int x = 0; x < normals.cols; ++x) {
-      const cv::Vec3f n = normals.at<cv::Vec3f>(y, x);
-      const double along_ray = n[0] * (x - at_map.cx) / at_map.fx + n[1] * (y - at_map.cy) / at_map.fy + n[2];
-      if ((n[0] != 0 || n[1] != 0 || n[2] != 0) && along_ray > 0) ++back_facing;
-    }
-  return back_facing;
-}
 
 struct SceneArrays {
   py::object image, depth, normals, albedo, roughness, instances, labels, lights, light_groups, camera;

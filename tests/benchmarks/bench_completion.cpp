@@ -2,8 +2,8 @@
 // accuracy of the filled pixels against the exact depth and the time, for a range of relaxation
 // sweeps. One row per scene and setting (median time of three runs), a table on stdout and a CSV.
 // Run (docs/depth-refinement.md):
-//   for s in stereo lidar mono; do build/release/tools/solo synth --seed 3 --size 1920x1080 \
-//     --depth-source $s -o /tmp/c_$s; done
+//   for s in stereo lidar mono; do
+//     build/release/tools/solo synth --seed 3 --size 1920x1080 --depth-source $s -o /tmp/c_$s; done
 //   build/release/tests/benchmarks/bench_completion docs/data/depth_completion.csv /tmp/c_stereo /tmp/c_lidar /tmp/c_mono
 
 #include <solo/core/report.h>
