@@ -114,6 +114,8 @@ python3 - "$work/lights.json" "$corpus/light_record/lights.json" <<'PY'
 import json, sys
 record = json.load(open(sys.argv[1]))
 record.pop("units", None)
+record["scene"] = "scene/scene.json"  # paths relative: the corpus holds no machine's paths
+record["illuminant_table"] = "data/illuminants/night_illuminants.csv"
 record["groups"] = record["groups"][:2]
 ids = {group["id"] for group in record["groups"]}
 record["lights"] = [light for light in record["lights"] if light["group"] in ids]
