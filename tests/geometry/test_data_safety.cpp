@@ -514,11 +514,49 @@ TEST(FuzzFindings, PlyVertexCoordinatesMustBeFloatScalars) {
                          "property list short int vertex_indices\nend_header\n" + std::string(36, '\0');
   negative += std::string("\x90\xc1", 2) + std::string(12, '\0');
   writeText(dir / "negative.ply", negative);
-  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "negative.ply"); }).find("a list declares a negative or impossible size"),
-            std::string::npos);
+  EXPECT_EQ(messageOf([&] { solo::readMesh(dir / "negative.ply"); }),
+            (dir / "negative.ply").string() + ": cannot read as a mesh: PLY face 0 has a list of negative size -15984 (corrupt file)");
   writeText(dir / "count.ply", "ply\nformat ascii 1.0\nelement vertex 3x\nproperty float x\nend_header\n0\n1\n2\n");
   EXPECT_NE(messageOf([&] { solo::readMesh(dir / "count.ply"); }).find("PLY element vertex has the count \"3x\""),
             std::string::npos);
+}
+
+TEST(FuzzFindings, PlyListSizesBeyondTheFileAreRefusedBeforeAllocation) {
+  // fuzz_mesh_ply: a binary face list whose uint size read 4294967289 made CGAL resize a vector
+  // to it (16 GB, out of memory after two minutes).
+  TempDir dir;
+  const std::string header = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                             "element face 2\nproperty list uint int vertex_indices\nend_header\n";
+  const std::string vertices(36, '\0');
+  const std::string triangle = std::string("\x03\0\0\0", 4) + std::string("\0\0\0\0\x01\0\0\0\x02\0\0\0", 12);
+  writeText(dir / "huge.ply", "ply\nformat binary_little_endian 1.0\n" + header + vertices + triangle +
+                                  std::string("\xf9\xff\xff\xff", 4) + std::string(12, '\0'));
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(messageOf([&] { solo::readMesh(dir / "huge.ply"); }),
+            (dir / "huge.ply").string() +
+                ": cannot read as a mesh: PLY face 1 has a list of 4294967289 values, more than the 12 bytes after it can "
+                "hold (corrupt file)");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2.0);
+  // The same list size in big-endian order, and a size that fits exactly: the second face reads.
+  writeText(dir / "big.ply", "ply\nformat binary_big_endian 1.0\n" + header + vertices +
+                                 std::string("\0\0\0\x03", 4) + std::string("\0\0\0\0\0\0\0\x01\0\0\0\x02", 12) +
+                                 std::string("\xff\xff\xff\xf9", 4) + std::string(12, '\0'));
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "big.ply"); }).find("PLY face 1 has a list of 4294967289 values"),
+            std::string::npos);
+  writeText(dir / "fits.ply", "ply\nformat binary_little_endian 1.0\n" + header + vertices + triangle + triangle);
+  EXPECT_EQ(solo::readMesh(dir / "fits.ply").faces.size(), 2u);
+  // ASCII: a uint size of 4e9, and an int size beyond int32 (the extraction fails and leaves
+  // INT_MAX, which CGAL's reader still sized its vector from).
+  const std::string ascii = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                            "property float z\nelement face 1\nproperty list ";
+  writeText(dir / "ascii.ply", ascii + "uint int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n4000000000 0 1 2\n");
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "ascii.ply"); }).find("PLY face 0 has a list of 4000000000 values"),
+            std::string::npos);
+  writeText(dir / "wide.ply", ascii + "int int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n9999999999 0 1 2\n");
+  EXPECT_NE(messageOf([&] { solo::readMesh(dir / "wide.ply"); }).find("PLY face 0 has a list of 2147483647 values"),
+            std::string::npos);
+  writeText(dir / "plain.ply", ascii + "uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2");
+  EXPECT_EQ(solo::readMesh(dir / "plain.ply").faces.size(), 1u);
 }
 
 TEST(FuzzFindings, OffFacesWithNegativeHugeOrMissingIndicesAndOffVariantsAreRefused) {
