@@ -42,6 +42,18 @@ bool fitPlane(const std::vector<WeightedPoint>& points, const std::vector<double
   return true;
 }
 
+/// The sum of the normal map over the light's pixels (invalid pixels add zero); zero without a map.
+Eigen::Vector3d normalMapSum(const Light& light, const cv::Mat& normals) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  if (!normals.empty())
+    for (const PixelRun& run : light.runs)
+      for (int x = run.first_col; x <= run.last_col; ++x) {
+        const cv::Vec3f n = normals.at<cv::Vec3f>(run.row, x);
+        sum += Eigen::Vector3d(n[0], n[1], n[2]);
+      }
+  return sum;
+}
+
 }  // namespace
 
 const char* normalSourceName(NormalSource source) {
@@ -57,6 +69,23 @@ NormalSource normalSourceFromName(const std::string& name) {
   for (NormalSource s : {NormalSource::NormalMap, NormalSource::PlaneFit, NormalSource::FacingCamera})
     if (name == normalSourceName(s)) return s;
   throw std::invalid_argument("unknown normal source \"" + name + "\"");
+}
+
+const char* lightPlacementName(LightPlacement placement) {
+  switch (placement) {
+    case LightPlacement::Measured: return "measured";
+    case LightPlacement::MovedToSupport: return "moved_to_support";
+    case LightPlacement::SupportDepth: return "support_depth";
+    case LightPlacement::PriorDistance: return "prior_distance";
+  }
+  return "measured";
+}
+
+LightPlacement lightPlacementFromName(const std::string& name) {
+  for (LightPlacement p : {LightPlacement::Measured, LightPlacement::MovedToSupport, LightPlacement::SupportDepth,
+                           LightPlacement::PriorDistance})
+    if (name == lightPlacementName(p)) return p;
+  throw std::invalid_argument("unknown light placement \"" + name + "\"");
 }
 
 LightDepthBand lightDepthBand(std::vector<double> depths_m) {
@@ -112,13 +141,7 @@ std::vector<LightGeometry> measureLightGeometry(const LightGroupTree& tree, cons
     Eigen::Vector3d centroid, normal;
     bool plane = fitPlane(points, weights, centroid, normal);
     NormalSource source = plane ? NormalSource::PlaneFit : NormalSource::FacingCamera;
-    Eigen::Vector3d mean_normal = Eigen::Vector3d::Zero();
-    if (!normals.empty())
-      for (const PixelRun& run : tree.lights[i].runs)
-        for (int x = run.first_col; x <= run.last_col; ++x) {
-          const cv::Vec3f n = normals.at<cv::Vec3f>(run.row, x);
-          mean_normal += Eigen::Vector3d(n[0], n[1], n[2]);
-        }
+    const Eigen::Vector3d mean_normal = normalMapSum(tree.lights[i], normals);
     if (mean_normal.norm() > 1e-6) {
       normal = mean_normal.normalized();
       if (normal.dot(centroid) > 0) normal = -normal;
@@ -156,6 +179,43 @@ std::vector<LightGeometry> measureLightGeometry(const LightGroupTree& tree, cons
     g.normal_source = source;
   }
   return result;
+}
+
+LightGeometry lightGeometryAtDepth(const Light& light, double depth_m, const PinholeCamera& camera,
+                                   const LightGeometryOptions& options, const cv::Mat& normals,
+                                   const Eigen::Vector3d& fallback_normal) {
+  CV_Assert(normals.empty() || normals.type() == CV_32FC3);
+  LightGeometry g;
+  if (!(depth_m > 0) || !std::isfinite(depth_m) || light.runs.empty()) return g;
+  const double min_cosine = std::cos(options.max_incidence_deg * M_PI / 180.0);
+  std::vector<Eigen::Vector3d> rays;
+  Eigen::Vector3d mean_ray = Eigen::Vector3d::Zero();
+  for (const PixelRun& run : light.runs)
+    for (int x = run.first_col; x <= run.last_col; ++x) {
+      rays.emplace_back((x - camera.cx) / camera.fx, (run.row - camera.cy) / camera.fy, 1.0);
+      mean_ray += rays.back();
+    }
+  const Eigen::Vector3d map_normal = normalMapSum(light, normals);
+  Eigen::Vector3d normal = -mean_ray.normalized();
+  g.normal_source = NormalSource::FacingCamera;
+  if (map_normal.norm() > 1e-6) {
+    normal = map_normal.normalized();
+    if (normal.dot(mean_ray) > 0) normal = -normal;
+    g.normal_source = NormalSource::NormalMap;
+  } else if (fallback_normal.norm() > 1e-6) {
+    normal = fallback_normal.normalized();
+    if (normal.dot(mean_ray) > 0) normal = -normal;
+  }
+  Eigen::Vector3d weighted_sum = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& ray : rays) {
+    const double cosine_times_ray = std::max(std::abs(normal.dot(ray)), min_cosine * ray.norm());
+    const double a = depth_m * depth_m / (camera.fx * camera.fy * cosine_times_ray);
+    g.area_m2 += a;
+    weighted_sum += a * depth_m * ray;
+  }
+  g.centroid_m = weighted_sum / g.area_m2;
+  g.normal = normal;
+  return g;
 }
 
 cv::Mat resampleNormals(const cv::Mat& normals, cv::Size size) {

@@ -1,11 +1,14 @@
 #include "solo/lighting/light_record.h"
 
+#include "solo/lighting/light_priors.h"
+
 #include <solo/core/atomic_file.h>
 #include <solo/core/error.h>
 #include <solo/core/input_file.h>
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -134,6 +137,8 @@ std::string lightRecordJson(const LightRecord& record) {
     o["centroid_m"] = vector3(g.centroid_m);
     o["normal"] = vector3(g.normal);
     o["normal_source"] = normalSourceName(g.normal_source);
+    o["placement"] = lightPlacementName(g.placement);
+    o["implausible"] = lightPriorCheckNames(g.implausible);
     o["bbox"] = rect(l.bbox);
     ordered_json runs = ordered_json::array();
     for (const PixelRun& r : l.runs) runs.push_back(ordered_json::array({r.row, r.first_col, r.last_col}));
@@ -242,6 +247,13 @@ LightGeometry readLightGeometry(const json& o, const Reader& r, const std::strin
   if (o.contains("normal")) g.normal = r.vector(o, "normal", where);
   try {
     g.normal_source = normalSourceFromName(o.value("normal_source", "facing_camera"));
+    if (o.contains("placement")) g.placement = lightPlacementFromName(r.text(o, "placement", where));
+    if (o.contains("implausible")) {
+      const json& checks = o.at("implausible");
+      if (!checks.is_array() || !std::all_of(checks.begin(), checks.end(), [](const json& c) { return c.is_string(); }))
+        r.fail(where, "\"implausible\" must be an array of check names");
+      g.implausible = lightPriorChecksFromNames(checks.get<std::vector<std::string>>());
+    }
   } catch (const std::invalid_argument& e) {
     r.fail(where, e.what());
   }

@@ -3,6 +3,7 @@
 #include <solo/core/srgb.h>
 #include <solo/lighting/colorimetry.h>
 #include <solo/lighting/light_geometry.h>
+#include <solo/lighting/light_priors.h>
 
 #include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
@@ -68,7 +69,8 @@ struct NightSceneBuilder {
   std::int64_t hidden_faces_under_lights = 0, faces_seen_edge_on = 0, emitting_faces = 0, faces_without_pixel = 0,
                faces_off_light_depth = 0;
   std::map<std::string, std::int64_t> lights_on_by_category;
-  std::int64_t lights_on_without_faces = 0, light_proxies = 0, light_proxies_for_area = 0;
+  std::int64_t lights_on_without_faces = 0, lights_on_not_emitting = 0, light_proxies = 0, light_proxies_for_area = 0,
+               light_proxies_moved = 0;
   double flux_area_mesh_m2 = 0, flux_area_record_m2 = 0, luminance_area_mesh_m2 = 0, luminance_area_record_m2 = 0;
   double proxy_area_m2 = 0;
 
@@ -138,8 +140,7 @@ void NightSceneBuilder::mapLights() {
 
   light_on.assign(record.tree.lights.size(), false);
   for (std::size_t i = 0; i < record.tree.lights.size(); ++i) {
-    const LightState& state = record.instantiation.lights[i];
-    light_on[i] = state.on && state.strength > 0 && std::isfinite(state.strength);
+    light_on[i] = lightIsLit(record.instantiation.lights[i]);
   }
   seen_faces.resize(record.tree.lights.size());
   nearest_depth_m = cv::Mat(height, width, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
@@ -319,7 +320,7 @@ double NightSceneBuilder::addProxy(std::size_t i) {
   const double min_incidence_cosine = std::cos(85.0 * 3.14159265358979 / 180.0);
   if (!lights_match || i >= record.geometry.size()) return 0;  // the runs are pixels of scene.camera's grid
   const LightGeometry& geometry = record.geometry[i];
-  if (!geometry.valid() || !geometry.centroid_m.allFinite() || !(geometry.centroid_m.z() > 0) ||
+  if (!geometry.positioned() || !geometry.centroid_m.allFinite() || !(geometry.centroid_m.z() > 0) ||
       !geometry.normal.allFinite() || !(geometry.normal.norm() > 0.5))
     return 0;
   const PinholeCamera& camera = scene.camera;
@@ -386,7 +387,13 @@ double NightSceneBuilder::addProxy(std::size_t i) {
 // a quad on the record's plane (its centroid and normal, with the 85 degree incidence limit
 // the record's area uses; past it the plane faces the camera), moved toward the camera by
 // 1 cm + 0.2 % of its distance so that it lies in front of the surface behind it. It covers
-// exactly the light's pixels, so the light-id AOV and the labels still agree.
+// exactly the light's pixels, so the light-id AOV and the labels still agree. A light the
+// physical priors moved onto its support (light_priors.h) emits from its proxy too: its faces lie
+// where its own depth put it. A light without valid depth has a record plane at a prior depth.
+//
+// lights_on_without_faces counts every light that is on and shows no mesh face, whether it then
+// emits from its proxy or not; lights_on_not_emitting those of them without a usable record
+// plane (only a record made without priors, or at another resolution), which emit nothing.
 void NightSceneBuilder::addEmitters() {
   emitter_of_light.assign(record.tree.lights.size(), -1);
   for (std::size_t i = 0; i < record.tree.lights.size(); ++i) {
@@ -396,17 +403,21 @@ void NightSceneBuilder::addEmitters() {
     const bool flux = state.unit == StrengthUnit::FluxLm;
     const double record_area_m2 = i < record.geometry.size() ? record.geometry[i].area_m2 : 0.0;
     const bool too_large = flux && seen_area_m2[i] > options.max_flux_area_ratio * record_area_m2;
+    const bool moved = i < record.geometry.size() && record.geometry[i].placement == LightPlacement::MovedToSupport;
+    const bool without_faces = !(seen_area_m2[i] > 0);
+    lights_on_without_faces += without_faces;
     double emitting_area_m2 = seen_area_m2[i];
-    if (!(seen_area_m2[i] > 0) || too_large) {
+    if (without_faces || too_large || moved) {
       const double area = addProxy(i);
       if (area > 0) {
         for (const SeenFace& face : seen_faces[i]) light_of_face[face.face] = -1;
         emitting_area_m2 = area;
         ++light_proxies;
-        light_proxies_for_area += seen_area_m2[i] > 0;
+        light_proxies_moved += !without_faces && moved;
+        light_proxies_for_area += !without_faces && !moved;
         proxy_area_m2 += area;
-      } else if (!(seen_area_m2[i] > 0)) {
-        ++lights_on_without_faces;
+      } else if (without_faces) {
+        ++lights_on_not_emitting;
         continue;
       }
     }
@@ -462,19 +473,30 @@ void NightSceneBuilder::writeReport() {
   report.add("hidden_faces_under_lights", hidden_faces_under_lights);
   report.add("faces_off_light_depth", faces_off_light_depth);
   report.add("flux_light_faces_edge_on", faces_seen_edge_on);
+  // The same count of lights without depth as the light stage's (countLightsWithoutDepth).
+  const LightsWithoutDepth without_depth = countLightsWithoutDepth(record);
+  report.add("lights_on_without_depth", without_depth.lit);
   report.add("lights_on_without_faces", lights_on_without_faces);
+  report.add("lights_on_not_emitting", lights_on_not_emitting);
   report.add("light_proxies", light_proxies);
   report.add("light_proxies_for_area", light_proxies_for_area);
+  report.add("light_proxies_moved", light_proxies_moved);
   report.add("light_proxies_area", proxy_area_m2, "m2");
   if (light_proxies > 0) {
-    char note[256];
+    char note[400];
     std::snprintf(note, sizeof note,
-                  "%lld lights that are on show no mesh face, and the faces of %lld flux lights cover more than %g "
-                  "times their record's area: they emit from their pixels on their record's plane",
-                  static_cast<long long>(light_proxies - light_proxies_for_area),
-                  static_cast<long long>(light_proxies_for_area), options.max_flux_area_ratio);
+                  "%lld lights that are on show no mesh face (%lld lights that are on have no valid depth), the faces "
+                  "of %lld flux lights cover more than %g times their record's area, and %lld lights were moved onto "
+                  "their support: %lld of them emit from their pixels on their record's plane",
+                  static_cast<long long>(lights_on_without_faces), static_cast<long long>(without_depth.lit),
+                  static_cast<long long>(light_proxies_for_area), options.max_flux_area_ratio,
+                  static_cast<long long>(light_proxies_moved), static_cast<long long>(light_proxies));
     report.notes.push_back(note);
   }
+  if (lights_on_not_emitting > 0)
+    report.warnings.push_back(std::to_string(lights_on_not_emitting) +
+                              " lights that are on show no mesh face and have no position in the light record: they "
+                              "emit nothing");
   report.add("flux_lights_area_mesh", flux_area_mesh_m2, "m2");
   report.add("flux_lights_area_record", flux_area_record_m2, "m2");
   // A luminance light's flux follows its emitting area: the mesh's against the record's.

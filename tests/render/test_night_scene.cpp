@@ -410,7 +410,8 @@ TEST(NightScene, ALightWithoutFacesEmitsItsFluxFromItsPixelsOnTheRecordsPlane) {
   EXPECT_NEAR(flux, 6000.0, 6000.0 * 1e-5);
   EXPECT_EQ(countMetric(night.report, "light_proxies"), 1);
   EXPECT_EQ(countMetric(night.report, "light_proxies_for_area"), 0);
-  EXPECT_EQ(countMetric(night.report, "lights_on_without_faces"), 0);
+  EXPECT_EQ(countMetric(night.report, "lights_on_without_faces"), 1) << "it shows no face, and emits from its proxy";
+  EXPECT_EQ(countMetric(night.report, "lights_on_not_emitting"), 0);
 
   // A record of another resolution than the maps' is not mapped at all: its runs are not the
   // render camera's pixels.
@@ -421,12 +422,52 @@ TEST(NightScene, ALightWithoutFacesEmitsItsFluxFromItsPixelsOnTheRecordsPlane) {
   EXPECT_TRUE(solo::buildNightScene(mesh, albedo, {}, {}, other_size, options).scene.emitters.empty());
   EXPECT_EQ(solo::buildNightScene(mesh, albedo, {}, {}, record, options).scene.emitters.size(), 1u);
 
-  // Without a usable plane (no depth under the light) there is nothing to emit from.
+  // Without a usable plane (no depth under the light and no placement by the light stage's
+  // priors) there is nothing to emit from, and the report says so.
   record.geometry[0] = {};
   const solo::NightScene unlit = solo::buildNightScene(mesh, {}, {}, {}, record, options);
   EXPECT_TRUE(unlit.scene.emitters.empty());
   EXPECT_EQ(countMetric(unlit.report, "lights_on_without_faces"), 1);
+  EXPECT_EQ(countMetric(unlit.report, "lights_on_not_emitting"), 1);
+  EXPECT_EQ(countMetric(unlit.report, "lights_on_without_depth"), 1);
   EXPECT_EQ(countMetric(unlit.report, "light_proxies"), 0);
+  EXPECT_EQ(unlit.report.warnings.size(), 2u) << "the light that emits nothing, and no active light";
+
+  // Placed at a prior depth by the light stage (no depth of its own), it emits from that plane.
+  setRecordPlane(record, {0, 0, -1});
+  record.geometry[0].pixels_with_depth = 0;
+  record.geometry[0].placement = solo::LightPlacement::PriorDistance;
+  const solo::NightScene placed = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  EXPECT_EQ(placed.scene.emitters.size(), 1u);
+  EXPECT_EQ(countMetric(placed.report, "lights_on_without_depth"), 1);
+  EXPECT_EQ(countMetric(placed.report, "lights_on_not_emitting"), 0);
+}
+
+TEST(NightScene, ALightMovedOntoItsSupportEmitsFromItsRecordPlaneNotFromItsFaces) {
+  // The mesh shows the lamp's pixels 4 m away; the light stage moved it onto its support at 3 m.
+  const solo::DepthMesh mesh = planeMesh();
+  solo::LightRecord record =
+      oneLightRecord(solo::LightCategory::StreetLightHighCct, 3, 5, 6000, solo::StrengthUnit::FluxLm, 7001, {0.38, 0.37}, 0);
+  setRecordPlane(record, {0, 0, -1});
+  solo::LightGeometry& g = record.geometry[0];
+  g.centroid_m *= 0.75;
+  g.area_m2 *= 0.75 * 0.75;
+  g.placement = solo::LightPlacement::MovedToSupport;
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  ASSERT_EQ(night.scene.emitters.size(), 1u);
+  EXPECT_EQ(countMetric(night.report, "light_proxies"), 1);
+  EXPECT_EQ(countMetric(night.report, "light_proxies_moved"), 1);
+  EXPECT_EQ(countMetric(night.report, "light_proxies_for_area"), 0);
+  EXPECT_EQ(countMetric(night.report, "lights_on_without_faces"), 0);
+  int emitting = 0;
+  for (std::size_t f = 0; f < night.scene.faces.size(); ++f) {
+    if (night.scene.face_emitter[f] < 0) continue;
+    ++emitting;
+    for (const std::uint32_t v : night.scene.faces[f]) EXPECT_LT(night.scene.vertices[v].z(), 3.0f) << "face " << f;
+  }
+  EXPECT_EQ(emitting, 8) << "the proxy's two quads per row; the mesh's faces at 4 m stay dark";
 }
 
 TEST(NightScene, AFluxLightWhoseFacesOutgrowItsRecordEmitsFromItsPixelsInstead) {

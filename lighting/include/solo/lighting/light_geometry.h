@@ -39,6 +39,17 @@ const char* normalSourceName(NormalSource source);
 /// Inverse; throws std::invalid_argument.
 NormalSource normalSourceFromName(const std::string& name);
 
+/// Where a light's geometry comes from (docs/lighting.md, "Physical priors"): its own depth
+/// ("measured"), its own depth moved onto its supporting surface because the measured position
+/// was implausible for its category ("moved_to_support"), or, for a light without valid depth,
+/// the depth of its supporting surface around it ("support_depth") or its category's prior
+/// distance along its pixels' rays ("prior_distance").
+enum class LightPlacement { Measured, MovedToSupport, SupportDepth, PriorDistance };
+/// "measured", "moved_to_support", "support_depth", "prior_distance".
+const char* lightPlacementName(LightPlacement placement);
+/// Inverse; throws std::invalid_argument.
+LightPlacement lightPlacementFromName(const std::string& name);
+
 struct LightGeometry {
   std::int64_t pixels_with_depth = 0;  ///< pixels of the light with valid depth
   /// Of those, pixels whose depth lies off the light's (beyond median +- max(3 MAD, 0.25 m)):
@@ -48,7 +59,16 @@ struct LightGeometry {
   Eigen::Vector3d centroid_m = Eigen::Vector3d::Zero();  ///< area-weighted, camera frame
   Eigen::Vector3d normal = Eigen::Vector3d(0, 0, -1);    ///< unit, toward the camera
   NormalSource normal_source = NormalSource::FacingCamera;
+  LightPlacement placement = LightPlacement::Measured;
+  /// The checks of its category's priors it fails where it is placed (LightPriorCheck bits,
+  /// light_priors.h); 0 = plausible or not checked.
+  std::uint32_t implausible = 0;
+  /// Has valid depth under it.
   bool valid() const { return pixels_with_depth > 0; }
+  /// Has a position, area and normal: measured, or placed at a prior depth.
+  bool positioned() const {
+    return valid() || placement == LightPlacement::SupportDepth || placement == LightPlacement::PriorDistance;
+  }
 };
 
 /// The depth band of one light: median +- max(3 MAD, 0.25 m) of its depths (the upper median
@@ -69,6 +89,17 @@ LightDepthBand lightDepthBand(std::vector<double> depths_m);
 std::vector<LightGeometry> measureLightGeometry(const LightGroupTree& tree, const cv::Mat& depth_m,
                                                 const PinholeCamera& camera, const LightGeometryOptions& options = {},
                                                 const cv::Mat& normals = cv::Mat());
+
+/// The geometry of a light whose pixels all lie at z-depth `depth_m` (a placement at a prior
+/// depth, for a light without valid depth): area and centroid as measureLightGeometry computes
+/// them, the normal from the normal map's pixels under the light when there are any, else
+/// `fallback_normal` (turned toward the camera) when it is not zero, else facing the camera.
+/// pixels_with_depth stays 0 and placement Measured (the caller says how it
+/// was placed). `normals`: as for measureLightGeometry, or empty. A depth that is not positive
+/// and finite gives the default (no position).
+LightGeometry lightGeometryAtDepth(const Light& light, double depth_m, const PinholeCamera& camera,
+                                   const LightGeometryOptions& options = {}, const cv::Mat& normals = cv::Mat(),
+                                   const Eigen::Vector3d& fallback_normal = Eigen::Vector3d::Zero());
 
 /// Normals at `size`: bilinear resampling, renormalised; invalid (zero) pixels are ignored
 /// like resampleDepthIgnoringInvalid does. CV_32FC3 in and out; empty stays empty.

@@ -2,10 +2,13 @@
 // The pipeline's "lights" stage: from a loaded scene to a light record. Resamples the
 // light, instance and window-group maps to the image resolution (nearest neighbour), builds
 // the group tree, measures each light's geometry on a depth map at the image resolution,
-// instantiates the lights with the illuminant table, and reports what it did.
+// checks it against its category's physical priors (moving implausible lights onto their
+// support, placing lights without depth at a prior depth; light_priors.h), instantiates the
+// lights with the illuminant table, and reports what it did.
 
 #include "solo/lighting/light_geometry.h"
 #include "solo/lighting/light_instantiation.h"
+#include "solo/lighting/light_priors.h"
 #include "solo/lighting/light_record.h"
 
 #include <solo/core/report.h>
@@ -18,6 +21,8 @@ namespace solo {
 struct LightStageOptions {
   InstantiationOptions instantiation;
   LightGeometryOptions geometry;
+  LightPriorOptions priors;          ///< the category priors every light is checked against
+  GroundFitOptions ground_plane;   ///< the priors' ground plane, from the road and sidewalk
   std::filesystem::path illuminant_table;  ///< CSV (data/illuminants/night_illuminants.csv)
 };
 
