@@ -10,6 +10,7 @@
 #include <solo/core/scene.h>
 #include <solo/geometry/depth_mesh.h>
 #include <solo/geometry/depth_metrics.h>
+#include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/mesh_metrics.h>
 #include <solo/geometry/normal_metrics.h>
 #include <solo/geometry/spurious_faces.h>
@@ -112,7 +113,9 @@ std::vector<Field> meshFields(const MeshMetrics& m, const MeshReadStats& read_st
       {"edges", "edges", m.edges, ""},
       {"euler_characteristic", "Euler characteristic V-E+F", m.euler_characteristic, ""},
       {"components", "connected components", m.components, ""},
-      {"closed", "closed", m.closed, ""},
+      {"closed", "closed (watertight)", isWatertight(m), ""},
+      {"open_because", "  what keeps it open", isWatertight(m) ? std::string("nothing") : watertightDefects(m), ""},
+      {"no_boundary", "  no boundary edge", m.closed, ""},
       {"boundary_loops", "boundary loops", m.boundary_loops, ""},
       {"boundary_edges", "boundary edges", m.boundary_edges, ""},
       {"non_manifold_edges", "non-manifold edges", m.non_manifold_edges, ""},

@@ -91,6 +91,7 @@ void requireReplaceableSynthFolder(const fs::path& folder) {
 // Moves the finished `staging` folder onto `target`, replacing a previous one only once the new
 // one is in place: a failure leaves the previous folder as it was.
 void moveFolderIntoPlace(const fs::path& staging, const fs::path& target) {
+  const BlockedTerminationSignals unsplit;  // a signal waits for the swap to end
   std::error_code ec;
   if (!fs::exists(fs::symlink_status(target, ec))) {
     fs::rename(staging, target);
@@ -413,6 +414,7 @@ void writeFolder(const fs::path& output, const SyntheticStreet& street, const Sy
   const fs::path parent = output.parent_path().empty() ? fs::path(".") : output.parent_path();
   const fs::path staging = parent / ("." + output.filename().string() + ".tmp" + std::to_string(::getpid()));
   fs::remove_all(staging);
+  const LiveTemporaryFolder removed_on_signal(staging);
   fs::create_directories(staging / "gt");
   fs::create_directories(staging / "est");
   try {

@@ -437,6 +437,43 @@ TEST(CheckedWrites, ASignalDuringAWriteRemovesTheTemporaryAndEndsByThatSignal) {
   }
 }
 
+TEST(CheckedWrites, ASignalRemovesALiveStagingFolderWithEverythingInIt) {
+  TempDir dir;
+  int pipe_ends[2];
+  ASSERT_EQ(::pipe(pipe_ends), 0);
+  const fs::path staging = dir / ".scene.tmp1";
+  const pid_t child = ::fork();
+  if (child == 0) {
+    solo::removeTemporariesOnSignals();
+    const solo::LiveTemporaryFolder registered(staging);
+    fs::create_directories(staging / "gt" / "deeper");
+    for (int i = 0; i < 300; ++i) writeText(staging / ("map" + std::to_string(i) + ".png"), "x");  // several reads
+    writeText(staging / "gt" / "depth.exr", "x");
+    writeText(staging / "gt" / "deeper" / "mesh.ply", "x");
+    const char byte = 1;
+    if (::write(pipe_ends[1], &byte, 1) != 1) ::_exit(3);
+    while (true) ::pause();
+  }
+  ::close(pipe_ends[1]);
+  char byte = 0;
+  ASSERT_EQ(::read(pipe_ends[0], &byte, 1), 1) << "the child filled its staging folder";
+  ::close(pipe_ends[0]);
+  ASSERT_TRUE(fs::exists(staging / "gt" / "deeper" / "mesh.ply"));
+  ::kill(child, SIGTERM);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << status;
+  EXPECT_EQ(solo::test::listFolder(dir.path()), std::vector<std::string>{});
+}
+
+TEST(CheckedWrites, AStagingFolderNoLongerRegisteredIsLeftAlone) {
+  TempDir dir;
+  { const solo::LiveTemporaryFolder registered(dir / "out"); }
+  writeText(dir / "out" / "kept.txt", "x");
+  solo::removeLiveTemporaries();
+  EXPECT_EQ(solo::test::readText(dir / "out" / "kept.txt"), "x");
+}
+
 TEST(CheckedWrites, AWriteThatEndedLeavesNothingForTheSignalHandler) {
   TempDir dir;
   solo::writeTextAtomically(dir / "a.json", "{}\n");

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -207,6 +208,40 @@ TEST(Evaluation, NormalFilesHaveTheHandComputedAngles) {
   EXPECT_DOUBLE_EQ(number(r, "under_11_25_deg"), 0.5);
 }
 
+TEST(Evaluation, MeshFileIsClosedOnlyWhenWatertight) {
+  // Two unit cubes, each without a boundary edge, the second moved by (1, 1, 0): they touch
+  // along the edge x = y = 1, where faces of both meet: closed in the topological sense only.
+  TempDir dir;
+  solo::TriangleMesh cubes;
+  for (const Eigen::Vector3d& offset : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 0)}) {
+    const auto first = static_cast<std::uint32_t>(cubes.vertices.size());
+    for (int corner = 0; corner < 8; ++corner)
+      cubes.vertices.push_back(offset + Eigen::Vector3d(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1));
+    const std::array<std::array<std::uint32_t, 3>, 12> faces = {{{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6},
+                                                                {0, 1, 4}, {1, 5, 4}, {2, 6, 3}, {3, 6, 7},
+                                                                {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}}};
+    for (const auto& f : faces) cubes.faces.push_back({first + f[0], first + f[1], first + f[2]});
+  }
+  solo::writeMesh(dir / "cubes.off", cubes);
+  solo::MeshFileEvaluationOptions o;
+  o.mesh = dir / "cubes.off";
+  const EvaluationRecord r = solo::evaluateMeshFile(o);
+  EXPECT_EQ(integer(r, "boundary_edges"), 0);
+  EXPECT_EQ(std::get<bool>(valueOf(r, "no_boundary")), true);
+  EXPECT_GT(integer(r, "self_intersecting_pairs"), 0);
+  EXPECT_EQ(std::get<bool>(valueOf(r, "closed")), false);
+  EXPECT_EQ(std::get<std::string>(valueOf(r, "open_because")),
+            std::to_string(integer(r, "self_intersecting_pairs")) + " self-intersecting face pairs");
+  // One cube alone is closed, and nothing keeps it open.
+  cubes.vertices.resize(8);
+  cubes.faces.resize(12);
+  solo::writeMesh(dir / "cube.off", cubes);
+  o.mesh = dir / "cube.off";
+  const EvaluationRecord one = solo::evaluateMeshFile(o);
+  EXPECT_EQ(std::get<bool>(valueOf(one, "closed")), true);
+  EXPECT_EQ(std::get<std::string>(valueOf(one, "open_because")), "nothing");
+}
+
 TEST(Evaluation, MeshFileWithAndWithoutReference) {
   TempDir dir;
   solo::test::writeSquareAndLiftedSquare(dir.path());
@@ -222,6 +257,8 @@ TEST(Evaluation, MeshFileWithAndWithoutReference) {
   EXPECT_EQ(integer(r, "boundary_loops"), 1);
   EXPECT_EQ(integer(r, "boundary_edges"), 4);
   EXPECT_EQ(std::get<bool>(valueOf(r, "closed")), false);
+  EXPECT_EQ(std::get<std::string>(valueOf(r, "open_because")), "1 boundary loops");
+  EXPECT_EQ(std::get<bool>(valueOf(r, "no_boundary")), false);
   EXPECT_EQ(integer(r, "samples"), 500);
   EXPECT_EQ(integer(r, "seed"), 9);
   // Parallel squares 0.25 apart: every distance is 0.25.

@@ -551,3 +551,35 @@ TEST(CliDataSafety, NightStoppedBySigtermAtAnyPointLeavesNoHiddenTemporary) {
   }
   EXPECT_GT(killed, kPoints / 2) << "most runs were stopped mid-way";
 }
+
+TEST(CliDataSafety, SynthStoppedBySigtermWhileWritingLeavesNoStagingFolder) {
+  TempDir dir;
+  const std::vector<std::string> arguments = {"synth", "-o", (dir / "scene").string(), "--size", "640x360",
+                                              "--seed", "5", "--depth-source", "stereo"};
+  // SIGTERM once the hidden staging folder exists, after 0 to 40 ms more: among the map writes.
+  int killed = 0;
+  for (const int delay_ms : {0, 1, 2, 4, 8, 15, 25, 40}) {
+    fs::remove_all(dir / "scene");
+    const pid_t pid = startSolo(arguments);
+    int status = 0;
+    bool staged = false;
+    while (!staged && ::waitpid(pid, &status, WNOHANG) == 0) {
+      staged = !hiddenEntries(dir.path()).empty();
+      if (!staged) std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    if (!staged) continue;  // ended before a poll saw the folder
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+    ::kill(pid, SIGTERM);
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    const bool ended_by_sigterm = WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM;
+    killed += ended_by_sigterm;
+    EXPECT_EQ(hiddenEntries(dir.path()), std::vector<std::string>{}) << "SIGTERM " << delay_ms << " ms into the writes";
+    if (ended_by_sigterm) {
+      EXPECT_FALSE(fs::exists(dir / "scene")) << delay_ms << " ms: a stopped run leaves no folder";
+    } else {
+      EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << delay_ms << " ms: status " << status;
+      EXPECT_TRUE(fs::exists(dir / "scene" / "synth.json")) << delay_ms << " ms";
+    }
+  }
+  EXPECT_GE(killed, 4) << "most runs were stopped while writing";
+}
