@@ -4,6 +4,7 @@
 
 #include <solo/geometry/depth_refinement.h>
 #include <solo/geometry/mesh_cleanup.h>
+#include <solo/lighting/light_proposals.h>
 #include <solo/lighting/light_stage.h>
 #include <solo/pipeline/data_dir.h>
 #include <solo/pipeline/dataset_scenes.h>
@@ -169,6 +170,19 @@ struct LightsOptions {
   LightStageOptions stage;  ///< an empty illuminant_table is the bundled table (data_dir.h)
 };
 int runLights(const LightsOptions& options);
+
+/// `solo propose-lights`: lights for scenes without a light map (lighting/light_proposals.h).
+/// One scene writes lights.png, light_groups.png and proposals.json into `output`; several scenes
+/// one subfolder each, named after the scene's folder.
+struct ProposeLightsOptions {
+  std::vector<std::filesystem::path> scenes;
+  std::filesystem::path output;
+  std::optional<std::filesystem::path> overlay;  ///< the proposals drawn on the day image (file name in each folder)
+  bool evaluate = false;     ///< score against the scenes' exact light maps (`solo synth` scenes)
+  int min_true_pixels = 30;  ///< true lights smaller than this are ignored in the evaluation
+  LightProposalOptions proposals;
+};
+int runProposeLights(const ProposeLightsOptions& options);
 
 struct IlluminantAddOptions {
   std::filesystem::path table;  ///< CSV to append to (created when absent)

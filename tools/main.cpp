@@ -136,6 +136,8 @@ void addNightSceneFlags(CLI::App* night_cmd, NightOptions& night) {
                       "Count self-intersections and non-manifold parts (slow; preset)");
   night_cmd->add_flag("--ablation", night.conversion.lights.instantiation.ablation, "The paper's ablation: every light on, white, one strength");
   night_cmd->add_option("--lights", night.conversion.light_record, "Use this (edited) light record instead of a new draw");
+  night_cmd->add_flag("--propose-lights,!--no-propose-lights", night.conversion.propose_lights,
+                      "Propose lights for a scene without a light map (default on; docs/lighting.md)");
   night_cmd->add_flag("--headlights,!--no-headlights", night.conversion.night_scene.headlights, "Ego-vehicle headlights (default on)");
   night_cmd->add_flag("--shading-normals,!--no-shading-normals", night.conversion.night_scene.shading_normals,
                       "Shade faces made from pixels with the normal map's normals (default on)");
@@ -415,6 +417,19 @@ void addLightsCommand(CLI::App& app, std::vector<Command>& commands) {
   commands.push_back({lights_cmd, [lights_holder] { return runLights(*lights_holder); }});
 }
 
+void addProposeLightsCommand(CLI::App& app, std::vector<Command>& commands) {
+  auto holder = std::make_shared<ProposeLightsOptions>();
+  ProposeLightsOptions& propose = *holder;
+  CLI::App* cmd = app.add_subcommand("propose-lights", "Propose lights for scenes without a light map (docs/lighting.md)");
+  cmd->add_option("scenes", propose.scenes, "Scene manifests (JSON)")->required();
+  cmd->add_option("-o,--output", propose.output, "Folder to write lights.png, light_groups.png, proposals.json")->required();
+  cmd->add_option("--overlay", propose.overlay, "PNG of the proposals drawn on the day image");
+  cmd->add_flag("--evaluate", propose.evaluate, "Score against the scenes' exact light maps (solo synth scenes)");
+  cmd->add_option("--min-true-pixels", propose.min_true_pixels, "Evaluation: ignore true lights smaller than this")
+      ->capture_default_str()->check(CLI::Range(0, 1000000));
+  commands.push_back({cmd, [holder] { return runProposeLights(*holder); }});
+}
+
 void addIlluminantCommands(CLI::App& app, std::vector<Command>& commands) {
   auto illuminant_add_holder = std::make_shared<IlluminantAddOptions>();
   IlluminantAddOptions& illuminant_add = *illuminant_add_holder;
@@ -690,6 +705,7 @@ int main(int argc, char** argv) {
   addEvalCommands(app, commands);
   addSynthCommand(app, commands);
   addLightsCommand(app, commands);
+  addProposeLightsCommand(app, commands);
   addIlluminantCommands(app, commands);
   addMeshCommands(app, commands);
   addPostCommand(app, commands);

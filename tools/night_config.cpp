@@ -58,6 +58,7 @@ std::string nightConfigText(const NightOptions& options) {
   flag("evaluate-mesh", o.mesh.evaluate);
   flag("ablation", o.lights.instantiation.ablation);
   if (o.light_record) path("lights", *o.light_record);
+  flag("propose-lights", o.propose_lights);
   flag("headlights", o.night_scene.headlights);
   flag("shading-normals", o.night_scene.shading_normals);
   line("headlight-flux", number(o.night_scene.headlight_flux_lm));

@@ -333,8 +333,23 @@ Scene sceneForRefinement(const Scene& scene, std::int64_t* changed) {
   return out;
 }
 
-NightScene runNightSceneStages(const Scene& scene, const NightConversionOptions& o,
+// `scene`, or with proposed lights when it has no light map and the options ask for them.
+Scene sceneWithLights(const Scene& scene, const NightConversionOptions& o, const NightConversionCallbacks& callbacks,
+                      NightConversionResult& r) {
+  if (!o.propose_lights || !scene.lights.empty() || o.light_record || scene.labels.empty()) return scene;
+  announce(callbacks, "light_proposals");
+  LightProposalResult proposed = proposeLights(scene, o.proposals);
+  proposed.report.notes.insert(proposed.report.notes.begin(),
+                               "the scene has no light map: " + std::to_string(proposed.proposals.size()) +
+                                   " lights proposed from its labels, day image and depth (docs/lighting.md, "
+                                   "\"Proposals\"; --no-propose-lights: headlights only)");
+  r.stages.push_back(proposed.report);
+  return withProposedLights(scene, proposed);
+}
+
+NightScene runNightSceneStages(const Scene& given_scene, const NightConversionOptions& o,
                                const NightConversionCallbacks& callbacks, NightConversionResult& r) {
+  const Scene scene = sceneWithLights(given_scene, o, callbacks, r);
   announce(callbacks, "refine");
   runRefineStage(scene, o, r);
   announce(callbacks, "mesh");

@@ -9,6 +9,7 @@
 #include <solo/geometry/depth_refinement.h>
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/lighting/light_record.h>
+#include <solo/lighting/light_proposals.h>
 #include <solo/lighting/light_stage.h>
 #include <solo/post/exposure.h>
 #include <solo/post/post_process.h>
@@ -53,6 +54,11 @@ struct NightConversionOptions {
 
   /// An (edited) light record to use instead of a new draw; none: draw from the light map.
   std::optional<std::filesystem::path> light_record;
+  /// A scene without a light map gets proposed lights (street lights, traffic lights, vehicle
+  /// lamps, windows; lighting/light_proposals.h) from its labels, day image and depth; the
+  /// report's "light_proposals" stage says so. false: such a scene has only the headlights.
+  bool propose_lights = true;
+  LightProposalOptions proposals;
   /// The light draw; an empty illuminant_table is the bundled table (data_dir.h).
   LightStageOptions lights;
 
