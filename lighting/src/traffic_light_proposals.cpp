@@ -1,6 +1,7 @@
 // Traffic lights: the lit lamp of every traffic-light housing (Cityscapes class 19). The
 // housing is split into three slots along its long side; the slot whose pixels are the most
-// saturated holds the lamp that is on, and its hue names the category. A housing without a
+// saturated holds the lamp that is on (its pixels: chroma at least a quarter of the slot's
+// 95th percentile, the lamp's shaded face included), and its hue names the category. A housing without a
 // saturated slot (seen from the side or the back) shows no lamp and gets none.
 
 #include "light_proposal_steps.h"
@@ -48,7 +49,7 @@ void proposeTrafficLights(const ProposalInputs& in, const LightProposalOptions&,
   for (int v = 0; v < ids.rows; ++v)
     for (int u = 0; u < ids.cols; ++u)
       if (const int id = ids.at<int>(v, u); id > 0) blobs[static_cast<std::size_t>(id)].emplace_back(u, v);
-  const int min_pixels = std::max(6, static_cast<int>(20 * in.pixel_scale * in.pixel_scale));
+  const int min_pixels = std::max(10, static_cast<int>(40 * in.pixel_scale * in.pixel_scale));
   int dark = 0, proposed = 0;
   for (int i = 1; i < n; ++i) {
     const std::vector<cv::Point>& blob = blobs[static_cast<std::size_t>(i)];
@@ -56,11 +57,12 @@ void proposeTrafficLights(const ProposalInputs& in, const LightProposalOptions&,
     const cv::Rect box(stats.at<int>(i, cv::CC_STAT_LEFT), stats.at<int>(i, cv::CC_STAT_TOP),
                        stats.at<int>(i, cv::CC_STAT_WIDTH), stats.at<int>(i, cv::CC_STAT_HEIGHT));
     const bool vertical = box.height >= box.width;
-    // The 80th percentile of each slot's chroma.
+    // The 80th and 95th percentiles of each slot's chroma.
     std::array<std::vector<double>, 3> slot_chroma;
     for (const cv::Point& p : blob) slot_chroma[slotOf(p, box, vertical)].push_back(chroma(in.image.at<cv::Vec3f>(p)));
     std::array<double, 3> strength{};
-    for (int s = 0; s < 3; ++s) strength[s] = quantile(slot_chroma[s], 0.8);
+    std::array<double, 3> peak{};
+    for (int s = 0; s < 3; ++s) strength[s] = quantile(slot_chroma[s], 0.8), peak[s] = quantile(slot_chroma[s], 0.95);
     const int lit = static_cast<int>(std::max_element(strength.begin(), strength.end()) - strength.begin());
     std::array<double, 3> others = strength;
     others[lit] = 0;
@@ -72,7 +74,7 @@ void proposeTrafficLights(const ProposalInputs& in, const LightProposalOptions&,
     DraftLight light;
     cv::Vec3d colour(0, 0, 0);
     for (const cv::Point& p : blob)
-      if (slotOf(p, box, vertical) == lit && chroma(in.image.at<cv::Vec3f>(p)) >= 0.5 * strength[lit]) {
+      if (slotOf(p, box, vertical) == lit && chroma(in.image.at<cv::Vec3f>(p)) >= 0.25 * peak[lit]) {
         light.pixels.push_back(p);
         colour += cv::Vec3d(in.image.at<cv::Vec3f>(p));
       }
