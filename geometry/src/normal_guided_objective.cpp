@@ -34,22 +34,44 @@ double tangentLoss(TangentLoss loss, double c, double s, double* first, double* 
   } else if (loss == TangentLoss::Cauchy) {
     const double t = 1 + s / c2;
     value = c2 * std::log(t), d1 = 1 / t, d2 = -d1 * d1 / c2;
+  } else if (loss == TangentLoss::DeadZone) {
+    const double root = std::sqrt(s);
+    value = d1 = d2 = 0;
+    if (root > c) value = (root - c) * (root - c), d1 = 1 - c / root, d2 = 0.5 * c / (root * s);
   }
   if (first) *first = d1;
   if (second) *second = d2;
   return value;
 }
 
-void NormalGuidedObjective::coefficients(const Axis& a, double& after, double& self, double& before) {
+NormalGuidedObjectiveOptions NormalGuidedObjectiveOptions::paper() {
+  NormalGuidedObjectiveOptions o;
+  o.tangent_weight = 50, o.data_weight = 1;
+  o.tangent_loss = TangentLoss::Squared;
+  o.tangent_stencil = TangentStencil::Central;
+  o.data_units = DataUnits::Metres;
+  return o;
+}
+
+int NormalGuidedObjective::differences(const Axis& a, Difference out[2]) const {
   if (a.before >= 0 && a.after >= 0) {
-    after = 0.5, self = 0, before = -0.5;
-  } else if (a.after >= 0) {
-    after = 1, self = -1, before = 0;
-  } else if (a.before >= 0) {
-    after = 0, self = 1, before = -1;
-  } else {
-    after = self = before = 0;
+    if (stencil_ == TangentStencil::Central) {
+      out[0] = {0.5, 0, -0.5, 1};
+      return 1;
+    }
+    out[0] = {1, -1, 0, 0.5};
+    out[1] = {0, 1, -1, 0.5};
+    return 2;
   }
+  if (a.after >= 0) {
+    out[0] = {1, -1, 0, 1};
+    return 1;
+  }
+  if (a.before >= 0) {
+    out[0] = {0, 1, -1, 1};
+    return 1;
+  }
+  return 0;
 }
 
 NormalGuidedObjective::NormalGuidedObjective(const cv::Mat& filtered_depth_m, const cv::Mat& normals,
@@ -72,7 +94,13 @@ NormalGuidedObjective::NormalGuidedObjective(const cv::Mat& filtered_depth_m, co
       }
   }
   const int m = unknowns();
-  data_weight_ = m > 0 ? options.data_weight / m : 0;
+  const double f = std::sqrt(camera.fx * camera.fy);
+  data_weight_.resize(m);
+  for (int i = 0; i < m; ++i) {
+    const double footprints_per_m = options.data_units == DataUnits::Footprints ? f / filtered_[i] : 1.0;
+    data_weight_[i] = options.data_weight / m * footprints_per_m * footprints_per_m;
+  }
+  stencil_ = options.tangent_stencil;
   loss_ = options.tangent_loss;
   loss_scale_ = options.tangent_loss_scale > 0 ? options.tangent_loss_scale : 1;
   u_.resize(m), v_.resize(m), tangent_weight_.assign(m, 0.0);
@@ -120,40 +148,46 @@ bool NormalGuidedObjective::evaluate(const double* z, ObjectiveValue& value, dou
         return;
       }
       const double e = zi - filtered_[i];
-      data_sum += e * e;
+      data_sum += data_weight_[i] * e * e;
       to_after_u_[i] = to_before_u_[i] = to_after_v_[i] = to_before_v_[i] = 0;
       own_[i] = 0;
       const double wt = tangent_weight_[i];
       if (wt == 0) continue;
-      // Both axes' residuals first: the loss weighs them by rho'(r_u^2 + r_v^2).
-      double r[2] = {0, 0}, d[2] = {0, 0}, ca[2] = {0, 0}, cs[2] = {0, 0}, cb[2] = {0, 0};
-      bool present[2] = {false, false};
+      // Every difference's residual first: the loss weighs them by rho'(s), s their weighted sum of squares.
+      Difference diff[2][2];
+      int count[2] = {0, 0};
+      double d[2][2] = {}, r[2][2] = {}, s = 0;
       for (int axis = 0; axis < 2; ++axis) {
         const Axis& a = axis == 0 ? u_[i] : v_[i];
-        if (a.before < 0 && a.after < 0) continue;
-        coefficients(a, ca[axis], cs[axis], cb[axis]);
-        d[axis] = ca[axis] * (a.after >= 0 ? z[a.after] : 0.0) + cs[axis] * zi +
-                  cb[axis] * (a.before >= 0 ? z[a.before] : 0.0);
-        r[axis] = a.offset + a.slope_factor * d[axis] / zi;
-        present[axis] = true;
+        count[axis] = differences(a, diff[axis]);
+        for (int k = 0; k < count[axis]; ++k) {
+          const Difference& c = diff[axis][k];
+          d[axis][k] = c.after * (a.after >= 0 ? z[a.after] : 0.0) + c.self * zi +
+                       c.before * (a.before >= 0 ? z[a.before] : 0.0);
+          r[axis][k] = a.offset + a.slope_factor * d[axis][k] / zi;
+          s += c.weight * r[axis][k] * r[axis][k];
+        }
       }
       double weight = wt;  // wt rho'(s): the squared loss's weight scaled by the loss's slope
       if (loss_ == TangentLoss::Squared) {
-        for (int axis = 0; axis < 2; ++axis)
-          if (present[axis]) tangent_sum += wt * r[axis] * r[axis];
+        tangent_sum += wt * s;
       } else {
         double slope_of_loss = 1;
-        tangent_sum += wt * tangentLoss(loss_, loss_scale_, r[0] * r[0] + r[1] * r[1], &slope_of_loss);
+        tangent_sum += wt * tangentLoss(loss_, loss_scale_, s, &slope_of_loss);
         weight = wt * slope_of_loss;
       }
       double own = 0;
       for (int axis = 0; axis < 2; ++axis) {
-        if (!present[axis]) continue;
         const Axis& a = axis == 0 ? u_[i] : v_[i];
-        const double slope = 2 * weight * r[axis] * a.slope_factor / zi;  // d(w rho) / dD
-        (axis == 0 ? to_after_u_ : to_after_v_)[i] = static_cast<float>(slope * ca[axis]);
-        (axis == 0 ? to_before_u_ : to_before_v_)[i] = static_cast<float>(slope * cb[axis]);
-        own += slope * (cs[axis] - d[axis] / zi);
+        double to_after = 0, to_before = 0;
+        for (int k = 0; k < count[axis]; ++k) {
+          const Difference& c = diff[axis][k];
+          const double slope = 2 * weight * c.weight * r[axis][k] * a.slope_factor / zi;  // d(w rho) / dD
+          to_after += slope * c.after, to_before += slope * c.before;
+          own += slope * (c.self - d[axis][k] / zi);
+        }
+        (axis == 0 ? to_after_u_ : to_after_v_)[i] = static_cast<float>(to_after);
+        (axis == 0 ? to_before_u_ : to_before_v_)[i] = static_cast<float>(to_before);
       }
       own_[i] = own;
     }
@@ -166,13 +200,12 @@ bool NormalGuidedObjective::evaluate(const double* z, ObjectiveValue& value, dou
   }
   value.tangent = value.data = 0;
   for (int c = 0; c < kChunks; ++c) value.tangent += tangent_sums[c], value.data += data_sums[c];
-  value.data *= data_weight_;
   value.total = value.tangent + value.data;
   if (!gradient) return true;
   // Pass 2: gather what the neighbours' residuals send to each unknown.
   forChunks(m, [&](int, int begin, int end) {
     for (int i = begin; i < end; ++i) {
-      double g = own_[i] + 2 * data_weight_ * (z[i] - filtered_[i]);
+      double g = own_[i] + 2 * data_weight_[i] * (z[i] - filtered_[i]);
       if (u_[i].before >= 0) g += to_after_u_[u_[i].before];  // i is the "after" of its left neighbour
       if (u_[i].after >= 0) g += to_before_u_[u_[i].after];
       if (v_[i].before >= 0) g += to_after_v_[v_[i].before];
@@ -194,22 +227,27 @@ std::vector<double> NormalGuidedObjective::gaussNewtonDiagonal(const double* z) 
       to_after_u_[i] = to_before_u_[i] = to_after_v_[i] = to_before_v_[i] = 0;
       for (int axis = 0; axis < 2; ++axis) {
         const Axis& a = axis == 0 ? u_[i] : v_[i];
-        if (wt == 0 || (a.before < 0 && a.after < 0)) continue;
-        double ca, cs, cb;
-        coefficients(a, ca, cs, cb);
-        const double d = ca * (a.after >= 0 ? z[a.after] : 0.0) + cs * zi + cb * (a.before >= 0 ? z[a.before] : 0.0);
-        const double k = a.slope_factor / zi;
-        const double curvature = 2 * wt * k * k;
-        (axis == 0 ? to_after_u_ : to_after_v_)[i] = static_cast<float>(curvature * ca * ca);
-        (axis == 0 ? to_before_u_ : to_before_v_)[i] = static_cast<float>(curvature * cb * cb);
-        own += curvature * (cs - d / zi) * (cs - d / zi);
+        Difference diff[2];
+        const int count = wt == 0 ? 0 : differences(a, diff);
+        double to_after = 0, to_before = 0;
+        for (int k = 0; k < count; ++k) {
+          const Difference& c = diff[k];
+          const double d = c.after * (a.after >= 0 ? z[a.after] : 0.0) + c.self * zi +
+                           c.before * (a.before >= 0 ? z[a.before] : 0.0);
+          const double slope = a.slope_factor / zi;
+          const double curvature = 2 * wt * c.weight * slope * slope;
+          to_after += curvature * c.after * c.after, to_before += curvature * c.before * c.before;
+          own += curvature * (c.self - d / zi) * (c.self - d / zi);
+        }
+        (axis == 0 ? to_after_u_ : to_after_v_)[i] = static_cast<float>(to_after);
+        (axis == 0 ? to_before_u_ : to_before_v_)[i] = static_cast<float>(to_before);
       }
       own_[i] = own;
     }
   });
   forChunks(m, [&](int, int begin, int end) {
     for (int i = begin; i < end; ++i) {
-      double h = own_[i] + 2 * data_weight_;
+      double h = own_[i] + 2 * data_weight_[i];
       if (u_[i].before >= 0) h += to_after_u_[u_[i].before];
       if (u_[i].after >= 0) h += to_before_u_[u_[i].after];
       if (v_[i].before >= 0) h += to_after_v_[v_[i].before];
@@ -245,29 +283,35 @@ NormalGuidedObjective::PixelStencil NormalGuidedObjective::stencil(int i) const 
   return s;
 }
 
-void NormalGuidedObjective::tangentResiduals(int i, const double* z_stencil, double residuals[2],
-                                             double jacobian[2][5]) const {
+void NormalGuidedObjective::tangentResiduals(int i, const double* z_stencil, double residuals[kMaxResiduals],
+                                             double jacobian[kMaxResiduals][5]) const {
   const PixelStencil s = stencil(i);
-  const double scale = std::sqrt(tangent_weight_[i]);
   const double zi = z_stencil[0];
+  for (int k = 0; k < kMaxResiduals; ++k) {
+    residuals[k] = 0;
+    for (int j = 0; j < 5; ++j) jacobian[k][j] = 0;
+  }
   for (int axis = 0; axis < 2; ++axis) {
     const Axis& a = axis == 0 ? u_[i] : v_[i];
-    residuals[axis] = 0;
-    for (int k = 0; k < 5; ++k) jacobian[axis][k] = 0;
-    if (a.before < 0 && a.after < 0) continue;
-    double ca, cs, cb;
-    coefficients(a, ca, cs, cb);
-    double d = cs * zi;
     int slot_before = -1, slot_after = -1;
     for (int k = 1; k < s.count; ++k) {
-      if (s.unknown[k] == a.after) slot_after = k, d += ca * z_stencil[k];
-      if (s.unknown[k] == a.before) slot_before = k, d += cb * z_stencil[k];
+      if (s.unknown[k] == a.after) slot_after = k;
+      if (s.unknown[k] == a.before) slot_before = k;
     }
-    const double k = a.slope_factor / zi;
-    residuals[axis] = scale * (a.offset + k * d);
-    jacobian[axis][0] = scale * k * (cs - d / zi);
-    if (slot_after > 0) jacobian[axis][slot_after] = scale * k * ca;
-    if (slot_before > 0) jacobian[axis][slot_before] = scale * k * cb;
+    Difference diff[2];
+    const int count = differences(a, diff);
+    for (int k = 0; k < count; ++k) {
+      const Difference& c = diff[k];
+      double d = c.self * zi;
+      if (slot_after > 0) d += c.after * z_stencil[slot_after];
+      if (slot_before > 0) d += c.before * z_stencil[slot_before];
+      const double scale = std::sqrt(tangent_weight_[i] * c.weight), slope = a.slope_factor / zi;
+      const int row = 2 * axis + k;
+      residuals[row] = scale * (a.offset + slope * d);
+      jacobian[row][0] = scale * slope * (c.self - d / zi);
+      if (slot_after > 0) jacobian[row][slot_after] = scale * slope * c.after;
+      if (slot_before > 0) jacobian[row][slot_before] = scale * slope * c.before;
+    }
   }
 }
 

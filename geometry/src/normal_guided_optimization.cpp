@@ -178,23 +178,25 @@ std::vector<double> solveLbfgs(const NormalGuidedObjective& objective, const std
 
 class PixelTangentCost final : public ceres::CostFunction {
  public:
+  static constexpr int kResiduals = NormalGuidedObjective::kMaxResiduals;
   PixelTangentCost(const NormalGuidedObjective& objective, int pixel, int blocks) : objective_(objective), pixel_(pixel) {
-    set_num_residuals(2);
+    set_num_residuals(kResiduals);
     for (int k = 0; k < blocks; ++k) mutable_parameter_block_sizes()->push_back(1);
   }
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
     const int blocks = static_cast<int>(parameter_block_sizes().size());
-    double z[5] = {}, r[2] = {}, j[2][5] = {};
+    double z[5] = {}, r[kResiduals] = {}, j[kResiduals][5] = {};
     for (int k = 0; k < blocks; ++k) {
       z[k] = parameters[k][0];
       if (!(z[k] > 0)) return false;
     }
     objective_.tangentResiduals(pixel_, z, r, j);
     // Ceres minimises 1/2 sum r^2; the objective is sum w r^2.
-    residuals[0] = std::sqrt(2.0) * r[0], residuals[1] = std::sqrt(2.0) * r[1];
+    for (int row = 0; row < kResiduals; ++row) residuals[row] = std::sqrt(2.0) * r[row];
     if (jacobians)
       for (int k = 0; k < blocks; ++k)
-        if (jacobians[k]) jacobians[k][0] = std::sqrt(2.0) * j[0][k], jacobians[k][1] = std::sqrt(2.0) * j[1][k];
+        if (jacobians[k])
+          for (int row = 0; row < kResiduals; ++row) jacobians[k][row] = std::sqrt(2.0) * j[row][k];
     return true;
   }
 
@@ -203,7 +205,7 @@ class PixelTangentCost final : public ceres::CostFunction {
   int pixel_;
 };
 
-// The tangent loss in Ceres' convention: its cost is 1/2 rho_c(|f|^2) with f = sqrt(2 w) (r_u, r_v),
+// The tangent loss in Ceres' convention: its cost is 1/2 rho_c(|f|^2) with f = sqrt(2 w) (the weighted residuals),
 // and the objective's is w rho(s), s = |f|^2 / (2 w): rho_c(t) = 2 w rho(t / (2 w)).
 class PixelTangentLoss final : public ceres::LossFunction {
  public:
@@ -212,6 +214,9 @@ class PixelTangentLoss final : public ceres::LossFunction {
     const double s = t / (2 * weight_);
     rho[0] = 2 * weight_ * tangentLoss(loss_, scale_, s, &rho[1], &rho[2]);
     rho[2] /= 2 * weight_;
+    // The dead zone is convex (rho'' >= 0) with rho' = 0 inside: Ceres' curvature correction
+    // divides by rho', so it gets the Gauss-Newton model of the scaled residuals instead.
+    if (loss_ == TangentLoss::DeadZone) rho[2] = 0;
   }
 
  private:
@@ -238,7 +243,7 @@ std::vector<double> solvePerPixel(const NormalGuidedObjective& objective, const 
   std::vector<double> z = objective.filteredDepths();
   ceres::Problem problem;
   for (int i = 0; i < objective.unknowns(); ++i) {
-    problem.AddResidualBlock(new PixelDataCost(z[i], objective.dataWeight()), nullptr, &z[i]);
+    problem.AddResidualBlock(new PixelDataCost(z[i], objective.dataWeight(i)), nullptr, &z[i]);
     const NormalGuidedObjective::PixelStencil s = objective.stencil(i);
     if (s.count == 0) continue;
     std::vector<double*> blocks;

@@ -7,7 +7,9 @@
 // Several scenes, the optimisation step only (from the depth refineDepth filters, with its
 // normals and uncertain mask), per solver setting and iteration:
 //   bench_refine --sweep OUT.csv [--config NAME:key=value,...]... SCENE_DIR...
-//   keys: it (iterations), dw (lambda2), tw (lambda1), loss (squared|huber|cauchy), c (loss scale)
+//   keys: objective (paper|default: the whole objective, set before the keys after it),
+//   it (iterations), dw (lambda2), tw (lambda1), loss (squared|huber|cauchy|deadzone),
+//   c (loss scale), stencil (central|onesided), units (metres|footprints)
 
 #include <solo/geometry/adam_depth_optimizer.h>
 #include <solo/geometry/depth_metrics.h>
@@ -114,14 +116,21 @@ SweepConfig parseConfig(const std::string& text) {
     const std::size_t eq = item.find('=');
     const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
     solo::NormalGuidedOptimizationOptions& o = config.options;
-    if (key == "it") o.max_iterations = std::stoi(value);
+    if (key == "objective") o.objective = value == "paper" ? solo::NormalGuidedObjectiveOptions::paper()
+                                                           : solo::NormalGuidedObjectiveOptions{};
+    else if (key == "it") o.max_iterations = std::stoi(value);
     else if (key == "dw") o.objective.data_weight = std::stod(value);
     else if (key == "tw") o.objective.tangent_weight = std::stod(value);
     else if (key == "c") o.objective.tangent_loss_scale = std::stod(value);
     else if (key == "loss")
       o.objective.tangent_loss = value == "huber"    ? solo::TangentLoss::Huber
                                  : value == "cauchy" ? solo::TangentLoss::Cauchy
+                                 : value == "deadzone" ? solo::TangentLoss::DeadZone
                                                      : solo::TangentLoss::Squared;
+    else if (key == "stencil")
+      o.objective.tangent_stencil = value == "onesided" ? solo::TangentStencil::OneSided : solo::TangentStencil::Central;
+    else if (key == "units")
+      o.objective.data_units = value == "footprints" ? solo::DataUnits::Footprints : solo::DataUnits::Metres;
     else throw std::runtime_error("unknown config key " + key);
   }
   return config;
@@ -214,7 +223,7 @@ int main(int argc, char** argv) {
       if (std::string(argv[i]) == "--config" && i + 1 < argc) configs.push_back(parseConfig(argv[++i]));
       else dirs.emplace_back(argv[i]);
     }
-    if (configs.empty()) configs = {parseConfig("default"), parseConfig("paper:loss=squared,dw=1,it=10")};
+    if (configs.empty()) configs = {parseConfig("default"), parseConfig("paper:objective=paper,it=10")};
     return sweep(argv[2], configs, dirs);
   }
   if (argc != 3) {

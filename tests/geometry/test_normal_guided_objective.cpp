@@ -20,7 +20,7 @@ TEST(NormalGuidedObjective, HandComputedThreePixelRow) {
   // Paper model: r_u = n_x + n_z f D / z. D: forward (1), central (1.5), backward (2).
   const cv::Mat depth = (cv::Mat_<float>(1, 3) << 2, 3, 5);
   const cv::Mat normals(1, 3, CV_32FC3, cv::Scalar(0, 0, -1));
-  solo::NormalGuidedObjectiveOptions o;
+  solo::NormalGuidedObjectiveOptions o = solo::NormalGuidedObjectiveOptions::paper();
   o.tangent_model = solo::TangentModel::PaperGraph;
   const solo::NormalGuidedObjective objective(depth, normals, {}, camera(3, 1, 10), o);
   ASSERT_EQ(objective.unknowns(), 3);
@@ -34,6 +34,58 @@ TEST(NormalGuidedObjective, HandComputedThreePixelRow) {
   z[1] = 4;  // data term (4 - 3)^2 / 3
   ASSERT_TRUE(objective.evaluate(z.data(), v));
   EXPECT_NEAR(v.data, 1.0 / 3, 1e-12);
+}
+
+TEST(NormalGuidedObjective, HandComputedOneSidedStencilAndFootprintData) {
+  // As above with the one-sided stencil: the middle pixel has the residuals of D = 1 and D = 2,
+  // half weight each; the ends keep their one difference. Data term in footprints: f = 10, so
+  // (4 - 3) m at d~ = 3 m is 10 / 3 footprints.
+  const cv::Mat depth = (cv::Mat_<float>(1, 3) << 2, 3, 5);
+  const cv::Mat normals(1, 3, CV_32FC3, cv::Scalar(0, 0, -1));
+  solo::NormalGuidedObjectiveOptions o = solo::NormalGuidedObjectiveOptions::paper();
+  o.tangent_model = solo::TangentModel::PaperGraph;
+  o.tangent_stencil = solo::TangentStencil::OneSided;
+  o.data_units = solo::DataUnits::Footprints;
+  const solo::NormalGuidedObjective objective(depth, normals, {}, camera(3, 1, 10), o);
+  std::vector<double> z = {2, 3, 5};
+  solo::ObjectiveValue v;
+  ASSERT_TRUE(objective.evaluate(z.data(), v));
+  const double r0 = -10 * 1.0 / 2, r1a = -10 * 1.0 / 3, r1b = -10 * 2.0 / 3, r2 = -10 * 2.0 / 5;
+  EXPECT_NEAR(v.tangent, 50.0 / 3 * (r0 * r0 + 0.5 * (r1a * r1a + r1b * r1b) + r2 * r2), 1e-6 * v.tangent);
+  z[1] = 4;
+  ASSERT_TRUE(objective.evaluate(z.data(), v));
+  EXPECT_NEAR(v.data, 1.0 / 3 * (10.0 / 3) * (10.0 / 3), 1e-12);
+}
+
+TEST(NormalGuidedObjective, TheCentralStencilCannotSeeAnOddEvenAlternation) {
+  // A fronto-parallel plane at 10 m whose odd columns are 2 % nearer: its central differences
+  // are all 0 (the alternation costs the paper's tangent term nothing), the one-sided ones are not.
+  cv::Mat depth(6, 8, CV_32F, cv::Scalar(10));
+  for (int x = 1; x < 8; x += 2) depth.col(x).setTo(9.8);
+  const cv::Mat normals(6, 8, CV_32FC3, cv::Scalar(0, 0, -1));
+  solo::NormalGuidedObjectiveOptions central = solo::NormalGuidedObjectiveOptions::paper(), one_sided = central;
+  central.tangent_model = one_sided.tangent_model = solo::TangentModel::PaperGraph;
+  one_sided.tangent_stencil = solo::TangentStencil::OneSided;
+  solo::ObjectiveValue vc, vo;
+  const solo::NormalGuidedObjective a(depth, normals, {}, camera(8, 6, 50), central);
+  a.evaluate(a.filteredDepths().data(), vc);
+  const solo::NormalGuidedObjective b(depth, normals, {}, camera(8, 6, 50), one_sided);
+  b.evaluate(b.filteredDepths().data(), vo);
+  // Only the two border columns (one-sided there in both stencils) see the alternation.
+  EXPECT_LT(vc.tangent, 0.3 * vo.tangent);
+  EXPECT_GT(vo.tangent, 10.0) << "every pixel's one-sided slopes are 0.2 m / 10 m * 50 = 1";
+}
+
+TEST(NormalGuidedObjective, DeadZoneLossIsFlatInsideItsTolerance) {
+  double d1 = -1, d2 = -1;
+  EXPECT_EQ(solo::tangentLoss(solo::TangentLoss::DeadZone, 0.1, 0.0081, &d1, &d2), 0.0);
+  EXPECT_EQ(d1, 0.0);
+  EXPECT_NEAR(solo::tangentLoss(solo::TangentLoss::DeadZone, 0.1, 0.09, &d1, &d2), 0.04, 1e-12);  // (0.3 - 0.1)^2
+  EXPECT_NEAR(d1, 1 - 0.1 / 0.3, 1e-12);
+  const double h = 1e-7, s = 0.09;
+  double p1 = 0, m1 = 0;
+  solo::tangentLoss(solo::TangentLoss::DeadZone, 0.1, s + h, &p1), solo::tangentLoss(solo::TangentLoss::DeadZone, 0.1, s - h, &m1);
+  EXPECT_NEAR(d2, (p1 - m1) / (2 * h), 1e-5);
 }
 
 TEST(NormalGuidedObjective, GradientMatchesFiniteDifferences) {
@@ -50,9 +102,16 @@ TEST(NormalGuidedObjective, GradientMatchesFiniteDifferences) {
   normals.at<cv::Vec3f>(5, 5) = {0, 0, 0};
   uncertain.at<uchar>(2, 2) = 255;
   labels.colRange(6, 9).setTo(2);
-  for (const auto model : {solo::TangentModel::Perspective, solo::TangentModel::PaperGraph}) {
-    solo::NormalGuidedObjectiveOptions o;
-    o.tangent_model = model;
+  std::vector<solo::NormalGuidedObjectiveOptions> variants;
+  for (const auto model : {solo::TangentModel::Perspective, solo::TangentModel::PaperGraph})
+    for (const auto stencil : {solo::TangentStencil::Central, solo::TangentStencil::OneSided})
+      for (const auto loss : {solo::TangentLoss::Squared, solo::TangentLoss::Cauchy, solo::TangentLoss::DeadZone}) {
+        solo::NormalGuidedObjectiveOptions o;
+        o.tangent_model = model, o.tangent_stencil = stencil, o.tangent_loss = loss;
+        o.data_units = stencil == solo::TangentStencil::OneSided ? solo::DataUnits::Footprints : solo::DataUnits::Metres;
+        variants.push_back(o);
+      }
+  for (const solo::NormalGuidedObjectiveOptions& o : variants) {
     const solo::NormalGuidedObjective objective(depth, normals, uncertain, camera(9, 7, 8), o, labels);
     std::vector<double> z = objective.filteredDepths();
     for (double& v : z) v *= 1 + 0.05 * unit(random);
@@ -92,7 +151,7 @@ TEST(NormalGuidedObjective, PerspectiveTangentsFitAGroundPlaneThePaperGraphCanno
   cv::Mat depth(h, w, CV_32F, cv::Scalar(0));
   for (int y = 25; y < h; ++y) depth.row(y).setTo(1.5 * 50 / (y - c.cy));
   const cv::Mat normals(h, w, CV_32FC3, cv::Scalar(0, -1, 0));
-  solo::NormalGuidedObjectiveOptions perspective, paper;
+  solo::NormalGuidedObjectiveOptions perspective = solo::NormalGuidedObjectiveOptions::paper(), paper = perspective;
   paper.tangent_model = solo::TangentModel::PaperGraph;
   solo::ObjectiveValue vp, vg;
   const solo::NormalGuidedObjective exact(depth, normals, {}, c, perspective);

@@ -22,6 +22,13 @@ namespace solo {
 
 enum class DepthOptimizer { Ceres, Adam };
 
+/// The paper's optimiser on the paper's objective (NormalGuidedObjectiveOptions::paper()).
+inline AdamOptions paperAdamOptions() {
+  AdamOptions a;
+  a.objective = NormalGuidedObjectiveOptions::paper();
+  return a;
+}
+
 struct DepthRefinementOptions {
   UpsampleOptions upsampling;  ///< .enabled = false: nearest-neighbour resizing only
   bool complete = true;        ///< a depth for every non-sky pixel (depth_completion.h)
@@ -35,7 +42,7 @@ struct DepthRefinementOptions {
   bool normals_from_depth = true;
   DepthOptimizer optimizer = DepthOptimizer::Ceres;
   NormalGuidedOptimizationOptions optimization;  ///< Ceres
-  AdamOptions adam;                              ///< the paper's optimiser
+  AdamOptions adam = paperAdamOptions();         ///< the paper's optimiser and objective
 };
 
 /// Everything at the image resolution.
