@@ -317,7 +317,7 @@ class PriorApplier {
   // of what is implausible, and flagged when something remains.
   void checkAndMove(const Light& light, LightGeometry& g) {
     ++counts(light).checked;
-    const std::uint32_t bad = checkLightPriors(light.category, g, in_.ground);
+    const std::uint32_t bad = checkLightPriors(light.category, g, in_.ground, options_.tolerance);
     g.implausible = bad;
     if (!bad) return;
     const double z = g.centroid_m.z();
@@ -325,7 +325,7 @@ class PriorApplier {
     if (support_z && z > 0 &&
         std::abs(*support_z - z) > std::max(options_.min_move_fraction * z, options_.min_move_m)) {
       LightGeometry moved = scaledGeometry(g, *support_z / z);
-      moved.implausible = checkLightPriors(light.category, moved, in_.ground);
+      moved.implausible = checkLightPriors(light.category, moved, in_.ground, options_.tolerance);
       if (checkCount(moved.implausible) < checkCount(bad)) {
         char what[96];
         std::snprintf(what, sizeof what, "moved from %.1f m to its support at %.1f m depth", z, *support_z);
@@ -373,7 +373,7 @@ class PriorApplier {
     g = placed;
     g.pixels_off_depth = pixels_off_depth;
     g.placement = support_z ? LightPlacement::SupportDepth : LightPlacement::PriorDistance;
-    g.implausible = checkLightPriors(light.category, g, in_.ground);
+    g.implausible = checkLightPriors(light.category, g, in_.ground, options_.tolerance);
     ++(support_z ? counts(light).support_depth : counts(light).prior_distance);
     if (g.implausible) ++counts(light).flagged;
     say(light,
@@ -444,19 +444,20 @@ GroundPlaneFit fitGroundPlaneToRoad(const cv::Mat& depth_m, const cv::Mat& label
   return ground;
 }
 
-std::uint32_t checkLightPriors(LightCategory category, const LightGeometry& geometry, const GroundPlaneFit& ground) {
+std::uint32_t checkLightPriors(LightCategory category, const LightGeometry& geometry, const GroundPlaneFit& ground,
+                               const LightPriorTolerance& tolerance) {
   if (!geometry.positioned() || !geometry.centroid_m.allFinite()) return 0;
   const LightCategoryPrior& prior = lightCategoryPrior(category);
   const double distance = geometry.centroid_m.norm();
   std::uint32_t bits = 0;
   if (!prior.distance_m.contains(distance)) bits |= bit(LightPriorCheck::Distance);
   if (prior.height_m) {
-    const double tolerance = kHeightToleranceM + kHeightToleranceFraction * distance;
-    const ValueRange widened{prior.height_m->min - tolerance, prior.height_m->max + tolerance};
+    const double margin_m = tolerance.height_m + tolerance.height_fraction * distance;
+    const ValueRange widened{prior.height_m->min - margin_m, prior.height_m->max + margin_m};
     if (!widened.contains(ground.heightOf(geometry.centroid_m))) bits |= bit(LightPriorCheck::Height);
   }
   // Only too large an area is implausible: a light partly hidden or cut by the frame shows less.
-  if (prior.area_m2 && !(geometry.area_m2 <= prior.area_m2->max * kAreaToleranceFactor))
+  if (prior.area_m2 && !(geometry.area_m2 <= prior.area_m2->max * tolerance.area_factor))
     bits |= bit(LightPriorCheck::Area);
   if (prior.in_facade) {
     const bool toward_camera = geometry.normal.dot(geometry.centroid_m) < 0;

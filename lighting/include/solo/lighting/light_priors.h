@@ -62,13 +62,16 @@ struct LightCategoryPrior {
 /// The prior of a category (documented in docs/lighting.md with its sources).
 const LightCategoryPrior& lightCategoryPrior(LightCategory category);
 
-/// Height tolerance of the check: the prior range widened by this plus kHeightToleranceFraction of
-/// the light's distance each side (depth errors grow with distance), metres.
-inline constexpr double kHeightToleranceM = 0.2;
-inline constexpr double kHeightToleranceFraction = 0.05;
-/// Area tolerance of the check: an area above the prior's maximum times this is implausible. Too
-/// small an area is not checked: a light partly hidden or cut by the frame shows less of itself.
-inline constexpr double kAreaToleranceFactor = 1.5;
+/// How far past a category's prior range a measured light may lie and still be plausible.
+struct LightPriorTolerance {
+  /// Heights: the prior range widened by height_m plus height_fraction of the light's distance
+  /// each side (depth errors grow with distance), metres.
+  double height_m = 0.2;
+  double height_fraction = 0.05;
+  /// Areas: above the prior's maximum times area_factor is implausible. Too small an area is not
+  /// checked: a light partly hidden or cut by the frame shows less of itself.
+  double area_factor = 1.5;
+};
 /// A facade light's normal lies within this angle of horizontal, degrees.
 inline constexpr double kFacadeNormalTiltDeg = 45;
 
@@ -103,7 +106,8 @@ GroundPlaneFit fitGroundPlaneToRoad(const cv::Mat& depth_m, const cv::Mat& label
 
 /// The checks of `category`'s prior that `geometry` fails (LightPriorCheck bits); 0 for a light
 /// without a position.
-std::uint32_t checkLightPriors(LightCategory category, const LightGeometry& geometry, const GroundPlaneFit& ground);
+std::uint32_t checkLightPriors(LightCategory category, const LightGeometry& geometry, const GroundPlaneFit& ground,
+                               const LightPriorTolerance& tolerance = {});
 
 /// The maps the priors look at, all at the light tree's resolution.
 struct LightPriorInputs {
@@ -121,6 +125,7 @@ struct LightPriorOptions {
   /// fraction of it and more than min_move_m.
   double min_move_fraction = 0.1;
   double min_move_m = 1.0;
+  LightPriorTolerance tolerance;
 };
 
 struct LightPriorCounts {
