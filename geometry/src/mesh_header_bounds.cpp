@@ -91,79 +91,6 @@ std::uint64_t plyScalarBytes(const std::string& type) {
   return it == sizes.end() ? 0 : it->second;
 }
 
-// The whitespace-separated words of a line of an OFF file, a '#' and what follows dropped.
-std::vector<std::string> offWords(const std::string& line) {
-  std::istringstream words(line.substr(0, line.find('#')));
-  std::vector<std::string> out;
-  std::string word;
-  while (words >> word) out.push_back(word);
-  return out;
-}
-
-// The numbers of a face line as CGAL's OFF scanner reads them: doubles by stream extraction
-// up to the first that fails ("2-1" is 2 and -1), a '#' and what follows dropped.
-std::vector<double> offNumbers(const std::string& line) {
-  std::istringstream numbers(line.substr(0, line.find('#')));
-  std::vector<double> out;
-  double value = 0;
-  while (numbers >> value) out.push_back(value);
-  return out;
-}
-
-// An OFF file as far as CGAL's scanner reads it safely: the word OFF and three counts (its
-// colour reading overflows its buffers, its keyword reading takes "OFF$0"); in ASCII, the face
-// lines (found as the scanner finds them: after the counts, one vertex and then one face a
-// non-blank line) with vertex counts and indices from 0 to 2^53, which it converts to size_t
-// (undefined for a negative or too large value), and no more vertices than the line lists (it
-// allocates the count first). A binary OFF is left to the reader.
-void requirePlainOffWithIndices(const fs::path& file) {
-  constexpr double kMaxIndex = 9007199254740992.0;  // 2^53
-  std::ifstream in(file, std::ios::binary);
-  std::string line, rest;  // rest: what follows the counts on their line, CGAL's first vertex line
-  std::vector<std::string> header;
-  while (header.size() < 4 && std::getline(in, line)) {
-    const std::vector<std::string> words = offWords(line);
-    for (std::size_t w = 0; w < words.size(); ++w) {
-      if (header.size() < 4)
-        header.push_back(words[w]);
-      else
-        rest += words[w] + " ";
-    }
-  }
-  if (header.empty() || header[0] != "OFF")
-    throw InputError(file, "cannot read as a mesh: an OFF file starts with the word OFF, this one with \"" +
-                               (header.empty() ? std::string() : header[0]) +
-                               "\" (variants with colours, normals, texture coordinates, 4D or nD points are not read)");
-  if (header.size() > 1 && header[1] == "BINARY") return;
-  const auto vertices = parseCount(header.size() > 1 ? header[1] : ""), faces = parseCount(header.size() > 2 ? header[2] : "");
-  if (header.size() < 4 || !vertices || !faces || !parseCount(header[3]))
-    throw InputError(file, "cannot read as a mesh: OFF counts of vertices, faces and edges are not three whole numbers");
-  std::uint64_t vertex_lines = 0, face = 0;
-  bool pending = !rest.empty();
-  while (face < *faces && (pending || std::getline(in, line))) {
-    if (pending) line = rest;
-    pending = false;
-    if (offWords(line).empty()) continue;
-    if (vertex_lines < *vertices) {
-      ++vertex_lines;
-      continue;
-    }
-    const std::vector<double> numbers = offNumbers(line);
-    const double corners = numbers.empty() ? 0 : numbers[0];
-    if (corners > static_cast<double>(numbers.size()) - 1)  // CGAL sizes the face from it first
-      throw InputError(file, "cannot read as a mesh: face " + std::to_string(face) + " declares more vertices than " +
-                                 "its line lists (" + std::to_string(numbers.size() - 1) + ")");
-    for (std::size_t n = 0; n < numbers.size() && (n == 0 || n <= corners); ++n)
-      if (!(numbers[n] >= 0 && numbers[n] <= kMaxIndex)) {
-        std::ostringstream problem;
-        problem << "cannot read as a mesh: face " << face << " has " << numbers[n] << " as "
-                << (n == 0 ? "its vertex count" : "a vertex index") << ", not a number from 0 to 2^53 (corrupt file)";
-        throw InputError(file, problem.str());
-      }
-    ++face;
-  }
-}
-
 // A vertex coordinate (x, y, z) must be a float or double scalar: CGAL's reader assumes it and
 // dereferences a null pointer otherwise.
 void requireFloatCoordinate(const fs::path& file, bool list, const std::string& type, const std::string& name) {
@@ -443,7 +370,6 @@ void requireMeshHeaderFitsFile(const fs::path& file, std::uintmax_t file_size_by
                                  element.name + ", more than the file's " + std::to_string(file_size_bytes) +
                                  " bytes can hold (truncated or corrupt header)");
   }
-  if (ext == ".off") requirePlainOffWithIndices(file);
   if (ext == ".ply") requirePlyListsFitFile(file, ply, file_size_bytes);
 }
 

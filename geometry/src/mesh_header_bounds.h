@@ -13,9 +13,7 @@ namespace solo {
 /// formats, and headers it cannot parse (left to the reader to reject), pass unchecked. Also
 /// refuses what CGAL's readers would dereference or convert with undefined behaviour: a PLY
 /// header with a property before any element, a non-numeric element count, a vertex
-/// coordinate that is not float or double or no end_header in 64 KiB; an OFF variant other than
-/// plain OFF (COFF, NOFF, ...); an ASCII OFF face whose vertex count or index is negative or
-/// beyond 2^53; a PLY list (ASCII or binary) whose size is negative or needs more bytes than
+/// coordinate that is not float or double or no end_header in 64 KiB; a PLY list (ASCII or binary) whose size is negative or needs more bytes than
 /// the file has after it (CGAL's reader sizes a vector from it first), found by walking the
 /// body as the reader does.
 void requireMeshHeaderFitsFile(const std::filesystem::path& file, std::uintmax_t file_size_bytes);

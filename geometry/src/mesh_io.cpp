@@ -6,11 +6,13 @@
 #include "solo/geometry/triangle_mesh.h"
 
 #include "mesh_header_bounds.h"
+#include "off_reader.h"
 
 #include <CGAL/IO/polygon_soup_io.h>
 #include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -68,6 +70,29 @@ void requireFiniteBinaryStlVertices(const fs::path& file) {
     }
 }
 
+// The file's points and polygons: plain OFF by solo's reader, the other formats by CGAL's
+// (whose parse errors, printed on stderr, become part of solo's one error line).
+void readSoup(const fs::path& file, std::vector<Point>& points, std::vector<std::vector<std::size_t>>& polygons) {
+  if (lowercaseExtension(file) == ".off") {
+    std::vector<std::array<double, 3>> xyz;
+    readPlainOff(file, xyz, polygons);
+    points.reserve(xyz.size());
+    for (const auto& p : xyz) points.emplace_back(p[0], p[1], p[2]);
+    return;
+  }
+  StderrCapture capture;
+  bool read = false;
+  try {
+    read = CGAL::IO::read_polygon_soup(file.string(), points, polygons);
+  } catch (const std::length_error&) {  // a list whose (signed) size reads negative
+    throw InputError(file, "cannot read as a mesh: a list declares a negative or impossible size (corrupt file)");
+  }
+  const std::string cgal_text = joinedLines(capture.finish());
+  if (!read)
+    throw InputError(file, "cannot read as a mesh: malformed or truncated" +
+                               (cgal_text.empty() ? std::string() : " (" + cgal_text + ")"));
+}
+
 }  // namespace
 
 TriangleMesh readMesh(const fs::path& file, MeshReadStats* stats) {
@@ -76,18 +101,7 @@ TriangleMesh readMesh(const fs::path& file, MeshReadStats* stats) {
   std::vector<Point> points;
   std::vector<std::vector<std::size_t>> polygons;
   if (lowercaseExtension(file) == ".stl") requireFiniteBinaryStlVertices(file);
-  // CGAL prints some of its parse errors on stderr: they become part of solo's one error line.
-  StderrCapture capture;
-  bool read = false;
-  try {
-    read = CGAL::IO::read_polygon_soup(file.string(), points, polygons);
-  } catch (const std::length_error&) {  // a PLY list whose (signed) size reads negative
-    throw InputError(file, "cannot read as a mesh: a list declares a negative or impossible size (corrupt file)");
-  }
-  const std::string cgal_text = joinedLines(capture.finish());
-  if (!read)
-    throw InputError(file, "cannot read as a mesh: malformed or truncated" +
-                               (cgal_text.empty() ? std::string() : " (" + cgal_text + ")"));
+  readSoup(file, points, polygons);
   if (points.empty()) throw InputError(file, "mesh has no vertices");
 
   TriangleMesh mesh;
