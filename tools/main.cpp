@@ -141,6 +141,8 @@ void addNightSceneFlags(CLI::App* night_cmd, NightOptions& night) {
   night_cmd->add_flag("--headlights,!--no-headlights", night.conversion.night_scene.headlights, "Ego-vehicle headlights (default on)");
   night_cmd->add_flag("--shading-normals,!--no-shading-normals", night.conversion.night_scene.shading_normals,
                       "Shade faces made from pixels with the normal map's normals (default on)");
+  night_cmd->add_flag("--remove-day-light,!--no-remove-day-light", night.conversion.night_scene.remove_day_light,
+                      "Without an albedo map, take the day's sun and sky out of the day image (default off; docs/rendering.md)");
   night_cmd->add_option("--headlight-flux", night.conversion.night_scene.headlight_flux_lm, "Flux of each headlight, lm")->capture_default_str();
 }
 

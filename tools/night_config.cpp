@@ -61,6 +61,7 @@ std::string nightConfigText(const NightOptions& options) {
   flag("propose-lights", o.propose_lights);
   flag("headlights", o.night_scene.headlights);
   flag("shading-normals", o.night_scene.shading_normals);
+  flag("remove-day-light", o.night_scene.remove_day_light);
   line("headlight-flux", number(o.night_scene.headlight_flux_lm));
   line("light-sampler", quoted("light-sampler", lightSamplerName(o.render.light_sampler)));
   line("sampler", quoted("sampler", samplerKindName(o.render.sampler)));

@@ -118,7 +118,18 @@ void NightSceneBuilder::prepareReflectance(const cv::Mat& albedo, const cv::Mat&
       for (int k = 0; k < 3; ++k) c[k] = srgbToLinear(std::clamp(c[k], 0.f, 1.f));
     });
     reflectance_map = resized;
-    report.notes.push_back("no albedo map: the linearised day image stands in for the reflectance");
+    if (options.remove_day_light) {
+      const cv::Mat maps_normals = normals.size() == resized.size() ? normals : cv::Mat();
+      DayLightRemoval removed =
+          removeDayLight(resized, dayLightGeometry(depth_mesh, scene.camera, maps_normals), options.day_light);
+      reflectance_map = removed.albedo;
+      report.notes.push_back(std::string("no albedo map: the day image with its light taken out (") +
+                             dayLightMethodName(removed.method) + ") stands in for the reflectance");
+      for (const std::string& note : removed.report.notes) report.notes.push_back("day light: " + note);
+      report.add("day_light_seconds", removed.report.seconds, "s");
+    } else {
+      report.notes.push_back("no albedo map: the linearised day image stands in for the reflectance");
+    }
   }
   CV_Assert(reflectance_map.empty() || reflectance_map.size() == cv::Size(width, height));
   CV_Assert(roughness.empty() || roughness.size() == cv::Size(width, height));

@@ -4,6 +4,7 @@
 // instantiated light record. A face takes the material and the light of the pixel under its
 // vertices' mean pixel position.
 
+#include "solo/render/day_light_removal.h"
 #include "solo/render/render_scene.h"
 
 #include <solo/geometry/depth_mesh.h>
@@ -28,6 +29,11 @@ struct NightSceneOptions {
   /// (where it faces the camera) instead of their own: depth noise folds a surface seen at
   /// grazing, and a fold's face turned from the lamps rendered as a black speck.
   bool shading_normals = true;
+  /// Without an albedo map, the day image's light is taken out of it (sun, sky and
+  /// interreflections through the mesh; day_light_removal.h) before it stands in for the
+  /// reflectance. Off: the linearised day image, as it is (docs/rendering.md).
+  bool remove_day_light = false;
+  DayLightRemovalOptions day_light;
 };
 
 struct NightScene {

@@ -1,0 +1,213 @@
+// Albedo from the day image on synthetic scenes with exact albedo: the linearised day image
+// (what stands in for a missing albedo map without removal) against removeDayLight, by the
+// error of linear albedo over the non-sky pixels, and the found sun against synth.json's.
+// Not a Google Benchmark: one run per scene, a table on stdout (docs/rendering.md).
+// The geometry is solo night's: the refined depth (default options) meshed and cleaned.
+// Run:
+//   for s in 1 2 3; do build/release/tools/solo synth -o /tmp/dl/s$s --seed $s --day-render path; done
+//   build/release/tests/benchmarks/bench_day_light [--pictures DIR] [--exact-geometry] /tmp/dl/s1 /tmp/dl/s2 ...
+// --exact-geometry: synth's exact mesh, normals and instances instead of solo night's.
+// Errors: "fit" scales each channel of both estimates by its least-squares gain to the exact
+// albedo (the shading left, not the exposure); "rule" is each estimate with the removal's own
+// white balance and scale (the day image given the same rule).
+
+#include <solo/core/image_io.h>
+#include <solo/core/scene.h>
+#include <solo/core/srgb.h>
+#include <solo/geometry/depth_refinement.h>
+#include <solo/geometry/mesh_cleanup.h>
+#include <solo/geometry/triangle_mesh.h>
+#include <solo/pipeline/night_conversion.h>
+#include <solo/render/day_light_removal.h>
+#include <solo/synth/scene_raster.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <variant>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace solo;
+
+namespace {
+
+constexpr int kSkyLabel = 23;
+
+std::string valueText(bool v) { return v ? "true" : "false"; }
+std::string valueText(std::int64_t v) { return std::to_string(v); }
+std::string valueText(double v) { return std::to_string(v); }
+std::string valueText(const std::string& v) { return v; }
+
+struct AlbedoError {
+  double mae = 0, relative = 0;
+};
+
+// Mean absolute error over the mask, averaged over channels, after per-channel gains (fit) or none.
+AlbedoError albedoError(const cv::Mat& estimate, const cv::Mat& truth, const cv::Mat& mask, bool fit) {
+  std::array<double, 3> ee{}, et{};
+  for (int y = 0; y < truth.rows; ++y)
+    for (int x = 0; x < truth.cols; ++x) {
+      if (!mask.at<std::uint8_t>(y, x)) continue;
+      const cv::Vec3f e = estimate.at<cv::Vec3f>(y, x), t = truth.at<cv::Vec3f>(y, x);
+      for (int c = 0; c < 3; ++c) {
+        ee[c] += double(e[c]) * e[c];
+        et[c] += double(e[c]) * t[c];
+      }
+    }
+  std::array<double, 3> gain{1, 1, 1};
+  if (fit)
+    for (int c = 0; c < 3; ++c) gain[c] = ee[c] > 0 ? et[c] / ee[c] : 1;
+  double abs_sum = 0, truth_sum = 0;
+  std::int64_t n = 0;
+  for (int y = 0; y < truth.rows; ++y)
+    for (int x = 0; x < truth.cols; ++x) {
+      if (!mask.at<std::uint8_t>(y, x)) continue;
+      const cv::Vec3f e = estimate.at<cv::Vec3f>(y, x), t = truth.at<cv::Vec3f>(y, x);
+      for (int c = 0; c < 3; ++c) {
+        abs_sum += std::abs(gain[c] * e[c] - t[c]);
+        truth_sum += t[c];
+      }
+      ++n;
+    }
+  AlbedoError out;
+  out.mae = n ? abs_sum / (3.0 * n) : 0;
+  out.relative = truth_sum > 0 ? abs_sum / truth_sum : 0;
+  return out;
+}
+
+// The removal's own rule on another estimate: road and sidewalk grey, median luminance 0.2.
+cv::Mat balanced(const cv::Mat& image, const cv::Mat& labels, const cv::Mat& mask) {
+  std::array<std::vector<float>, 3> road;
+  std::vector<float> lum;
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x) {
+      const int label = labels.at<int>(y, x);
+      if (!mask.at<std::uint8_t>(y, x) || (label != 7 && label != 8)) continue;
+      for (int c = 0; c < 3; ++c) road[c].push_back(image.at<cv::Vec3f>(y, x)[c]);
+    }
+  const auto median = [](std::vector<float> v) {
+    if (v.empty()) return 1.f;
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  cv::Vec3f gain(1, 1, 1);
+  const cv::Vec3f ref(median(road[0]), median(road[1]), median(road[2]));
+  for (int c = 0; c < 3; ++c) gain[c] = (ref[0] + ref[1] + ref[2]) / 3 / ref[c];
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x)
+      if (mask.at<std::uint8_t>(y, x)) {
+        const cv::Vec3f v = image.at<cv::Vec3f>(y, x);
+        lum.push_back(0.2126f * v[0] * gain[0] + 0.7152f * v[1] * gain[1] + 0.0722f * v[2] * gain[2]);
+      }
+  const float scale = 0.2f / median(lum);
+  cv::Mat out = image.clone();
+  out.forEach<cv::Vec3f>([&](cv::Vec3f& v, const int*) {
+    for (int c = 0; c < 3; ++c) v[c] = std::clamp(v[c] * gain[c] * scale, 0.f, 1.f);
+  });
+  return out;
+}
+
+Eigen::Vector3f synthSun(const fs::path& dir) {
+  std::ifstream in(dir / "synth.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  const auto& s = j.at("sun_direction");
+  return Eigen::Vector3f(s[0].get<float>(), s[1].get<float>(), s[2].get<float>()).normalized();
+}
+
+cv::Mat linearised(const cv::Mat& srgb) {
+  cv::Mat out = srgb.clone();
+  out.forEach<cv::Vec3f>([](cv::Vec3f& c, const int*) {
+    for (int k = 0; k < 3; ++k) c[k] = srgbToLinear(std::clamp(c[k], 0.f, 1.f));
+  });
+  return out;
+}
+
+void runScene(const fs::path& dir, const fs::path& pictures, bool exact_geometry) {
+  const Scene scene = loadScene(dir / "scene.json");
+  const NightConversionOptions o;
+  const DepthRefinementResult refined = refineDepth(sceneForRefinement(scene), o.refinement);
+  StageReport mesh_report;
+  const DepthMesh mesh =
+      meshFromScene(refined.depth_m, scene.camera, refined.maps.instances, refined.uncertain, o.mesh, mesh_report);
+  const cv::Mat day = linearised(scene.image);
+  const PinholeCamera camera = scene.camera.scaledTo(day.cols, day.rows);
+  DayLightGeometry geometry = dayLightGeometry(mesh, camera, refined.normals);
+  if (exact_geometry) {
+    const TriangleMesh exact = readMesh(dir / "gt" / "mesh.ply");
+    geometry.vertices.clear();
+    geometry.triangles.clear();
+    for (const Eigen::Vector3d& v : exact.vertices)
+      for (int k = 0; k < 3; ++k) geometry.vertices.push_back(static_cast<float>(v[k]));
+    for (const auto& f : exact.faces)
+      for (int k = 0; k < 3; ++k) geometry.triangles.push_back(f[static_cast<std::size_t>(k)]);
+    geometry.triangle_instance.assign(exact.faces.size(), 0);
+    geometry.normals = readNormals(dir / "gt" / "normals.png");
+    geometry.instances = readLabels(dir / "gt" / "instanceIds.png");
+  }
+  const DayLightRemoval removal = removeDayLight(day, geometry);
+
+  const cv::Mat truth = readColorImage(dir / "gt" / "albedo.png");
+  const cv::Mat labels = readLabels(dir / "gt" / "labelIds.png");
+  cv::Mat mask = cv::Mat::zeros(truth.size(), CV_8U);
+  for (int y = 0; y < mask.rows; ++y)
+    for (int x = 0; x < mask.cols; ++x) mask.at<std::uint8_t>(y, x) = labels.at<int>(y, x) != kSkyLabel ? 1 : 0;
+  const cv::Mat day_rule = balanced(day, labels, mask);
+  const AlbedoError day_fit = albedoError(day, truth, mask, true), ours_fit = albedoError(removal.albedo, truth, mask, true);
+  const AlbedoError day_rule_err = albedoError(day_rule, truth, mask, false),
+                    ours_rule = albedoError(removal.albedo, truth, mask, false);
+  const Eigen::Vector3f sun = synthSun(dir);
+  const double sun_error_deg =
+      removal.method == DayLightMethod::SunAndSky
+          ? std::acos(std::clamp(double(sun.dot(removal.sun_direction)), -1.0, 1.0)) * 180 / 3.14159265358979
+          : -1;
+  std::printf("%-14s %-12s %6.3f %6.3f  %6.3f %6.3f  %6.3f %6.3f  %6.3f %6.3f  %6.2f  %5.2f  %5.2f s\n",
+              dir.filename().string().c_str(), dayLightMethodName(removal.method), day_fit.mae, day_fit.relative,
+              ours_fit.mae, ours_fit.relative, day_rule_err.mae, day_rule_err.relative, ours_rule.mae,
+              ours_rule.relative, sun_error_deg, removal.sun_gain, removal.report.seconds);
+  for (const std::string& note : removal.report.notes) std::printf("    %s\n", note.c_str());
+  if (std::getenv("SOLO_BENCH_VERBOSE"))
+    for (const Metric& m : removal.report.metrics)
+      std::visit([&m](const auto& v) { std::printf("    %s = %s\n", m.name.c_str(), valueText(v).c_str()); }, m.value);
+  std::fflush(stdout);
+  if (!pictures.empty()) {
+    fs::create_directories(pictures);
+    writeImage(pictures / (dir.filename().string() + "_day_albedo.png"), srgbEncode8(day_rule));
+    writeImage(pictures / (dir.filename().string() + "_delit_albedo.png"), srgbEncode8(removal.albedo));
+    writeImage(pictures / (dir.filename().string() + "_true_albedo.png"), srgbEncode8(truth));
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  fs::path pictures;
+  bool exact_geometry = false;
+  std::vector<fs::path> scenes;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--pictures" && i + 1 < argc)
+      pictures = argv[++i];
+    else if (arg == "--exact-geometry")
+      exact_geometry = true;
+    else
+      scenes.emplace_back(arg);
+  }
+  if (scenes.empty()) {
+    std::fprintf(stderr, "usage: bench_day_light [--pictures DIR] SCENE_DIR...\n");
+    return 2;
+  }
+  std::printf("%-14s %-12s %13s  %13s  %13s  %13s  %6s  %5s  %7s\n", "scene", "method", "day fit", "delit fit",
+              "day rule", "delit rule", "sun", "gain", "time");
+  std::printf("%-14s %-12s %6s %6s  %6s %6s  %6s %6s  %6s %6s  %6s\n", "", "", "MAE", "rel", "MAE", "rel", "MAE", "rel",
+              "MAE", "rel", "deg");
+  for (const fs::path& dir : scenes) runScene(dir, pictures, exact_geometry);
+  return 0;
+}
