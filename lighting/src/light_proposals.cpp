@@ -3,6 +3,7 @@
 #include "light_proposal_steps.h"
 #include "solo/core/error.h"
 #include "solo/lighting/light_geometry.h"
+#include "solo/lighting/light_priors.h"
 #include "solo/lighting/light_stage.h"
 
 #include <nlohmann/json.hpp>
@@ -11,7 +12,6 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <random>
 
 namespace solo {
 namespace proposals {
@@ -74,71 +74,21 @@ ProposalInputs resampledInputs(const Scene& scene) {
   return in;
 }
 
-// Road (else road and sidewalk) points with a depth, at most about 20000.
-std::vector<Eigen::Vector3d> groundPoints(const ProposalInputs& in) {
-  std::vector<Eigen::Vector3d> road, walk;
-  const int step = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(in.labels.total()) / 40000.0)));
-  for (int v = 0; v < in.height(); v += step)
-    for (int u = 0; u < in.width(); u += step) {
-      const int label = in.labelAt(u, v);
-      const float z = in.depthAt(u, v);
-      if (!(z > 0)) continue;
-      if (label == kRoad || label == kParking) road.push_back(in.point(u, v, z));
-      if (label == kSidewalk) walk.push_back(in.point(u, v, z));
-    }
-  if (road.size() < 200) road.insert(road.end(), walk.begin(), walk.end());
-  return road;
-}
-
-// Least-squares plane through `points` (PCA): unit normal toward -y (up in the camera frame).
-ProposalGroundPlane planeThrough(const std::vector<Eigen::Vector3d>& points) {
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const auto& p : points) mean += p;
-  mean /= static_cast<double>(points.size());
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (const auto& p : points) scatter += (p - mean) * (p - mean).transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter);
-  Eigen::Vector3d up = solver.eigenvectors().col(0);
-  if (up.y() > 0) up = -up;
+// The ground plane of the light priors (light_priors.h: RANSAC over road and sidewalk points,
+// seeded, refitted on its inliers), with the proposals' inlier band; the level camera when it
+// finds none (points = 0).
+ProposalGroundPlane fitGroundPlane(const ProposalInputs& in) {
+  GroundFitOptions options;
+  options.inlier_m = 0.08;
+  options.inlier_fraction = 0.004;
+  options.max_tilt_deg = 35;
+  const GroundPlaneFit fit = fitGroundPlaneToRoad(in.depth_m, in.labels, in.camera, options);
   ProposalGroundPlane plane;
-  plane.up = up;
-  plane.offset_m = -up.dot(mean);
-  plane.points = static_cast<std::int64_t>(points.size());
+  if (!fit.fitted) return plane;
+  plane.up = fit.up;
+  plane.offset_m = fit.offset_m;
+  plane.points = fit.inliers;
   return plane;
-}
-
-// RANSAC over road points for a plane within 35 degrees of level, refitted on its inliers;
-// the level camera 1.5 m above the ground when too few points.
-ProposalGroundPlane fitGroundPlane(const std::vector<Eigen::Vector3d>& points) {
-  ProposalGroundPlane best;
-  if (points.size() < 50) return best;
-  std::mt19937 rng(12345);
-  std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
-  const auto tolerance = [](const Eigen::Vector3d& p) { return 0.08 + 0.004 * p.z(); };
-  std::size_t best_inliers = 0;
-  for (int iteration = 0; iteration < 200; ++iteration) {
-    const Eigen::Vector3d& a = points[pick(rng)];
-    const Eigen::Vector3d& b = points[pick(rng)];
-    const Eigen::Vector3d& c = points[pick(rng)];
-    Eigen::Vector3d n = (b - a).cross(c - a);
-    if (n.norm() < 1e-9) continue;
-    n.normalize();
-    if (n.y() > 0) n = -n;
-    if (-n.y() < std::cos(35.0 * M_PI / 180.0)) continue;
-    const double offset = -n.dot(a);
-    std::size_t inliers = 0;
-    for (const auto& p : points) inliers += std::abs(n.dot(p) + offset) < tolerance(p);
-    if (inliers > best_inliers) {
-      best_inliers = inliers;
-      best.up = n;
-      best.offset_m = offset;
-    }
-  }
-  if (best_inliers < 30) return ProposalGroundPlane{};
-  std::vector<Eigen::Vector3d> inliers;
-  for (const auto& p : points)
-    if (std::abs(best.up.dot(p) + best.offset_m) < tolerance(p)) inliers.push_back(p);
-  return planeThrough(inliers);
 }
 
 void setGroundFrame(ProposalInputs& in, const ProposalGroundPlane& ground) {
@@ -213,7 +163,7 @@ LightProposalResult proposeLights(const Scene& scene, const LightProposalOptions
   LightProposalResult result;
   ProposalInputs in = resampledInputs(scene);
   Stopwatch clock;
-  setGroundFrame(in, fitGroundPlane(groundPoints(in)));
+  setGroundFrame(in, fitGroundPlane(in));
   result.ground = in.ground;
   if (in.ground.points == 0)
     result.report.notes.push_back("no ground plane from road pixels: a level camera 1.5 m above the ground assumed");

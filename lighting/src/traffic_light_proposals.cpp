@@ -1,8 +1,9 @@
-// Traffic lights: the lit lamp of every traffic-light housing (Cityscapes class 19). The
-// housing is split into three slots along its long side; the slot whose pixels are the most
-// saturated holds the lamp that is on (its pixels: chroma at least a quarter of the slot's
-// 95th percentile, the lamp's shaded face included), and its hue names the category. A housing without a
-// saturated slot (seen from the side or the back) shows no lamp and gets none.
+// Traffic lights: the lit lamp of every traffic-light housing (Cityscapes class 19). Label
+// blobs a few pixels apart are one housing. Its lamps are the groups of saturated pixels in it
+// at least a quarter of its short side in both directions (no slivers of background colour); the
+// lit one is the brightest, by at least a quarter over any other lamp shown (an unlit lamp's
+// glass is several times darker), and its hue names the category. A housing without a saturated
+// lamp (seen from the side or the back) gets none, and so does one whose lamps are equally bright.
 
 #include "light_proposal_steps.h"
 
@@ -33,77 +34,123 @@ LightCategory signalCategory(double hue) {
   return LightCategory::TrafficLightGreen;
 }
 
-// The slot (0..2 along the housing's long side) of a pixel.
-int slotOf(const cv::Point& p, const cv::Rect& box, bool vertical) {
-  const double t = vertical ? (p.y - box.y + 0.5) / box.height : (p.x - box.x + 0.5) / box.width;
-  return std::clamp(static_cast<int>(t * 3), 0, 2);
+// The traffic-light housings: class-19 pixels grouped by 8-connectivity after closing gaps of
+// a few pixels, so a housing the labels split in two (a pole, a wire, label noise) stays one.
+std::vector<std::vector<cv::Point>> housings(const ProposalInputs& in) {
+  const cv::Mat mask = in.labels == kTrafficLight;
+  const int gap = in.scaledPixels(3);
+  cv::Mat joined, ids;
+  cv::dilate(mask, joined, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * gap + 1, 2 * gap + 1)));
+  const int n = cv::connectedComponents(joined, ids, 8, CV_32S);
+  std::vector<std::vector<cv::Point>> groups(static_cast<std::size_t>(std::max(n, 1)));
+  for (int v = 0; v < ids.rows; ++v)
+    for (int u = 0; u < ids.cols; ++u)
+      if (mask.at<std::uint8_t>(v, u)) groups[static_cast<std::size_t>(ids.at<int>(v, u))].emplace_back(u, v);
+  return groups;
+}
+
+// A coloured lamp in a housing: a connected group of saturated pixels.
+struct LampBlob {
+  std::vector<cv::Point> pixels;
+  double value = 0;   ///< 80th percentile of the brightest channel: a lit lamp is several times brighter
+  double chroma = 0;  ///< 80th percentile of max - min
+};
+
+constexpr double kLampChroma = 0.15;       ///< a lamp's pixel is at least this saturated (the housing is grey)
+constexpr double kLampSaturation = 0.4;   ///< and chroma / value: pale background at the label's edge is not
+constexpr double kLampShortSide = 0.25;    ///< a lamp spans at least this share of the housing's short side
+constexpr double kLitOverOthers = 1.25;    ///< the lit lamp is this much brighter than any other lamp shown
+
+// The housing's lamps: saturated pixel groups at least kLampShortSide of the housing's short
+// side in both directions (a sliver of background colour at the label's edge is none).
+std::vector<LampBlob> lampBlobs(const ProposalInputs& in, const std::vector<cv::Point>& housing, const cv::Rect& box) {
+  cv::Mat local = cv::Mat::zeros(box.size(), CV_8U);
+  for (const cv::Point& p : housing) {
+    const cv::Vec3f c = in.image.at<cv::Vec3f>(p);
+    if (chroma(c) >= kLampChroma && chroma(c) >= kLampSaturation * std::max({c[0], c[1], c[2]}))
+      local.at<std::uint8_t>(p - box.tl()) = 255;
+  }
+  cv::Mat ids, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(local, ids, stats, centroids, 8, CV_32S);
+  const double least = kLampShortSide * std::min(box.width, box.height);
+  std::vector<LampBlob> lamps;
+  for (int i = 1; i < n; ++i) {
+    if (stats.at<int>(i, cv::CC_STAT_WIDTH) < least || stats.at<int>(i, cv::CC_STAT_HEIGHT) < least) continue;
+    LampBlob lamp;
+    std::vector<double> values, chromas;
+    for (int v = 0; v < ids.rows; ++v)
+      for (int u = 0; u < ids.cols; ++u)
+        if (ids.at<int>(v, u) == i) {
+          const cv::Vec3f c = in.image.at<cv::Vec3f>(v + box.y, u + box.x);
+          lamp.pixels.emplace_back(u + box.x, v + box.y);
+          values.push_back(std::max({c[0], c[1], c[2]}));
+          chromas.push_back(chroma(c));
+        }
+    lamp.value = quantile(values, 0.8);
+    lamp.chroma = quantile(chromas, 0.8);
+    lamps.push_back(std::move(lamp));
+  }
+  return lamps;
 }
 
 }  // namespace
 
 void proposeTrafficLights(const ProposalInputs& in, const LightProposalOptions&, std::vector<DraftLight>& out,
                           StageReport& report) {
-  cv::Mat ids, stats, centroids;
-  const int n = cv::connectedComponentsWithStats(in.labels == kTrafficLight, ids, stats, centroids, 8, CV_32S);
-  std::vector<std::vector<cv::Point>> blobs(static_cast<std::size_t>(n));
-  for (int v = 0; v < ids.rows; ++v)
-    for (int u = 0; u < ids.cols; ++u)
-      if (const int id = ids.at<int>(v, u); id > 0) blobs[static_cast<std::size_t>(id)].emplace_back(u, v);
   const int min_pixels = std::max(10, static_cast<int>(40 * in.pixel_scale * in.pixel_scale));
-  int dark = 0, proposed = 0;
-  for (int i = 1; i < n; ++i) {
-    const std::vector<cv::Point>& blob = blobs[static_cast<std::size_t>(i)];
-    if (static_cast<int>(blob.size()) < min_pixels) continue;
-    const cv::Rect box(stats.at<int>(i, cv::CC_STAT_LEFT), stats.at<int>(i, cv::CC_STAT_TOP),
-                       stats.at<int>(i, cv::CC_STAT_WIDTH), stats.at<int>(i, cv::CC_STAT_HEIGHT));
-    const bool vertical = box.height >= box.width;
-    // The 80th and 95th percentiles of each slot's chroma.
-    std::array<std::vector<double>, 3> slot_chroma;
-    for (const cv::Point& p : blob) slot_chroma[slotOf(p, box, vertical)].push_back(chroma(in.image.at<cv::Vec3f>(p)));
-    std::array<double, 3> strength{};
-    std::array<double, 3> peak{};
-    for (int s = 0; s < 3; ++s) strength[s] = quantile(slot_chroma[s], 0.8), peak[s] = quantile(slot_chroma[s], 0.95);
-    const int lit = static_cast<int>(std::max_element(strength.begin(), strength.end()) - strength.begin());
-    std::array<double, 3> others = strength;
-    others[lit] = 0;
-    const double runner_up = *std::max_element(others.begin(), others.end());
-    if (strength[lit] < 0.2) {
+  int dark = 0, undecided = 0, proposed = 0;
+  const std::vector<std::vector<cv::Point>> groups = housings(in);
+  for (std::size_t i = 1; i < groups.size(); ++i) {
+    const std::vector<cv::Point>& housing = groups[i];
+    if (static_cast<int>(housing.size()) < min_pixels) continue;
+    const cv::Rect box = cv::boundingRect(housing);
+    std::vector<LampBlob> lamps = lampBlobs(in, housing, box);
+    std::sort(lamps.begin(), lamps.end(), [](const LampBlob& a, const LampBlob& b) { return a.value > b.value; });
+    if (lamps.empty() || lamps.front().chroma < 0.2) {
       ++dark;
       continue;
     }
+    const double runner_up = lamps.size() > 1 ? lamps[1].value : 0.0;
+    if (lamps.front().value < kLitOverOthers * runner_up) {
+      ++undecided;
+      continue;
+    }
     DraftLight light;
+    light.pixels = lamps.front().pixels;
     cv::Vec3d colour(0, 0, 0);
-    for (const cv::Point& p : blob)
-      if (slotOf(p, box, vertical) == lit && chroma(in.image.at<cv::Vec3f>(p)) >= 0.25 * peak[lit]) {
-        light.pixels.push_back(p);
-        colour += cv::Vec3d(in.image.at<cv::Vec3f>(p));
-      }
+    cv::Point2d centre(0, 0);
+    for (const cv::Point& p : light.pixels) {
+      colour += cv::Vec3d(in.image.at<cv::Vec3f>(p));
+      centre += cv::Point2d(p.x, p.y);
+    }
     colour *= 1.0 / static_cast<double>(light.pixels.size());
+    centre *= 1.0 / static_cast<double>(light.pixels.size());
     const double hue = hueDegrees(cv::Vec3f(static_cast<float>(colour[0]), static_cast<float>(colour[1]),
                                             static_cast<float>(colour[2])));
     light.category = signalCategory(hue);
     std::vector<double> depths;
-    for (const cv::Point& p : blob)
+    for (const cv::Point& p : housing)
       if (const float z = in.depthAt(p.x, p.y); z > 0) depths.push_back(z);
     const double depth = depths.empty() ? 0 : quantile(depths, 0.25);
-    cv::Point2d centre(0, 0);
-    for (const cv::Point& p : light.pixels) centre += cv::Point2d(p.x, p.y);
-    centre *= 1.0 / static_cast<double>(light.pixels.size());
     if (depth > 0) {
       light.position_m = in.point(centre.x, centre.y, depth);
       light.height_m = in.ground.height(light.position_m);
     }
-    light.score = std::clamp((strength[lit] - runner_up) / std::max(strength[lit], 1e-6), 0.0, 1.0);
-    light.rule = "most_saturated_slot";
-    light.evidence = std::string(vertical ? "vertical" : "horizontal") + " housing " + std::to_string(box.width) + "x" +
-                     std::to_string(box.height) + " px, slot " + std::to_string(lit + 1) + "/3 chroma " +
-                     fixed(strength[lit]) + " (others " + fixed(runner_up) + "), hue " + fixed(hue, 0) + " deg";
+    light.score = std::clamp(1.0 - runner_up / std::max(lamps.front().value, 1e-6), 0.0, 1.0);
+    light.rule = "brightest_lamp";
+    light.evidence = "housing " + std::to_string(box.width) + "x" + std::to_string(box.height) + " px, " +
+                     std::to_string(lamps.size()) + " lamp(s) shown, brightest " + fixed(lamps.front().value) +
+                     " (next " + fixed(runner_up) + "), chroma " + fixed(lamps.front().chroma) + ", hue " +
+                     fixed(hue, 0) + " deg";
     light.source_instance = kTrafficLight;
     out.push_back(std::move(light));
     ++proposed;
   }
   report.add("traffic_lights_proposed", static_cast<std::int64_t>(proposed));
   if (dark > 0) report.notes.push_back(std::to_string(dark) + " traffic-light housings show no lit lamp (side or back)");
+  if (undecided > 0)
+    report.notes.push_back(std::to_string(undecided) +
+                           " traffic-light housings show lamps of which none is clearly brighter: none proposed");
 }
 
 }  // namespace solo::proposals

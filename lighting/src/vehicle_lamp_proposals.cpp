@@ -1,15 +1,19 @@
 // Vehicle lamps: a symmetric pair (one lamp for two-wheelers) on the end face a vehicle
-// instance shows the camera. The face is the vehicle's nearest 3D extent along the street; its
-// width comes from the instance's pixels cast onto that face. Front or rear from the day image
-// (red lamps: rear; lamps brighter and whiter than the body: front), else from the lane (right-
-// hand traffic: a vehicle ahead in or right of the camera's lane shows its rear). Parked when
-// its kerb-side flank is within LightProposalOptions::parked_kerb_gap_m of the kerb.
+// instance shows the camera. The face is the vehicle's nearest 3D extent along the street. A
+// vehicle off the street's centre line shows a flank toward it, a vertical plane whose points
+// share one lateral position: the face ends there, and its outer side is the class's width away
+// (or the instance's outline, when that agrees), so a neighbour hiding or mixing its depth into
+// the outer side does not move the lamps. Front or rear from the day image (red lamps: rear;
+// lamps brighter and whiter than the body: front), else from the lane (right-hand traffic: a
+// vehicle ahead in or right of the camera's lane shows its rear). Parked when its kerb-side
+// flank is within LightProposalOptions::parked_kerb_gap_m of the kerb.
 
 #include "light_proposal_steps.h"
 
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 namespace solo::proposals {
@@ -82,7 +86,32 @@ struct EndFace {
   cv::Mat mask;         ///< CV_8U over box: the instance
   cv::Mat grown_mask;   ///< the instance dilated by the label maps' boundary error
   int points = 0;
+  /// Lateral position of the flank the vehicle shows the street's centre line (a vertical
+  /// plane: its points share it), NaN when too few of its points are seen.
+  double flank_m = std::numeric_limits<double>::quiet_NaN();
 };
+
+// The flank's lateral position: the median lateral of the points 0.8-4 m behind the end face
+// on the side toward the street's centre line, when at least 20 agree within 0.3 m (MAD).
+double flankLateral(const ProposalInputs& in, const std::vector<cv::Point>& sampled, const std::vector<double>& along,
+                    double face_along_m, double face_centre_m) {
+  std::vector<double> lateral;
+  for (std::size_t i = 0; i < along.size(); ++i) {
+    if (along[i] < face_along_m + 0.8 || along[i] > face_along_m + 4.0) continue;
+    const double x = in.lateral(in.point(sampled[i].x, sampled[i].y, in.depthAt(sampled[i].x, sampled[i].y)));
+    if ((face_centre_m < 0) == (x > face_centre_m)) lateral.push_back(x);
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (lateral.size() < 20) return nan;
+  std::vector<double> copy = lateral;
+  const double median = quantile(copy, 0.5);
+  std::vector<double> deviation;
+  for (double x : lateral) deviation.push_back(std::abs(x - median));
+  if (quantile(deviation, 0.5) >= 0.3) return nan;
+  // The flank's edge pixels take the depth of what lies behind them, which casts them outward:
+  // the quartile toward the centre line.
+  return quantile(lateral, face_centre_m < 0 ? 0.75 : 0.25);
+}
 
 bool measureEndFace(const ProposalInputs& in, const std::vector<cv::Point>& pixels, EndFace& face) {
   face.box = cv::boundingRect(pixels);
@@ -129,7 +158,31 @@ bool measureEndFace(const ProposalInputs& in, const std::vector<cv::Point>& pixe
   const double margin_m = (margin + 0.5) * face.along_m / in.camera.fx;
   face.left_m = quantile(lateral, 0.01) - margin_m;
   face.right_m = quantile(lateral, 0.99) + margin_m;
+  face.flank_m = flankLateral(in, sampled, along, face.along_m, (face.left_m + face.right_m) / 2);
   return face.right_m > face.left_m;
+}
+
+// Lateral positions, on the face plane at `along_m`, of the instance's outermost columns in
+// the rows between heights h0 and h1 above ground.
+bool outlineExtent(const ProposalInputs& in, const EndFace& face, double along_m, double h0, double h1,
+                   double& left_m, double& right_m) {
+  const Eigen::Vector2d low = in.camera.project(in.groundFramePoint(0, h0, along_m));
+  const Eigen::Vector2d high = in.camera.project(in.groundFramePoint(0, h1, along_m));
+  const int v0 = std::max(0, static_cast<int>(std::floor(high.y())) - face.box.y);
+  const int v1 = std::min(face.mask.rows - 1, static_cast<int>(std::ceil(low.y())) - face.box.y);
+  int first = face.mask.cols, last = -1;
+  for (int v = v0; v <= v1; ++v)
+    for (int u = 0; u < face.mask.cols; ++u)
+      if (face.mask.at<std::uint8_t>(v, u)) first = std::min(first, u), last = std::max(last, u);
+  if (last < first) return false;
+  const Eigen::Vector3d origin = in.groundFramePoint(0, (h0 + h1) / 2, along_m);
+  const auto cast = [&](double u) {
+    const Eigen::Vector3d r = in.ray(u, (low.y() + high.y()) / 2);
+    return in.lateral(r * (in.forward.dot(origin) / in.forward.dot(r)));
+  };
+  left_m = cast(first + face.box.x);
+  right_m = cast(last + face.box.x + 1.0);
+  return true;
 }
 
 // Which side of the face is cut, by an occluder or by the frame: -1 left, +1 right, 0 neither or
@@ -243,8 +296,43 @@ bool snapToLampColour(const ProposalInputs& in, const EndFace& face, const LampC
     if (rear ? isRed(c, 0.15) : isBright(c, colours.body_luma)) found.push_back(p);
   }
   if (found.size() < 3 || static_cast<double>(found.size()) < 0.3 * static_cast<double>(pixels.size())) return false;
+  // Lamp-coloured pixels spread well beyond a lamp's size are body or background, not a lamp.
+  const cv::Rect prior = cv::boundingRect(pixels), snapped = cv::boundingRect(found);
+  if (snapped.width > 1.6 * prior.width + 2 || snapped.height > 1.6 * prior.height + 2) return false;
   pixels.swap(found);
   return true;
+}
+
+// The end face's lateral extent. A vehicle off the street's centre line shows the flank on the
+// centre line's side: the face ends where that flank plane is (its own depth, which no neighbour
+// mixes into), and the outer side is the instance's outline when it lies the class's width away
+// (else an occluder or the frame cuts it: the class's width from the flank). A vehicle on the
+// centre line shows no flank: both sides from its outline. Two-wheelers: their outline.
+struct FaceExtent {
+  double left_m = 0, right_m = 0;
+  const char* rule = "outline";
+};
+
+FaceExtent placeFace(const ProposalInputs& in, const LampLayout& layout, const EndFace& face, int cut_side) {
+  FaceExtent placed{face.left_m, face.right_m, "depth_extent"};
+  double left = 0, right = 0;
+  const double h0 = layout.front_centre_m - layout.lamp_height_m, h1 = layout.rear_centre_m + layout.lamp_height_m;
+  if (!outlineExtent(in, face, face.along_m, h0, h1, left, right)) return placed;
+  const double width = layout.vehicle_width_m;
+  const double centre = (face.left_m + face.right_m) / 2;
+  if (layout.single || (std::abs(centre) < 0.5 * width && cut_side == 0)) return {left, right, "outline"};
+  const bool from_flank = !std::isnan(face.flank_m);
+  if (centre < 0) {  // the outer side is the left, the flank on the right
+    const double inner = from_flank ? face.flank_m : face.right_m;
+    const bool outline_fits = cut_side >= 0 && std::abs(inner - left - width) < 0.1 * width;
+    placed = {outline_fits ? left : inner - width, inner, ""};
+  } else {
+    const double inner = from_flank ? face.flank_m : face.left_m;
+    const bool outline_fits = cut_side <= 0 && std::abs(right - inner - width) < 0.1 * width;
+    placed = {inner, outline_fits ? right : inner + width, ""};
+  }
+  placed.rule = from_flank ? "flank" : "depth_extent";
+  return placed;
 }
 
 // Lateral extents of the lamps on a face of width left..right (one or two).
@@ -281,18 +369,17 @@ void proposeVehicleLamps(const ProposalInputs& in, const LightProposalOptions& o
       ++skipped;
       continue;
     }
-    // A face much narrower than the class's width is a flank seen along the street, not an end;
-    // a face somewhat narrower is cut by an occluder or the frame: widen it on that side.
-    double left = face.left_m, right = face.right_m;
-    if (!layout.single && right - left < 0.45 * layout.vehicle_width_m) {
+    // A face much narrower than the class's width is a flank seen along the street, not an end,
+    // unless a flank shows beside it and the frame does not cut the vehicle: then it is an end
+    // the next vehicle in the row hides.
+    const bool in_frame = face.box.x > 0 && face.box.br().x < in.width();
+    const bool hidden_end = in_frame && !std::isnan(face.flank_m);
+    if (!layout.single && !hidden_end && face.right_m - face.left_m < 0.45 * layout.vehicle_width_m) {
       ++no_end_face;
       continue;
     }
-    if (right - left < 0.85 * layout.vehicle_width_m) {
-      const int side = cutSide(in, face, instance);
-      if (side < 0) left = right - layout.vehicle_width_m;
-      if (side > 0) right = left + layout.vehicle_width_m;
-    }
+    const FaceExtent extent = placeFace(in, layout, face, cutSide(in, face, instance));
+    const double left = extent.left_m, right = extent.right_m;
     const double centre = (left + right) / 2;
     const double gap = centre >= 0 ? kerbs.right - right : left - kerbs.left;
     const bool parked = std::abs(centre) > 1.0 && gap < options.parked_kerb_gap_m;
@@ -329,7 +416,7 @@ void proposeVehicleLamps(const ProposalInputs& in, const LightProposalOptions& o
       light.score = std::clamp(0.4 + 0.6 * std::max(colours.red_share, colours.bright_share), 0.0, 1.0) * visible;
       light.rule = rule + (snapped ? "+lamp_pixels" : "+prior_box") + (parked ? "+parked_at_kerb" : "+moving");
       light.evidence = "face at " + fixed(face.along_m, 1) + " m, lateral " + fixed(left) + ".." + fixed(right) +
-                       " m, kerb gap " + fixed(gap) + " m; red share " + fixed(colours.red_share) + ", bright share " +
+                       " m (" + extent.rule + "), kerb gap " + fixed(gap) + " m; red share " + fixed(colours.red_share) + ", bright share " +
                        fixed(colours.bright_share) + (colours.body_red ? ", red body" : "") + "; visible " +
                        fixed(visible);
       light.source_instance = instance;
