@@ -37,6 +37,10 @@ cv::Mat drawLightOverlay(const cv::Mat& day_image, const LightGroupTree& tree, c
     const cv::Scalar colour = group.kind == LightGroupKind::BuildingFloor ? cv::Scalar(255, 220, 0) : cv::Scalar(0, 220, 255);
     cv::rectangle(canvas, group.bbox, colour, 1);
   }
+  if (options.proposed)
+    for (const Light& light : tree.lights)
+      cv::rectangle(canvas, cv::Rect(light.bbox.x - 1, light.bbox.y - 1, light.bbox.width + 2, light.bbox.height + 2),
+                    cv::Scalar(255, 0, 255), 1);
   return canvas;
 }
 

@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <variant>
 
 namespace fs = std::filesystem;
 
@@ -36,20 +37,35 @@ cv::Mat removedAtImageSize(const DepthMesh& mesh, cv::Size image_size) {
   return resized;
 }
 
+// The number of lights the conversion proposed from the labels (its "light_proposals" stage),
+// or -1 when the lights came from the scene's light map or a light record.
+std::int64_t proposedLightCount(const std::vector<StageReport>& stages) {
+  for (const StageReport& stage : stages) {
+    if (stage.name != "light_proposals") continue;
+    const MetricValue* lights = stage.find("lights");
+    return lights && std::holds_alternative<std::int64_t>(*lights) ? std::get<std::int64_t>(*lights) : 0;
+  }
+  return -1;
+}
+
 // The contact sheet: day, raw and refined depth on one colour scale, the faces the mesh stage
-// cut, the lights on and off, the night image.
+// cut, the lights on and off (proposed ones framed in magenta), the night image.
 cv::Mat contactSheet(const Scene& scene, const DepthRefinementResult& refined, const DepthMesh& mesh,
-                     const LightRecord& record, const cv::Mat& night_rgb8) {
+                     const LightRecord& record, std::int64_t proposed_lights, const cv::Mat& night_rgb8) {
   cv::Mat day;
   scene.image.convertTo(day, CV_8UC3, 255.0);
   const auto [near_m, far_m] = depthDisplayRange({refined.upsampled_depth_m, refined.depth_m});
   char range[64];
   std::snprintf(range, sizeof range, ", log %.3g-%.3g m", near_m, far_m);
   cv::Mat lights;
-  std::string lights_label = "lights: bright on, dim off";
+  std::string lights_label = proposed_lights >= 0
+                                 ? "lights: proposed from labels (" + std::to_string(proposed_lights) + ")"
+                                 : std::string("lights: bright on, dim off");
   if (record.tree.width == scene.width() && record.tree.height == scene.height() &&
       record.instantiation.lights.size() == record.tree.lights.size()) {
-    lights = drawLightOverlay(scene.image, record.tree, record.instantiation.lights);
+    LightOverlayOptions overlay;
+    overlay.proposed = proposed_lights >= 0;
+    lights = drawLightOverlay(scene.image, record.tree, record.instantiation.lights, overlay);
   } else {
     scene.image.convertTo(lights, CV_8UC3, 127.5);
     lights_label = "lights: none at this resolution";
@@ -166,6 +182,7 @@ NightJobResult runNightJob(const NightJobOptions& job, const NightConversionOpti
   report.stages.push_back(sceneInputReport(scene, clock.seconds()));
 
   NightConversionResult converted = runNightConversion(scene, o, callbacks);
+  const std::int64_t proposed_lights = proposedLightCount(converted.stages);
   for (StageReport& stage : converted.stages) report.stages.push_back(std::move(stage));
   const PostProcessResult& developed = converted.developed;
   writeDevelopedImage(job.output, developed.encoded, developed.linear_rgb, job.sixteen_bit);
@@ -176,7 +193,7 @@ NightJobResult runNightJob(const NightJobOptions& job, const NightConversionOpti
   if (job.render_exr) writeRenderExr(*job.render_exr, converted.rendered);
   if (job.contact_sheet)
     writeImage(*job.contact_sheet, contactSheet(scene, converted.refined, converted.mesh, converted.record,
-                                                quantiseEncoded(developed.encoded, 8)));
+                                                proposed_lights, quantiseEncoded(developed.encoded, 8)));
   if (job.text_file) writeTextAtomically(job.text_file->first, job.text_file->second);
   report.total_seconds = total.seconds();
   writeReportJson(result.report_file, report);

@@ -279,6 +279,41 @@ TEST_F(NightCli, ContactSheetTilesHoldTheStagesPictures) {
   }
 }
 
+// Pixels of an 8-bit BGR image in exactly the overlay's proposed-light frame colour, magenta.
+static int magentaPixels(const cv::Mat& bgr) {
+  int count = 0;
+  for (int y = 0; y < bgr.rows; ++y)
+    for (int x = 0; x < bgr.cols; ++x) count += bgr.at<cv::Vec3b>(y, x) == cv::Vec3b(255, 0, 255);
+  return count;
+}
+
+TEST_F(NightCli, ContactSheetFramesProposedLightsInMagentaAndSaysSo) {
+  // The same street without its light map: `night` proposes lights from the labels.
+  auto manifest = readJson(scene());
+  manifest.erase("lights");
+  manifest.erase("light_groups");
+  const auto unlit = sceneDir() / "no_light_map.json";
+  writeText(unlit, manifest.dump(2));
+  auto r = runSolo("night " + q(unlit) + " -o " + q(dir / "p.png") + " --preset draft --contact-sheet " +
+                   q(dir / "p_sheet.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_GT(stage(readJson(dir / "p.report.json"), "light_proposals")["metrics"]["lights"].get<int>(), 0);
+  r = runSolo("night " + q(scene()) + " -o " + q(dir / "g.png") + " --preset draft --contact-sheet " +
+              q(dir / "g_sheet.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+
+  const cv::Mat proposed = cv::imread((dir / "p_sheet.png").string());
+  const cv::Mat given = cv::imread((dir / "g_sheet.png").string());
+  ASSERT_FALSE(proposed.empty());
+  ASSERT_EQ(proposed.size(), given.size());
+  const solo::ContactSheetLayout layout = solo::contactSheetLayout(cv::Size(160, 90), 6);
+  EXPECT_GT(magentaPixels(proposed(layout.tiles[4])), 20) << "proposed lights are framed";
+  EXPECT_EQ(magentaPixels(given(layout.tiles[4])), 0) << "lights of a light map are not";
+  // "lights: proposed from labels (N)" against "lights: bright on, dim off".
+  EXPECT_GT(cv::norm(proposed(layout.labels[4]), given(layout.labels[4]), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(proposed(layout.labels[0]), given(layout.labels[0]), cv::NORM_INF), 0.0) << "day label";
+}
+
 TEST_F(NightCli, SamplerOptionReachesTheRendererAndUnknownSamplersAreRefused) {
   auto r = runSolo("night " + q(scene()) + " -o " + q(dir / "n.png") + " --preset draft");
   ASSERT_EQ(r.exit_code, 0) << r.output;

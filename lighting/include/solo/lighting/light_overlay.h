@@ -1,7 +1,8 @@
 #pragma once
 // A picture of the instantiated lights for checking them by eye: the day image darkened,
 // every light's pixels in the colour of its chromaticity (bright when on, dimmed when off),
-// and each group's outline (its mask's bounding box: vehicles cyan, floors yellow).
+// and each group's outline (its mask's bounding box: vehicles cyan, floors yellow). Lights
+// proposed from the labels (no light map given) are each framed in magenta.
 
 #include "solo/lighting/light_groups.h"
 #include "solo/lighting/light_instantiation.h"
@@ -14,6 +15,9 @@ namespace solo {
 struct LightOverlayOptions {
   double background_scale = 0.5;  ///< the day image's brightness under the lights
   double off_scale = 0.3;         ///< brightness of a light that is off, relative to on
+  /// The lights were proposed from the labels (light_proposals.h): each light gets a 1-pixel
+  /// magenta (RGB 255, 0, 255) frame one pixel outside its bounding box, drawn over the groups.
+  bool proposed = false;
 };
 
 /// sRGB-encoded display colour of a chromaticity relative to white E, at the largest
