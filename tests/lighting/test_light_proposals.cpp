@@ -117,6 +117,33 @@ TEST(LightProposals, APoleWithAnArmGetsItsLampAtTheArmsEnd) {
   EXPECT_NEAR(lamps[0]->position_m.z(), 25.0, 0.7);
 }
 
+TEST(LightProposals, AHeadAgainstTheSkyWhosePoleIsHiddenGetsOneLampAndLowOrSignIslandsNone) {
+  solo::Scene scene = flatStreet();
+  // A car 15 m away hides the pole's foot; the estimate lost the pole above it to the sky and
+  // labels the 0.6 x 0.25 m head building: an island inside the sky 7.0-7.25 m high, 25 m away.
+  paintBox(scene, 1.5, 4.5, 0.0, 1.5, 15.0, 26, 26001, cv::Scalar(0.2, 0.2, 0.6));
+  paintBox(scene, 2.8, 3.4, 7.0, 7.25, 25.0, 11, 11, cv::Scalar(0.7, 0.7, 0.6));
+  paintBox(scene, -3.0, -2.4, 2.4, 2.65, 20.0, 11, 11, cv::Scalar(0.7, 0.7, 0.6));  // too low for a street light
+  paintBox(scene, -6.0, -5.4, 7.0, 7.5, 30.0, 20, 20, cv::Scalar(0.9, 0.9, 0.9));   // a traffic sign
+  const solo::LightProposalResult result = solo::proposeLights(scene);
+  const auto lamps = ofFamily(result, solo::LightFamily::StreetLight);
+  ASSERT_EQ(lamps.size(), 1u);
+  const solo::LightProposal& lamp = *lamps[0];
+  EXPECT_EQ(lamp.rule, "head_against_sky");
+  EXPECT_NEAR(lamp.position_m.z(), 25.0, 0.1);
+  EXPECT_NEAR(lamp.position_m.x(), 3.1, 0.1);
+  EXPECT_NEAR(lamp.height_m, 7.12, 0.1);
+  EXPECT_EQ(lamp.category, LightCategory::StreetLightHighCct);
+  const cv::Point2d corner = pixelOf(scene, 2.8, 7.25, 25.0);
+  EXPECT_NEAR(lamp.box.x, corner.x, 1.5);
+  EXPECT_NEAR(lamp.box.y, corner.y, 1.5);
+
+  // Without the sky around it (a facade behind the head) it is no island and gets no lamp.
+  paintBox(scene, -10.0, 10.0, 6.0, 12.0, 40.0, 11, 11, cv::Scalar(0.5, 0.5, 0.5));
+  paintBox(scene, 2.8, 3.4, 7.0, 7.25, 25.0, 11, 11, cv::Scalar(0.7, 0.7, 0.6));
+  EXPECT_TRUE(ofFamily(solo::proposeLights(scene), solo::LightFamily::StreetLight).empty());
+}
+
 TEST(LightProposals, ACarWithRedBlobsGetsRearLampsAndWithWhiteBlobsFrontLamps) {
   for (const bool rear : {true, false}) {
     solo::Scene scene = flatStreet();
