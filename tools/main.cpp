@@ -616,6 +616,17 @@ void addDepthCommand(CLI::App& app, std::vector<Command>& commands) {
   DepthRefinementOptions& refinement = depth.refinement;
   namedChoice(depth_cmd->add_option("--optimizer", refinement.optimizer, "ceres, or adam (the paper's optimiser)"),
               kDepthOptimizers, refinement.optimizer, "{ceres,adam}");
+  // The objective first: the tangent model below applies to whichever is chosen.
+  depth_cmd
+      ->add_option_function<std::string>(
+          "--objective",
+          [&refinement](const std::string& name) {
+            refinement.optimization.objective =
+                name == "paper" ? NormalGuidedObjectiveOptions::paper() : NormalGuidedObjectiveOptions{};
+          },
+          "default (one-sided differences, data term in footprints, Cauchy loss) or paper (docs/depth-refinement.md)")
+      ->check(CLI::IsMember({"default", "paper"}))
+      ->default_str("default");
   // One tangent model for both optimisers' objectives.
   namedChoice(depth_cmd->add_option_function<TangentModel>(
                   "--tangent-model",

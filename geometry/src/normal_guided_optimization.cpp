@@ -10,6 +10,16 @@
 namespace solo {
 namespace {
 
+const char* tangentLossName(TangentLoss loss) {
+  switch (loss) {
+    case TangentLoss::Squared: return "squared";
+    case TangentLoss::Huber: return "huber";
+    case TangentLoss::Cauchy: return "cauchy";
+    case TangentLoss::DeadZone: return "dead_zone";
+  }
+  return "unknown";
+}
+
 // ---- pyramid for the coarse-to-fine start ----
 
 struct Level {
@@ -360,12 +370,18 @@ NormalGuidedOptimizationResult optimizeDepthWithNormals(const cv::Mat& filtered_
   r.add("layout", std::string(lbfgs ? "whole_image_lbfgs" : "per_pixel_residual_blocks"));
   r.add("tangent_model",
         std::string(options.objective.tangent_model == TangentModel::Perspective ? "perspective" : "paper_graph"));
+  r.add("tangent_stencil",
+        std::string(options.objective.tangent_stencil == TangentStencil::OneSided ? "one_sided" : "central"));
+  r.add("tangent_loss", std::string(tangentLossName(options.objective.tangent_loss)));
+  r.add("data_weight", options.objective.data_weight);
+  r.add("data_units", std::string(options.objective.data_units == DataUnits::Footprints ? "footprints" : "metres"));
   r.add("unknowns", std::int64_t{objective.unknowns()});
   r.add("tangent_pixels", std::int64_t{objective.tangentPixels()});
   r.add("iterations", std::int64_t{full_iterations});
   r.add("objective_initial", result.initial.total).add("objective_final", result.final.total);
   r.add("tangent_term_initial", result.initial.tangent).add("tangent_term_final", result.final.tangent);
-  r.add("data_term_final", result.final.data, "m^2");
+  r.add("data_term_final", result.final.data,
+        options.objective.data_units == DataUnits::Footprints ? "footprint^2" : "m^2");
   r.add("mean_abs_change", objective.unknowns() ? change / objective.unknowns() : 0.0, "m");
   r.add("termination", result.termination);
   r.seconds = clock.seconds();

@@ -45,6 +45,33 @@ TEST(CliDepth, SwitchedOffStepsAreReportedAsSkipped) {
   EXPECT_EQ(j["stages"][5]["skip_reason"], "switched off");
 }
 
+TEST(CliDepth, TheObjectiveIsChosenByNameAndReported) {
+  TempDir dir;
+  const auto optimizeStage = [&](const std::string& extra, const std::string& name) {
+    const auto r = runSolo("depth " + kScene + " -o \"" + (dir / (name + ".exr")).string() + "\" " + extra);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    const auto j = nlohmann::json::parse(solo::test::readText(dir / (name + ".report.json")));
+    return j["stages"][5]["metrics"];
+  };
+  const auto chosen = optimizeStage("", "default");
+  EXPECT_EQ(chosen["tangent_stencil"], "one_sided");
+  EXPECT_EQ(chosen["tangent_loss"], "cauchy");
+  EXPECT_EQ(chosen["data_units"], "footprints");
+  EXPECT_EQ(chosen["data_weight"], 3.0);
+  // The paper's, with the paper's tangent graph given after it: both hold.
+  const auto paper = optimizeStage("--tangent-model paper --objective paper", "paper");
+  EXPECT_EQ(paper["tangent_stencil"], "central");
+  EXPECT_EQ(paper["tangent_loss"], "squared");
+  EXPECT_EQ(paper["data_units"], "metres");
+  EXPECT_EQ(paper["data_weight"], 1.0);
+  EXPECT_EQ(paper["tangent_model"], "paper_graph");
+  const cv::Mat a = solo::readDepth(dir / "default.exr", 0), b = solo::readDepth(dir / "paper.exr", 0);
+  EXPECT_GT(cv::norm(a, b, cv::NORM_INF), 1e-3) << "the two objectives refine differently";
+  const auto bad = runSolo("depth " + kScene + " -o \"" + (dir / "x.exr").string() + "\" --objective smooth");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("--objective"), std::string::npos) << bad.output;
+}
+
 TEST(CliDepth, AMissingSceneIsAnErrorNamingItAndWritesNothing) {
   TempDir dir;
   const auto r = runSolo("depth \"" + (dir / "none.json").string() + "\" -o \"" + (dir / "out.exr").string() + "\"");
