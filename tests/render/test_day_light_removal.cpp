@@ -86,11 +86,11 @@ float radiance(const solo::RayCaster& caster, const Eigen::Vector3f& p, const Ei
   return kAlbedo * (sun_irradiance * direct + ambient / static_cast<float>(rays));
 }
 
-// The day image of constant albedo under the sun and a uniform sky, with one bounce; sky pixels
-// show the sky.
-cv::Mat renderDay(const solo::DayLightGeometry& g, const Eigen::Vector3f& sun, float sun_irradiance) {
-  const solo::RayCaster caster(g.vertices, g.triangles);
-  cv::Mat day(kHeight, kWidth, CV_32FC3, cv::Scalar::all(kSkyRadiance));
+// Calls visit(x, y, view, point, normal) for every pixel whose camera ray (through a fixed
+// sub-pixel offset) hits the mesh: the unit view direction, the hit point lifted 1 mm off the
+// surface and the surface normal facing the camera.
+template <typename Visit>
+void forEachSurfacePixel(const solo::DayLightGeometry& g, const solo::RayCaster& caster, Visit visit) {
   for (int y = 0; y < kHeight; ++y)
     for (int x = 0; x < kWidth; ++x) {
       const Eigen::Vector3f view = Eigen::Vector3f(static_cast<float>((x + 0.13 - g.camera.cx) / g.camera.fx),
@@ -100,9 +100,19 @@ cv::Mat renderDay(const solo::DayLightGeometry& g, const Eigen::Vector3f& sun, f
       if (!hit.hit) continue;
       Eigen::Vector3f n = hit.geometric_normal.normalized();
       if (n.dot(view) > 0) n = -n;
-      day.at<cv::Vec3f>(y, x) =
-          cv::Vec3f::all(radiance(caster, view * hit.distance + n * 1e-3f, n, sun, sun_irradiance, 16, true));
+      visit(x, y, view, Eigen::Vector3f(view * hit.distance + n * 1e-3f), n);
     }
+}
+
+// The day image of constant albedo under the sun and a uniform sky, with one bounce; sky pixels
+// show the sky.
+cv::Mat renderDay(const solo::DayLightGeometry& g, const Eigen::Vector3f& sun, float sun_irradiance) {
+  const solo::RayCaster caster(g.vertices, g.triangles);
+  cv::Mat day(kHeight, kWidth, CV_32FC3, cv::Scalar::all(kSkyRadiance));
+  forEachSurfacePixel(g, caster, [&](int x, int y, const Eigen::Vector3f&, const Eigen::Vector3f& p,
+                                     const Eigen::Vector3f& n) {
+    day.at<cv::Vec3f>(y, x) = cv::Vec3f::all(radiance(caster, p, n, sun, sun_irradiance, 16, true));
+  });
   return day;
 }
 
@@ -137,21 +147,12 @@ Spread albedoSpread(const cv::Mat& albedo, const cv::Mat& lit) {
 cv::Mat sunlit(const solo::DayLightGeometry& g) {
   const solo::RayCaster caster(g.vertices, g.triangles);
   cv::Mat lit(kHeight, kWidth, CV_32FC3, cv::Scalar::all(-1));
-  for (int y = 0; y < kHeight; ++y)
-    for (int x = 0; x < kWidth; ++x) {
-      const Eigen::Vector3f view = Eigen::Vector3f(static_cast<float>((x + 0.13 - g.camera.cx) / g.camera.fx),
-                                                   static_cast<float>((y + 0.07 - g.camera.cy) / g.camera.fy), 1.f)
-                                       .normalized();
-      const solo::RayHit hit = caster.intersect(Eigen::Vector3f::Zero(), view);
-      if (!hit.hit) continue;
-      Eigen::Vector3f n = hit.geometric_normal.normalized();
-      if (n.dot(view) > 0) n = -n;
-      const Eigen::Vector3f p = view * hit.distance + n * 1e-3f;
-      lit.at<cv::Vec3f>(y, x) = cv::Vec3f::all(0);
-      if (n.dot(sunDirection()) > 0 &&
-          !caster.occluded(p, sunDirection(), 0.f, std::numeric_limits<float>::infinity()))
-        lit.at<cv::Vec3f>(y, x) = cv::Vec3f::all(n.dot(sunDirection()));
-    }
+  forEachSurfacePixel(g, caster, [&](int x, int y, const Eigen::Vector3f&, const Eigen::Vector3f& p,
+                                     const Eigen::Vector3f& n) {
+    lit.at<cv::Vec3f>(y, x) = cv::Vec3f::all(0);
+    if (n.dot(sunDirection()) > 0 && !caster.occluded(p, sunDirection(), 0.f, std::numeric_limits<float>::infinity()))
+      lit.at<cv::Vec3f>(y, x) = cv::Vec3f::all(n.dot(sunDirection()));
+  });
   return lit;
 }
 
