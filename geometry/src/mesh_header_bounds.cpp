@@ -251,9 +251,16 @@ void requireListFits(const fs::path& file, const ElementBound& element, std::uin
                                " bytes after it can hold (corrupt file)");
 }
 
+// Throws for a list whose size the file ends before or inside: CGAL's reader sizes a vector from
+// the bytes it did not read (uninitialised memory, up to 2^32 items).
+[[noreturn]] void throwListSizeCutOff(const fs::path& file, const ElementBound& element, std::uint64_t item) {
+  throw InputError(file, "cannot read as a mesh: PLY " + element.name + " " + std::to_string(item) +
+                             " has a list whose size the end of the file cuts off (truncated file)");
+}
+
 // A binary PLY body walked as CGAL's reader walks it, each list size checked against the bytes
-// left before the reader sizes a vector from it. Stops quietly at the end of the file: the
-// reader reports the truncation.
+// left before the reader sizes a vector from it. Stops quietly where the file ends before a
+// scalar (the reader reports the truncation); throws where it ends before or inside a list size.
 void requireBinaryPlyListsFitFile(const fs::path& file, const PlyHeader& ply, std::uint64_t file_size_bytes) {
   const bool big_endian = ply.format == PlyFormat::BinaryBigEndian;
   ChunkedBytes body(file, ply.body_offset_bytes);
@@ -266,7 +273,8 @@ void requireBinaryPlyListsFitFile(const fs::path& file, const PlyHeader& ply, st
           if (!body.skip(item_bytes)) return;
           continue;
         }
-        if (!body.read(bytes, static_cast<std::size_t>(plyScalarBytes(property.count_type)))) return;
+        if (!body.read(bytes, static_cast<std::size_t>(plyScalarBytes(property.count_type))))
+          throwListSizeCutOff(file, element, item);
         const std::int64_t size = binaryListSize(bytes, property.count_type, big_endian);
         const std::uint64_t remaining = file_size_bytes - std::min(file_size_bytes, body.position());
         requireListFits(file, element, item, size, item_bytes, remaining);
@@ -323,7 +331,9 @@ bool skipAsciiValue(std::istream& in, const std::string& type) {
 
 // An ASCII PLY body walked value by value as CGAL's reader extracts them, each list size checked
 // against the bytes left (a value takes at least one digit and a separator) before the reader
-// sizes a vector from it. Stops quietly where an extraction fails: the reader reports it.
+// sizes a vector from it. Stops quietly where an extraction fails (the reader reports it), except
+// where the file ends before a list size: there the reader's extraction of an integer leaves its
+// uninitialised variable as the size.
 void requireAsciiPlyListsFitFile(const fs::path& file, const PlyHeader& ply, std::uint64_t file_size_bytes) {
   std::ifstream in(file, std::ios::binary);
   in.seekg(static_cast<std::streamoff>(ply.body_offset_bytes));
@@ -334,6 +344,7 @@ void requireAsciiPlyListsFitFile(const fs::path& file, const PlyHeader& ply, std
           if (!skipAsciiValue(in, property.item_type)) return;
           continue;
         }
+        if ((in >> std::ws).peek() == std::char_traits<char>::eof()) throwListSizeCutOff(file, element, item);
         const std::optional<std::int64_t> size = asciiListSize(in, property.count_type);
         if (!size) return;
         const std::uint64_t at = in.good() ? static_cast<std::uint64_t>(in.tellg()) : file_size_bytes;

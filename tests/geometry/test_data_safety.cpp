@@ -597,6 +597,30 @@ TEST(FuzzFindings, PlyListSizesBeyondTheFileAreRefusedBeforeAllocation) {
   EXPECT_EQ(solo::readMesh(dir / "plain.ply").faces.size(), 1u);
 }
 
+TEST(FuzzFindings, PlyListSizesCutOffByTheEndOfTheFileAreRefused) {
+  // fuzz_mesh_ply: a binary list element whose body is one byte: CGAL's reader read the uint list
+  // size from 1 of its 4 bytes, took the rest from uninitialised memory and sized a vector from it
+  // (2.7 billion ints under AddressSanitizer).
+  TempDir dir;
+  const std::string header = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                             "element face 1\nproperty list uint int vertex_indices\nend_header\n";
+  const std::string vertices(36, '\0');
+  writeText(dir / "cut.ply", "ply\nformat binary_little_endian 1.0\n" + header + vertices + "i");
+  const std::string cut_message = ": cannot read as a mesh: PLY face 0 has a list whose size the end of the file cuts "
+                                  "off (truncated file)";
+  EXPECT_EQ(messageOf([&] { solo::readMesh(dir / "cut.ply"); }), (dir / "cut.ply").string() + cut_message);
+  writeText(dir / "ends.ply", "ply\nformat binary_big_endian 1.0\n" + header + vertices);
+  EXPECT_EQ(messageOf([&] { solo::readMesh(dir / "ends.ply"); }), (dir / "ends.ply").string() + cut_message);
+  // ASCII: the file ends (after white space) where the face's list size should be: the reader's
+  // integer extraction fails before it starts and leaves the size uninitialised.
+  const std::string ascii = "ply\nformat ascii 1.0\n" + header + "0 0 0\n1 0 0\n0 1 0\n";
+  writeText(dir / "ascii.ply", ascii + " \n");
+  EXPECT_EQ(messageOf([&] { solo::readMesh(dir / "ascii.ply"); }), (dir / "ascii.ply").string() + cut_message);
+  // A size that is there, even as the file's last token, reads.
+  writeText(dir / "last.ply", ascii + "3 0 1 2");
+  EXPECT_EQ(solo::readMesh(dir / "last.ply").faces.size(), 1u);
+}
+
 TEST(FuzzFindings, OffFacesWithNegativeHugeOrMissingIndicesAndOffVariantsAreRefused) {
   // fuzz_mesh_off: CGAL converts a face's vertex count and indices from double to size_t
   // (undefined for -1 or 1e23), sizes the face from the count before reading it (111111111111
