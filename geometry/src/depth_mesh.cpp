@@ -6,6 +6,15 @@
 #include <stdexcept>
 
 namespace solo {
+namespace {
+
+// A grid of n pixels has about n vertices, 3n edges and 2n faces; room is kept for half as many
+// again (in halves of a pixel's share).
+constexpr std::size_t kReservedVertexHalvesPerPixel = 3;
+constexpr std::size_t kReservedEdgeHalvesPerPixel = 9;
+constexpr std::size_t kReservedFaceHalvesPerPixel = 6;
+
+}  // namespace
 
 DepthMesh meshFromDepth(const cv::Mat& depth_m, const PinholeCamera& camera, const cv::Mat& instances) {
   if (depth_m.type() != CV_32F) throw std::invalid_argument("meshFromDepth: depth must be CV_32F");
@@ -18,7 +27,12 @@ DepthMesh meshFromDepth(const cv::Mat& depth_m, const PinholeCamera& camera, con
   out.properties = ImageVertexProperties::getOrAdd(out.mesh);
   out.vertex_of_pixel.assign(static_cast<std::size_t>(out.width) * out.height, -1);
   SurfaceMesh& mesh = out.mesh;
-  mesh.reserve(out.vertex_of_pixel.size(), out.vertex_of_pixel.size() * 3, out.vertex_of_pixel.size() * 2);
+  // Room for the grid and for what the cleanup adds (hole patches, closed solids: a solid's back
+  // and walls can double a sheet), so that no array is copied to grow. Reserved pages that are
+  // never written cost address space only.
+  const std::size_t pixels = out.vertex_of_pixel.size();
+  mesh.reserve(pixels * kReservedVertexHalvesPerPixel / 2, pixels * kReservedEdgeHalvesPerPixel / 2,
+               pixels * kReservedFaceHalvesPerPixel / 2);
 
   for (int v = 0; v < out.height; ++v) {
     const float* d = depth_m.ptr<float>(v);
