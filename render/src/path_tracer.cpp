@@ -764,14 +764,27 @@ struct SampleBudget {
   int replicates = 1;  // independent replicates of the point set (sampler.h)
   int min_samples = 2, max_samples = 2;
   bool pooled = false;  // replicate variances pooled over the tile (pool_error_gain)
+  // AdaptiveRule::ImageError: a pixel takes samples_per_sigma x its neighbours' per-sample
+  // standard deviation of Y (within min and max), the image's constant from the pilot.
+  bool allocate = false;
+  double samples_per_sigma = 0;
 };
+
+// Whether the ImageError rule applies: adaptive, with relative_error the only target.
+bool allocatesSamples(const PathTracerOptions& options) {
+  const bool adaptive = std::max(2, options.min_samples) < options.max_samples;
+  return adaptive && options.adaptive_rule == AdaptiveRule::ImageError && options.relative_error > 0 &&
+         options.absolute_error.empty() && !options.noise_sigma;
+}
 
 SampleBudget sampleBudget(const PathTracerOptions& options) {
   SampleBudget budget;
   const bool adaptive = std::max(2, options.min_samples) < options.max_samples;
-  // Replicates (sampler.h) only where stopping decisions are made: a fixed sample count keeps
-  // the single, best stratified point set.
-  const int replicates = options.sampler == SamplerKind::Sobol && adaptive ? options.error_replicates : 1;
+  budget.allocate = allocatesSamples(options);
+  // Replicates (sampler.h) only where stopping decisions are made: a fixed sample count, and
+  // the ImageError rule, keep the single, best stratified point set.
+  const int replicates =
+      options.sampler == SamplerKind::Sobol && adaptive && !budget.allocate ? options.error_replicates : 1;
   if (replicates != 1 && replicates != 2 && replicates != 4 && replicates != 8)
     throw std::invalid_argument("renderPathTraced: error_replicates must be 1, 2, 4 or 8, got " +
                                 std::to_string(options.error_replicates));
@@ -795,6 +808,7 @@ struct PixelState {
   std::array<double, kMaxReplicates> replicate_sum{};
   std::array<int, kMaxReplicates> replicate_count{};
   int n = 0, taken = 0;  // finite samples, samples taken
+  int allotted = 0;      // the ImageError rule's sample count for the pixel
   int emitter_hits = 0;  // samples whose camera ray hit an emitter
   bool done = false;
   double stopped_variance = -1;  // variance of the mean when the target stopped it
@@ -844,6 +858,10 @@ class TileRenderer {
   void render() {
     for (PixelState& p : pixels_) wave_.push_back(&p);
     for (int k = 0; k < budget_.min_samples; ++k) takeSamples();
+    if (budget_.allocate) {
+      allotSamples();
+      return;
+    }
     for (;;) {
       if (budget_.pooled) gain_ = tileGain();
       if (!decideStops()) break;
@@ -915,6 +933,44 @@ class TileRenderer {
       p.replicate_sum[static_cast<std::size_t>(replicate)] += luminance(value);
       ++p.replicate_count[static_cast<std::size_t>(replicate)];
     }
+  }
+
+  // The ImageError rule: each pixel's count from its neighbours' per-sample standard deviation
+  // (independent of its own samples, so its mean stays unbiased), then waves of one more sample
+  // for every pixel short of its count.
+  void allotSamples() {
+    for (std::size_t k = 0; k < pixels_.size(); ++k) {
+      PixelState& p = pixels_[k];
+      const double sigma = neighbourSigma(k);
+      const double wanted = sigma > 0 ? std::ceil(budget_.samples_per_sigma * sigma) : budget_.min_samples;
+      p.allotted = std::isfinite(wanted) ? static_cast<int>(std::clamp<double>(wanted, budget_.min_samples, budget_.max_samples))
+                                         : budget_.max_samples;
+    }
+    for (;;) {
+      wave_.clear();
+      for (PixelState& p : pixels_)
+        if (p.taken < p.allotted) wave_.push_back(&p);
+      if (wave_.empty()) break;
+      takeSamples();
+    }
+  }
+
+  // The mean per-sample standard deviation of Y over the pixel's 3x3 neighbours in the tile
+  // (itself excluded); its own when it has no neighbour with two samples.
+  double neighbourSigma(std::size_t k) const {
+    const int i = static_cast<int>(k) % tile_width_, j = static_cast<int>(k) / tile_width_;
+    double sum = 0;
+    int count = 0;
+    for (int jj = std::max(0, j - 1); jj <= std::min(tile_rows_ - 1, j + 1); ++jj)
+      for (int ii = std::max(0, i - 1); ii <= std::min(tile_width_ - 1, i + 1); ++ii) {
+        const PixelState& q = pixels_[static_cast<std::size_t>(jj * tile_width_ + ii)];
+        if ((ii == i && jj == j) || q.n < 2) continue;
+        sum += std::sqrt(q.m2_y / (q.n - 1));
+        ++count;
+      }
+    if (count > 0) return sum / count;
+    const PixelState& p = pixels_[k];
+    return p.n > 1 ? std::sqrt(p.m2_y / (p.n - 1)) : 0.0;
   }
 
   // The tile's stratification gain: summed replicate variances over summed independent-sample
@@ -1083,6 +1139,43 @@ void reportRender(RenderOutput& out, double seconds, const Context& context, con
 }  // namespace
 
 RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const PinholeCamera& camera,
+                              const PathTracerOptions& options);
+
+namespace {
+
+// The ImageError rule's constant. Pixel i's mean has variance s_i^2 / n_i (s_i its per-sample
+// standard deviation); for a total of samples the image's summed variance is least with n_i
+// proportional to s_i, and it equals eps^2 sum(mean_i^2) (relative RMSE eps) at
+// n_i = s_i sum(s) / (eps^2 sum(mean^2)). The sums come from a pilot at a quarter of the
+// resolution with min_samples per pixel (a sixteenth of the pixels), over the pixels that see no
+// emitter (their error is that of their coverage, not of the light transport); per pixel they
+// are the averages, which do not depend on the resolution.
+double samplesPerSigma(const PreparedRenderScene& prepared, const PinholeCamera& camera, const PathTracerOptions& options,
+                       int min_samples, std::int64_t* pilot_samples) {
+  PathTracerOptions pilot = options;
+  pilot.min_samples = pilot.max_samples = min_samples;
+  pilot.progress = false;
+  pilot.ray_log = nullptr;
+  pilot.seed = options.seed ^ 0x9e3779b97f4a7c15ULL;
+  const PinholeCamera small = camera.scaledTo(std::max(1, camera.width / 4), std::max(1, camera.height / 4));
+  const RenderOutput out = renderPathTraced(prepared, small, pilot);
+  double sigma_sum = 0, square_sum = 0;
+  for (int y = 0; y < out.radiance.rows; ++y)
+    for (int x = 0; x < out.radiance.cols; ++x) {
+      if (out.emitter_coverage.at<float>(y, x) > 0.f) continue;
+      const double mean_y = out.radiance.at<cv::Vec3f>(y, x)[1];
+      // A fixed count reports sample variance / n as its standard error.
+      sigma_sum += static_cast<double>(out.std_error.at<float>(y, x)) * std::sqrt(static_cast<double>(out.samples.at<int>(y, x)));
+      square_sum += mean_y * mean_y;
+    }
+  *pilot_samples = static_cast<std::int64_t>(small.width) * small.height * min_samples;
+  if (square_sum <= 0) return std::numeric_limits<double>::infinity();  // nothing lit: the cap decides
+  return sigma_sum / (options.relative_error * options.relative_error * square_sum);
+}
+
+}  // namespace
+
+RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const PinholeCamera& camera,
                               const PathTracerOptions& options) {
   Stopwatch clock;
   const RenderScene& scene = prepared.scene();
@@ -1095,7 +1188,9 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   if (!scene.face_roughness.empty()) ggxAverageAlbedo(0.5f);  // builds the albedo table before the tiles start
   const Context context = makeContext(scene, camera, options, p, sampler);
   RenderOutput out = allocateOutput(width, height);
-  const SampleBudget budget = sampleBudget(options);
+  SampleBudget budget = sampleBudget(options);
+  std::int64_t pilot_samples = 0;
+  if (budget.allocate) budget.samples_per_sigma = samplesPerSigma(prepared, camera, options, budget.min_samples, &pilot_samples);
 
   const int tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
   ProgressBar progress(options.progress, tiles_x * tiles_y);
@@ -1114,6 +1209,10 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
     progress.tick();
   });
   reportRender(out, clock.seconds(), context, p, totals);
+  if (budget.allocate) {
+    out.report.add("adaptive_rule", std::string("image_error"));
+    out.report.add("pilot_samples_per_pixel", static_cast<double>(pilot_samples) / (static_cast<double>(width) * height));
+  }
   return out;
 }
 

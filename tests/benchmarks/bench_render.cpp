@@ -359,9 +359,10 @@ int main(int argc, char** argv) {
                 median(seconds[0]) / median(seconds[1]), median(seconds[0]) / median(seconds[2]));
   }
 
-  // Adaptive stopping (relative error 5 %, 16 to 256 samples) with the Sobol sampler: the
-  // error estimate from 1 replicate (sample variance / n, which assumes independent samples),
-  // 2 replicates per pixel, 2 or 4 with the tile-pooled gain; the independent sampler.
+  // Adaptive sampling (relative error 5 %, 16 to 256 samples): the per-pixel threshold rule
+  // with the Sobol sampler's error estimate from 1 replicate (sample variance / n, which assumes
+  // independent samples), 2 replicates per pixel, 2 or 4 with the tile-pooled gain, and with the
+  // independent sampler; then the image-error rule (the default) with each sampler.
   {
     struct Row {
       solo::SamplerKind sampler;
@@ -379,11 +380,26 @@ int main(int argc, char** argv) {
       a.sampler = row.sampler;
       a.error_replicates = row.replicates;
       a.pool_error_gain = row.pooled;
+      a.adaptive_rule = solo::AdaptiveRule::PixelThreshold;
       const solo::RenderOutput out = solo::renderPathTraced(scene, a);
-      std::printf("adaptive 5 %%, %s, %d replicate(s)%s: %.1f spp mean, %.2f s, relative RMSE %.4f\n",
+      std::printf("adaptive 5 %%, per-pixel threshold, %s, %d replicate(s)%s: %.1f spp mean, %.2f s, relative RMSE %.4f\n",
                   solo::samplerKindName(row.sampler), row.replicates,
                   row.replicates == 1 ? "" : row.pooled ? ", tile-pooled gain" : ", per pixel",
                   std::get<double>(*out.report.find("samples_per_pixel_mean")), out.report.seconds,
+                  relativeRmse(out.radiance, reference.radiance, reference.emitter_coverage));
+    }
+    for (const solo::SamplerKind kind : {solo::SamplerKind::Sobol, solo::SamplerKind::Independent}) {
+      solo::PathTracerOptions a = o;
+      a.min_samples = 16;
+      a.max_samples = 256;
+      a.relative_error = 0.05;
+      a.seed = 7;
+      a.sampler = kind;
+      const solo::RenderOutput out = solo::renderPathTraced(scene, a);
+      const double spp = std::get<double>(*out.report.find("samples_per_pixel_mean")) +
+                         std::get<double>(*out.report.find("pilot_samples_per_pixel"));
+      std::printf("adaptive 5 %%, image-error rule, %s: %.1f spp mean (pilot included), %.2f s, relative RMSE %.4f\n",
+                  solo::samplerKindName(kind), spp, out.report.seconds,
                   relativeRmse(out.radiance, reference.radiance, reference.emitter_coverage));
     }
   }

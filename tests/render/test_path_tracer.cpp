@@ -764,6 +764,7 @@ TEST(PathTracer, EmittersTouchingTheReceiverStayFiniteAndBelowThePhysicalBound) 
 TEST(PathTracer, AdaptiveSamplingStopsEarlyWhereTheImageIsSmooth) {
   solo::PathTracerOptions o;
   o.diffuse = solo::DiffuseModel::Lambert;
+  o.adaptive_rule = solo::AdaptiveRule::PixelThreshold;  // the per-pixel promise below
   o.stop_on_neighbours = false;  // the promise below is the pixel's own estimate's
   o.min_samples = 16;
   o.max_samples = 1024;
@@ -896,6 +897,7 @@ TEST(PathTracer, NoiseMatchedTargetStopsAtThePredictedSampleCount) {
 
 TEST(PathTracer, AHighNoiseFloorTakesFewerSamplesThanTheRelativeTargetAlone) {
   solo::PathTracerOptions o;
+  o.adaptive_rule = solo::AdaptiveRule::PixelThreshold;  // the relative target per pixel, as the noise target
   o.stop_on_neighbours = false;  // "every pixel below" is the pixel's own estimate's promise
   o.diffuse = solo::DiffuseModel::Lambert;
   o.min_samples = 16;

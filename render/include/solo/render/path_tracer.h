@@ -29,6 +29,20 @@ struct RecordedRay {
   bool shadow = false;
 };
 
+/// How adaptive sampling (min_samples < max_samples) spends its samples.
+enum class AdaptiveRule {
+  /// relative_error is a target for the image's relative RMSE: a pilot render at a quarter of the
+  /// resolution gives the image's scale, then every pixel takes, after its min_samples, a count
+  /// proportional to its neighbours' per-sample standard deviation (the allocation that minimises
+  /// the summed squared error for a total; docs/rendering.md, "Adaptive sampling"). Applies when
+  /// relative_error is the only target (no absolute_error, no noise_sigma); otherwise, and with
+  /// relative_error 0, PixelThreshold.
+  ImageError,
+  /// Each pixel stops once its standard error is below its own target (max of relative_error x
+  /// mean, absolute_error, noise_factor x noise_sigma), checked every 8 samples.
+  PixelThreshold,
+};
+
 /// The path tracer's settings. Its defaults are the renderer's on its own (converged reference
 /// renders, benchmarks, tests); the night conversion's are set once in NightConversionOptions
 /// (pipeline/night_conversion.h: 2 to 8 spp to the sensor noise, power light sampling, seed 0).
@@ -38,15 +52,19 @@ struct PathTracerOptions {
   /// there, and the outer half of each frame pixel would otherwise see nothing behind it.
   bool film_within_pixel_centres = true;
   int max_samples = 256;  ///< per pixel
-  /// Stop a pixel when the standard error of its mean luminance (Y) is below
+  AdaptiveRule adaptive_rule = AdaptiveRule::ImageError;
+  /// ImageError: the target for the image's relative RMSE of Y (root of the summed squared errors
+  /// over the summed squared luminance, on the pixels that see no emitter), from independent-
+  /// sample variances (an upper bound with the Sobol sampler).
+  /// PixelThreshold: stop a pixel when the standard error of its mean luminance (Y) is below
   /// max(relative_error * mean, absolute_error[pixel], noise_factor * noise_sigma(mean)).
   /// The standard error: with the independent sampler, sample variance / n; with the Sobol
   /// sampler (whose stratified samples make that an overestimate), the spread of the means of
   /// `error_replicates` independently scrambled point sets the samples alternate between
   /// (batch means over replicates); both are unbiased for the mean's variance. By default the
   /// replicate spread is pooled over the pixel's tile (pool_error_gain).
-  double relative_error = 0.02;
-  /// 1, 2, 4 or 8; used with the Sobol sampler when min_samples < max_samples (adaptive). More
+  double relative_error = 0.05;
+  /// 1, 2, 4 or 8; used with the Sobol sampler by the PixelThreshold rule. More
   /// replicates give a less noisy error estimate but smaller, less stratified point sets; 1
   /// falls back to sample variance / n. min_samples is rounded up to a multiple of it.
   int error_replicates = 2;
