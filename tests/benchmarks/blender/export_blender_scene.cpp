@@ -7,7 +7,9 @@
 //       plane under one rectangle light), plane-emitter (a grey plane under an emitting quad),
 //       pipeline:MANIFEST (the render scene `solo night` builds from a scene manifest, e.g. of
 //       `solo synth --seed 3 --size 1920x1080`: refined depth, cleaned mesh with solids, the
-//       light record drawn with seed 3, the two headlights; the camera scaled to WIDTHxHEIGHT).
+//       light record drawn with seed 3, the two headlights; the camera scaled to WIDTHxHEIGHT);
+//       rough:MANIFEST (the same with its roughness map: solo only), windows:MANIFEST (without
+//       the street lights), headlights:MANIFEST (no emitter but the two headlights).
 //       Writes OUT_DIR/scene.json + *.f32/*.u32 arrays (camera frame = OpenCV, metres; colours
 //       are XYZ relative to E, rendered channel by channel, so Cycles receives them as "RGB"
 //       and no colour transform may touch them), solo_reference.exr, emitter_mask.exr (1 where any
@@ -23,6 +25,8 @@
 //       both together; with `clamp` the indirect clamp at 30 to 3000 cd/m^2;
 //       with `roulette` Russian roulette from bounce 1, 2 and 4 (the default is 3); with `split`
 //       emission splitting (PathTracerOptions::emission_splits) 4 and 8 within 0.5 and 2 m.
+//       With `adaptive`, only the default adaptive run and fixed sampling at its mean
+//       samples per pixel.
 //       The runs take the seed from the environment variable SOLO_SEED (7 unless set), so that a
 //       firefly-ruled error can be averaged over seeds.
 //   export_blender_scene compare OUT_DIR IMAGE.exr
@@ -58,6 +62,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <set>
 #include <sstream>
 #include <sys/resource.h>
 #include <stdexcept>
@@ -83,6 +88,43 @@ solo::RenderScene pipelineScene(const fs::path& manifest, int width, int height)
   scene.face_roughness.clear();
   scene.sky_radiance = Eigen::Vector3f::Zero();
   scene.sky_zenith_radiance.reset();
+  return scene;
+}
+
+// The scene kinds the scene-kind benchmark derives from a manifest (run_scene_kinds.sh): the
+// comparison's pipeline scene (`pipeline:`), the same keeping the roughness map (`rough:`, Lambert
+// + GGX, solo only: the Cycles script renders diffuse only), without the street lights
+// (`windows:`: the windows and the cars' lights stay), and with no emitter at all but the two
+// headlights (`headlights:`). A dropped emitter's faces keep their reflectance.
+solo::RenderScene sceneKind(const std::string& name, int width, int height) {
+  const auto manifest = [&](const char* prefix) { return name.substr(std::string(prefix).size()); };
+  if (name.rfind("pipeline:", 0) == 0) return pipelineScene(manifest("pipeline:"), width, height);
+  if (name.rfind("rough:", 0) == 0) {
+    solo::RenderScene scene = solo::bench::pipelineScene(manifest("rough:"), width, height);
+    for (auto& emitter : scene.emitters) emitter.directional_profile = false;
+    for (auto& light : scene.rectangle_lights) light.spread_rad = 3.14159265f;
+    scene.sky_radiance = Eigen::Vector3f::Zero();
+    scene.sky_zenith_radiance.reset();
+    return scene;
+  }
+  const bool windows = name.rfind("windows:", 0) == 0, headlights = name.rfind("headlights:", 0) == 0;
+  if (!windows && !headlights) throw std::runtime_error("unknown scene " + name);
+  solo::RenderScene scene = pipelineScene(manifest(windows ? "windows:" : "headlights:"), width, height);
+  std::size_t kept = 0;
+  std::set<int> emitters_kept;
+  for (int& emitter : scene.face_emitter) {
+    if (emitter < 0) continue;
+    const int category = solo::lightCategoryOfId(scene.emitters[static_cast<std::size_t>(emitter)].light_id);
+    const bool street_light = category == static_cast<int>(solo::LightCategory::StreetLightHighCct) ||
+                              category == static_cast<int>(solo::LightCategory::StreetLightLowCct);
+    if (headlights || street_light) {
+      emitter = -1;
+    } else {
+      ++kept;
+      emitters_kept.insert(emitter);
+    }
+  }
+  std::printf("%s: %zu emitters (%zu emitting triangles) kept\n", name.c_str(), emitters_kept.size(), kept);
   return scene;
 }
 
@@ -218,12 +260,12 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
   const bool clamp_variants = argc > 7 && std::string(argv[7]) == "clamp";
   const bool roulette_variants = argc > 7 && std::string(argv[7]) == "roulette";
   const bool split_variants = argc > 7 && std::string(argv[7]) == "split";
+  const bool adaptive_only = argc > 7 && std::string(argv[7]) == "adaptive";
   solo::RenderScene scene;
   if (name == "night") scene = nightStreet(width, height);
   else if (name == "plane-area") scene = litPlane(width, height, false);
   else if (name == "plane-emitter") scene = litPlane(width, height, true);
-  else if (name.rfind("pipeline:", 0) == 0) scene = pipelineScene(name.substr(9), width, height);
-  else throw std::runtime_error("unknown scene " + name + " (night, plane-area, plane-emitter, pipeline:MANIFEST)");
+  else scene = sceneKind(name, width, height);
   fs::create_directories(dir);
   solo::PathTracerOptions o;
   o.progress = false;
@@ -273,7 +315,7 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
   csv << "settings,spp_mean,seconds,cpu_seconds,relative_rmse,mean_ratio\n";
   std::printf("%-22s %8s %9s %9s %14s %10s\n", "solo settings", "spp", "seconds", "cpu_s", "relative_rmse",
               "mean_ratio");
-  const auto run = [&](const std::string& label, solo::PathTracerOptions options) {
+  const auto run = [&](const std::string& label, solo::PathTracerOptions options) -> double {
     options.seed = std::getenv("SOLO_SEED") ? static_cast<std::uint64_t>(std::atoi(std::getenv("SOLO_SEED"))) : 7;
     solo::Stopwatch clock;
     const double cpu_start = processCpuSeconds();
@@ -281,18 +323,22 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     const double seconds = clock.seconds(), cpu_seconds = processCpuSeconds() - cpu_start;
     double ratio = 0;
     const double error = relativeRmse(out.radiance, reference, mask, &ratio);
-    const double spp = cv::mean(out.samples)[0];
+    double spp = cv::mean(out.samples)[0];
+    // The ImageError rule's pilot render (a quarter of the resolution) counts toward the samples.
+    if (const solo::MetricValue* pilot = out.report.find("pilot_samples_per_pixel")) spp += std::get<double>(*pilot);
     std::printf("%-22s %8.1f %9.3f %9.3f %14.4f %10.4f\n", label.c_str(), spp, seconds, cpu_seconds, error, ratio);
     csv << label << "," << spp << "," << seconds << "," << cpu_seconds << "," << error << "," << ratio << std::endl;
     std::string file = "solo_" + label + ".exr";  // for `compare` (error concentration) and viewing
     std::replace(file.begin(), file.end(), ' ', '_');
     solo::writeImage(dir / file, out.radiance);
     std::fflush(stdout);
+    return spp;
   };
   // Both per-sample samplers (sobol is the default); the reference above uses the default.
   for (const solo::SamplerKind kind : samplers) {
     const std::string suffix = std::string(" ") + solo::samplerKindName(kind);
     for (int spp : {1, 4, 16, 64}) {
+      if (adaptive_only) break;
       solo::PathTracerOptions fixed = o;
       fixed.min_samples = fixed.max_samples = spp;
       fixed.sampler = kind;
@@ -302,7 +348,18 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     defaults.progress = false;
     defaults.diffuse = solo::DiffuseModel::Lambert;
     defaults.sampler = kind;
-    run("default adaptive" + suffix, defaults);
+    // SOLO_RELATIVE_ERROR and SOLO_ADAPTIVE_RULE=threshold change the default adaptive run's
+    // target and rule (AdaptiveRule::PixelThreshold), for the adaptive-against-fixed table.
+    if (const char* target = std::getenv("SOLO_RELATIVE_ERROR")) defaults.relative_error = std::atof(target);
+    if (const char* rule = std::getenv("SOLO_ADAPTIVE_RULE"); rule && std::string(rule) == "threshold")
+      defaults.adaptive_rule = solo::AdaptiveRule::PixelThreshold;
+    const double adaptive_spp = run("default adaptive" + suffix, defaults);
+    // Fixed sampling at the adaptive run's mean samples per pixel: adaptive sampling pays only
+    // if it beats this.
+    solo::PathTracerOptions equal = o;
+    equal.min_samples = equal.max_samples = std::max(1, static_cast<int>(std::lround(adaptive_spp)));
+    equal.sampler = kind;
+    run("fixed at adaptive mean" + suffix, equal);
   }
   // A/B runs at 16 and 64 spp with the first sampler: `name` labels a variant that `set` makes.
   using Variant = std::pair<std::string, std::function<void(solo::PathTracerOptions&)>>;
@@ -407,8 +464,7 @@ int probe(int argc, char** argv) {
   const std::string name = argv[2];
   solo::RenderScene scene;
   if (name == "night") scene = nightStreet(width, height);
-  else if (name.rfind("pipeline:", 0) == 0) scene = pipelineScene(name.substr(9), width, height);
-  else throw std::runtime_error("probe: unknown scene " + name);
+  else scene = sceneKind(name, width, height);
   const solo::PreparedRenderScene prepared(scene);
   solo::PinholeCamera pixel = scene.camera;
   pixel.cx -= x;
