@@ -77,6 +77,7 @@ struct NightSceneBuilder {
   void chooseResolution(const cv::Mat& albedo);
   void prepareReflectance(const cv::Mat& albedo, const cv::Mat& day_image);
   void mapLights();
+  void reserveFaceArrays(std::size_t faces, std::size_t vertices);
   void addMeshFaces();
   Eigen::Vector3f shadingNormal(const FaceVertices& fv, double scale_x, double scale_y) const;
   FaceVertices addFaceVertices(SurfaceMesh::FaceHandle f, const std::optional<ImageVertexProperties>& props,
@@ -240,6 +241,7 @@ void NightSceneBuilder::addMeshFaces() {
   // Pixel coordinates on the mesh are of its own grid; pixel centres map by the camera's rule.
   const double scale_x = depth_mesh.width > 0 ? static_cast<double>(width) / depth_mesh.width : 1.0;
   const double scale_y = depth_mesh.height > 0 ? static_cast<double>(height) / depth_mesh.height : 1.0;
+  reserveFaceArrays(mesh.n_faces(), mesh.n_vertices());
   for (const auto f : mesh.faces()) {
     if (mesh.status(f).deleted()) continue;
     const FaceVertices fv = addFaceVertices(f, props, index_of_vertex);
@@ -282,6 +284,18 @@ void NightSceneBuilder::addMeshFaces() {
       faces_with_shading_normal += scene.face_shading_normal.back().squaredNorm() > 0.f;
     }
   }
+}
+
+// Room in the scene's per-face and per-vertex arrays for a mesh of `faces` and `vertices` (the
+// proxies and the sky add a few more): they are not copied to grow.
+void NightSceneBuilder::reserveFaceArrays(std::size_t faces, std::size_t vertices) {
+  scene.vertices.reserve(scene.vertices.size() + vertices);
+  scene.faces.reserve(scene.faces.size() + faces);
+  scene.face_reflectance.reserve(scene.face_reflectance.size() + faces);
+  if (!roughness.empty()) scene.face_roughness.reserve(scene.face_roughness.size() + faces);
+  light_of_face.reserve(light_of_face.size() + faces);
+  if (options.shading_normals && !normals.empty())
+    scene.face_shading_normal.reserve(scene.face_shading_normal.size() + faces);
 }
 
 // Removes the faces for which `drop` holds (they stay dark) and counts them.

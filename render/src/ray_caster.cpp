@@ -49,8 +49,8 @@ namespace {
 void pairIntoQuads(const std::vector<std::uint32_t>& triangles, std::vector<std::uint32_t>& quads,
                    std::vector<QuadSource>& sources) {
   const std::size_t count = triangles.size() / 3;
-  quads.reserve(count / 2 * 4 + 4);
-  sources.reserve(count / 2 + 1);
+  quads.reserve(count * 4);  // at most one quad per triangle: the arrays are never copied to grow
+  sources.reserve(count);
   const auto vertex = [&](std::size_t t, int k) { return triangles[3 * t + static_cast<std::size_t>(k % 3)]; };
   for (std::size_t t = 0; t < count; ++t) {
     QuadSource source;

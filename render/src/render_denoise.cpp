@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace solo {
 
@@ -76,36 +77,48 @@ bool isEmitter(const RenderOutput& r, int y, int x) {
          (!r.emitter_coverage.empty() && r.emitter_coverage.at<float>(y, x) > 0.f);
 }
 
-// The pixels to filter and the geometry of their first hits.
+// Row y of the guides (which pixels to filter, the geometry of their first hits), counted.
+void guideRow(const RenderOutput& r, const PinholeCamera& camera, int y, Guides& g, PixelCounts& counts) {
+  for (int x = 0; x < r.radiance.cols; ++x) {
+    const float z = r.depth_m.at<float>(y, x);
+    const cv::Vec3f n = r.normal.at<cv::Vec3f>(y, x);
+    const cv::Vec3f radiance = r.radiance.at<cv::Vec3f>(y, x);
+    const float n_length = std::sqrt(n.dot(n));
+    if (isEmitter(r, y, x)) {
+      ++counts.emitter;
+      continue;
+    }
+    const bool finite_radiance = std::isfinite(radiance[0]) && std::isfinite(radiance[1]) && std::isfinite(radiance[2]);
+    if (!(std::isfinite(z) && z > 0.f && std::isfinite(n_length) && n_length > 1e-3f && finite_radiance)) {
+      ++counts.no_surface;
+      continue;
+    }
+    ++counts.filtered;
+    g.filtered.at<std::uint8_t>(y, x) = 1;
+    const Eigen::Vector3d p = camera.backproject(x, y, z);
+    g.point_m.at<cv::Vec3f>(y, x) = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())};
+    g.normal.at<cv::Vec3f>(y, x) = n / n_length;
+    g.depth_m.at<float>(y, x) = z;
+  }
+}
+
+// The pixels to filter and the geometry of their first hits (rows in parallel, counted per row
+// and summed in row order).
 Guides makeGuides(const RenderOutput& r, const PinholeCamera& camera, PixelCounts& counts) {
   Guides g;
   g.filtered = cv::Mat::zeros(r.radiance.size(), CV_8U);
   g.point_m = cv::Mat::zeros(r.radiance.size(), CV_32FC3);
   g.normal = cv::Mat::zeros(r.radiance.size(), CV_32FC3);
   g.depth_m = cv::Mat::zeros(r.radiance.size(), CV_32F);
-  for (int y = 0; y < r.radiance.rows; ++y)
-    for (int x = 0; x < r.radiance.cols; ++x) {
-      const float z = r.depth_m.at<float>(y, x);
-      const cv::Vec3f n = r.normal.at<cv::Vec3f>(y, x);
-      const cv::Vec3f radiance = r.radiance.at<cv::Vec3f>(y, x);
-      const float n_length = std::sqrt(n.dot(n));
-      if (isEmitter(r, y, x)) {
-        ++counts.emitter;
-        continue;
-      }
-      const bool finite_radiance =
-          std::isfinite(radiance[0]) && std::isfinite(radiance[1]) && std::isfinite(radiance[2]);
-      if (!(std::isfinite(z) && z > 0.f && std::isfinite(n_length) && n_length > 1e-3f && finite_radiance)) {
-        ++counts.no_surface;
-        continue;
-      }
-      ++counts.filtered;
-      g.filtered.at<std::uint8_t>(y, x) = 1;
-      const Eigen::Vector3d p = camera.backproject(x, y, z);
-      g.point_m.at<cv::Vec3f>(y, x) = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())};
-      g.normal.at<cv::Vec3f>(y, x) = n / n_length;
-      g.depth_m.at<float>(y, x) = z;
-    }
+  std::vector<PixelCounts> row_counts(static_cast<std::size_t>(r.radiance.rows));
+  cv::parallel_for_(cv::Range(0, r.radiance.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) guideRow(r, camera, y, g, row_counts[static_cast<std::size_t>(y)]);
+  });
+  for (const PixelCounts& row : row_counts) {
+    counts.filtered += row.filtered;
+    counts.emitter += row.emitter;
+    counts.no_surface += row.no_surface;
+  }
   return g;
 }
 
@@ -114,14 +127,16 @@ cv::Mat demodulationAlbedo(const RenderOutput& r, Guides& g, float albedo_floor)
   cv::Mat a(r.radiance.size(), CV_32FC3, cv::Scalar::all(1));
   g.log_albedo = cv::Mat::zeros(r.radiance.size(), CV_32F);
   if (r.albedo.empty()) return a;
-  for (int y = 0; y < a.rows; ++y)
-    for (int x = 0; x < a.cols; ++x) {
-      if (!g.filtered.at<std::uint8_t>(y, x)) continue;
-      const cv::Vec3f albedo = r.albedo.at<cv::Vec3f>(y, x);
-      for (int c = 0; c < 3; ++c)
-        a.at<cv::Vec3f>(y, x)[c] = std::isfinite(albedo[c]) ? std::max(albedo[c], albedo_floor) : albedo_floor;
-      g.log_albedo.at<float>(y, x) = std::log(a.at<cv::Vec3f>(y, x)[1]);
-    }
+  cv::parallel_for_(cv::Range(0, a.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y)
+      for (int x = 0; x < a.cols; ++x) {
+        if (!g.filtered.at<std::uint8_t>(y, x)) continue;
+        const cv::Vec3f albedo = r.albedo.at<cv::Vec3f>(y, x);
+        for (int c = 0; c < 3; ++c)
+          a.at<cv::Vec3f>(y, x)[c] = std::isfinite(albedo[c]) ? std::max(albedo[c], albedo_floor) : albedo_floor;
+        g.log_albedo.at<float>(y, x) = std::log(a.at<cv::Vec3f>(y, x)[1]);
+      }
+  });
   return a;
 }
 
@@ -131,11 +146,13 @@ cv::Mat demodulationAlbedo(const RenderOutput& r, Guides& g, float albedo_floor)
 cv::Mat initialVariance(const RenderOutput& r, const Guides& g, const cv::Mat& albedo) {
   if (r.std_error.empty()) return {};
   cv::Mat variance = cv::Mat::zeros(r.radiance.size(), CV_32F);
-  for (int y = 0; y < variance.rows; ++y)
-    for (int x = 0; x < variance.cols; ++x) {
-      const float e = r.std_error.at<float>(y, x) / albedo.at<cv::Vec3f>(y, x)[1];
-      if (g.filtered.at<std::uint8_t>(y, x) && std::isfinite(e)) variance.at<float>(y, x) = e * e;
-    }
+  cv::parallel_for_(cv::Range(0, variance.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y)
+      for (int x = 0; x < variance.cols; ++x) {
+        const float e = r.std_error.at<float>(y, x) / albedo.at<cv::Vec3f>(y, x)[1];
+        if (g.filtered.at<std::uint8_t>(y, x) && std::isfinite(e)) variance.at<float>(y, x) = e * e;
+      }
+  });
   cv::Mat weight, blurred, blurred_weight;
   g.filtered.convertTo(weight, CV_32F);
   cv::GaussianBlur(variance, blurred, cv::Size(3, 3), 0);
