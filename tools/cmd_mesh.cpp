@@ -98,7 +98,8 @@ int runMeshFromDepth(const MeshFromDepthOptions& options) {
   std::int64_t street_light_pixels = 0;
   const cv::Mat instances = sceneForRefinement(scene, &street_light_pixels).instances;
   DepthMesh mesh =
-      meshFromScene(scene.depth_m, scene.camera, instances, uncertain, options.cleanup, stage, true_depth, true_normals);
+      meshFromScene(scene.depth_m, scene.camera, instances, uncertain, options.cleanup, stage, true_depth, true_normals,
+                    scene.normals);
   stage.add("street_light_pixels_relabelled", street_light_pixels);
   const Stopwatch clock;
   const TriangleMesh triangles = toTriangleMesh(mesh.mesh);

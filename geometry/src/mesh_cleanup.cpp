@@ -294,7 +294,8 @@ void addMeshCounts(StageReport& report, const std::string& prefix, const MeshMet
 }
 
 StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& instances, const cv::Mat& uncertain,
-                           const DepthMeshCleanupOptions& options, const std::vector<std::uint8_t>* spurious_truth) {
+                           const DepthMeshCleanupOptions& options, const std::vector<std::uint8_t>* spurious_truth,
+                           const cv::Mat& normals) {
   StageReport report;
   report.name = "mesh";
   const Stopwatch total;
@@ -310,7 +311,8 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
   if (uncertain.empty()) report.notes.push_back("no uncertain mask: uncertain criterion not applied");
 
   Stopwatch step;
-  const SpuriousFaceResult spurious = findSpuriousFaces(m, depth_m, instances, uncertain, options.spurious);
+  const SpuriousFaceResult spurious = findSpuriousFaces(m, depth_m, instances, uncertain, options.spurious, normals);
+  report.add("spurious_normal_planes", !normals.empty() && options.spurious.use_normals);
   removeSpuriousFaces(report, m, spurious);
   report.add("seconds_spurious_faces", step.seconds(), "s");
   if (spurious_truth) addSpuriousScores(report, spurious, *spurious_truth);
@@ -361,9 +363,9 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
 
 DepthMesh meshFromScene(const cv::Mat& depth_m, const PinholeCamera& camera, const cv::Mat& instances,
                         const cv::Mat& uncertain, const DepthMeshCleanupOptions& options, StageReport& report,
-                        const cv::Mat& true_depth_m, const cv::Mat& true_normals) {
+                        const cv::Mat& true_depth_m, const cv::Mat& true_normals, const cv::Mat& normals) {
   const Stopwatch clock;
-  cv::Mat ids, mask;
+  cv::Mat ids, mask, normal_map;
   if (!instances.empty()) {
     if (instances.size() == depth_m.size()) ids = instances;
     else cv::resize(instances, ids, depth_m.size(), 0, 0, cv::INTER_NEAREST);
@@ -371,6 +373,10 @@ DepthMesh meshFromScene(const cv::Mat& depth_m, const PinholeCamera& camera, con
   if (!uncertain.empty()) {
     if (uncertain.size() == depth_m.size()) mask = uncertain;
     else cv::resize(uncertain, mask, depth_m.size(), 0, 0, cv::INTER_NEAREST);
+  }
+  if (!normals.empty()) {
+    if (normals.size() == depth_m.size()) normal_map = normals;
+    else cv::resize(normals, normal_map, depth_m.size(), 0, 0, cv::INTER_NEAREST);
   }
  
   DepthMesh mesh = meshFromDepth(depth_m, camera, ids);
@@ -380,7 +386,7 @@ DepthMesh meshFromScene(const cv::Mat& depth_m, const PinholeCamera& camera, con
   const bool scored = !true_depth_m.empty() && true_depth_m.size() == depth_m.size() && !true_normals.empty() &&
                       true_normals.size() == depth_m.size();
   if (scored) truth = spuriousFacesFromGroundTruth(mesh, true_depth_m, true_normals);
-  report = cleanDepthMesh(mesh, depth_m, ids, mask, options, scored ? &truth : nullptr);
+  report = cleanDepthMesh(mesh, depth_m, ids, mask, options, scored ? &truth : nullptr, normal_map);
   if (!true_depth_m.empty() && !scored)
     report.notes.push_back("ground truth not of the depth map's size (or without normals): spurious faces not scored");
   report.metrics.insert(report.metrics.begin(), Metric{"seconds_backprojection", build_seconds, "s"});

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 
 namespace solo {
 namespace {
@@ -36,8 +37,13 @@ FacePixels facePixels(const DepthMesh& m, OpenMesh::FaceHandle f) {
 
 class JumpTest {
  public:
-  JumpTest(const DepthMesh& mesh, const cv::Mat& depth, const SpuriousFaceOptions& options)
-      : mesh_(mesh), depth_(depth), options_(options), focal_px_(0.5 * (mesh.camera.fx + mesh.camera.fy)) {}
+  JumpTest(const DepthMesh& mesh, const cv::Mat& depth, const cv::Mat& normals, const SpuriousFaceOptions& options)
+      : mesh_(mesh),
+        depth_(depth),
+        normals_(normals),
+        options_(options),
+        focal_px_(0.5 * (mesh.camera.fx + mesh.camera.fy)),
+        normals_agree_cos_(std::cos(options.normal_plane_max_angle_deg * kRadPerDeg)) {}
 
   /// The footprint test alone: |za - zb| over `factor` pixel footprints at the nearer depth.
   bool exceedsFootprints(const OpenMesh::Vec2i& a, const OpenMesh::Vec2i& b, double factor) const {
@@ -66,6 +72,11 @@ class JumpTest {
     if (small_jump && !(options_.small_jump_fraction > 0 && std::abs(za - zb) > small_factor * footprint_m))
       return Edge::Small;
     if (!options_.extrapolation_test) return small_jump ? Edge::Small : Edge::Jump;  // no step test either
+    // The normal map measures the step directly (only for the edge itself: the edges of the
+    // blocks behind it are tested on their depths, so that a block across a corner stays out).
+    if (with_planes && !normals_.empty() &&
+        distanceToNormalPlanes(a, b, point(a[0], a[1]), point(b[0], b[1])) < options_.min_step_m)
+      return Edge::ThinStep;
     const double wa = 1.0 / za, wb = 1.0 / zb;
     // A side without a pixel behind it (image frame, sky) cannot be extrapolated: only jumps
     // larger than edge_of_data_factor times the criterion are cut there.
@@ -170,6 +181,21 @@ class JumpTest {
     return best;
   }
 
+  /// Each point's distance from the plane through the other with the other's normal (the normal
+  /// map), the smaller one; infinite unless both normals are valid and agree within
+  /// normal_plane_max_angle_deg (a window proud of its facade: both carry the facade's normal,
+  /// and the step is the window's depth; near an occluder's outline a blurred normal belongs to
+  /// neither surface).
+  double distanceToNormalPlanes(const OpenMesh::Vec2i& a, const OpenMesh::Vec2i& b, const Eigen::Vector3d& pa,
+                                const Eigen::Vector3d& pb) const {
+    const cv::Vec3f ca = normals_.at<cv::Vec3f>(a[1], a[0]), cb = normals_.at<cv::Vec3f>(b[1], b[0]);
+    const Eigen::Vector3d na(ca[0], ca[1], ca[2]), nb(cb[0], cb[1], cb[2]);
+    const double la = na.norm(), lb = nb.norm();
+    if (!(la > 0.5 && lb > 0.5) || !std::isfinite(la) || !std::isfinite(lb)) return std::numeric_limits<double>::infinity();
+    if (std::abs(na.dot(nb)) < normals_agree_cos_ * la * lb) return std::numeric_limits<double>::infinity();
+    return std::min(std::abs(na.dot(pb - pa)) / la, std::abs(nb.dot(pa - pb)) / lb);
+  }
+
   bool hasVertex(int u, int v) const { return mesh_.vertexAt(u, v) >= 0; }
   double inverseDepth(int u, int v) const { return 1.0 / depth_.at<float>(v, u); }
   Eigen::Vector3d point(int u, int v) const { return mesh_.camera.backproject(u, v, depth_.at<float>(v, u)); }
@@ -181,8 +207,10 @@ class JumpTest {
 
   const DepthMesh& mesh_;
   const cv::Mat& depth_;
+  const cv::Mat& normals_;
   const SpuriousFaceOptions& options_;
   double focal_px_;
+  double normals_agree_cos_;
 };
 
 }  // namespace
@@ -197,7 +225,10 @@ bool isForegroundThingClass(int class_id) {
 }
 
 SpuriousFaceResult findSpuriousFaces(const DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& instances,
-                                     const cv::Mat& uncertain, const SpuriousFaceOptions& options) {
+                                     const cv::Mat& uncertain, const SpuriousFaceOptions& options,
+                                     const cv::Mat& normals) {
+  if (!normals.empty() && (normals.type() != CV_32FC3 || normals.size() != depth_m.size()))
+    throw std::invalid_argument("findSpuriousFaces: the normal map must be CV_32FC3 of the depth map's size");
   SpuriousFaceResult result;
   const SurfaceMesh& mesh = m.mesh;
   result.spurious.assign(mesh.n_faces(), 0);
@@ -206,7 +237,8 @@ SpuriousFaceResult findSpuriousFaces(const DepthMesh& m, const cv::Mat& depth_m,
   const bool use_uncertain = options.use_uncertain_mask && !uncertain.empty();
   const bool use_grazing = options.grazing_angle_deg < 90.0;
   const double grazing_cos = std::cos(options.grazing_angle_deg * kRadPerDeg);
-  const JumpTest jumps(m, depth_m, options);
+  const cv::Mat no_normals;
+  const JumpTest jumps(m, depth_m, options.use_normals ? normals : no_normals, options);
   std::atomic<std::int64_t> checked{0}, removed{0}, jump{0}, grazing{0}, uncertain_count{0}, instance{0};
 
   cv::parallel_for_(cv::Range(0, static_cast<int>(mesh.n_faces())), [&](const cv::Range& range) {

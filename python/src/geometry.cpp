@@ -91,7 +91,7 @@ void requireAFaceOfDepth(const cv::Mat& depth, const std::filesystem::path& sour
 /// The maps the mesh is made from: the scene's (its street lights as instances of their own,
 /// as `solo mesh from-depth` and `solo night` see them), or arrays with a camera dict.
 struct MeshInput {
-  cv::Mat depth_m, instances, uncertain;
+  cv::Mat depth_m, instances, uncertain, normals;
   PinholeCamera camera;
   std::filesystem::path source = "depth";
   std::vector<py::object> arrays;  // viewed by the Mats
@@ -99,7 +99,7 @@ struct MeshInput {
 };
 
 MeshInput meshInput(const py::object& scene, const py::object& depth, const py::object& camera,
-                    const py::object& instances, const py::object& uncertain) {
+                    const py::object& instances, const py::object& uncertain, const py::object& normals) {
   MeshInput in;
   const auto view = [&in](const py::object& value, const py::dtype& dtype, const std::string& what) {
     const py::array array = asArray(value, dtype);
@@ -113,6 +113,7 @@ MeshInput meshInput(const py::object& scene, const py::object& depth, const py::
     in.source = s.manifest.depth;
     in.street_light_pixels = 0;
     in.instances = sceneForRefinement(s, &in.street_light_pixels).instances;
+    in.normals = s.normals;
   } else {
     if (depth.is_none() || camera.is_none())
       throw py::type_error("mesh_from_depth: give a scene, or depth and camera");
@@ -126,14 +127,18 @@ MeshInput meshInput(const py::object& scene, const py::object& depth, const py::
     if (!instances.is_none()) in.instances = view(instances, py::dtype::of<std::int32_t>(), "instances");
   }
   if (!uncertain.is_none()) in.uncertain = view(uncertain, py::dtype::of<std::uint8_t>(), "uncertain");
+  if (!normals.is_none()) {
+    in.normals = view(normals, py::dtype::of<float>(), "normals");
+    if (in.normals.channels() != 3) throw InputError("normals", "normals must have three channels (HxWx3)");
+  }
   if (in.depth_m.channels() != 1) throw InputError(in.source, "depth must have one channel");
   return in;
 }
 
 py::dict meshFromDepthBinding(const py::object& scene, const py::object& depth, const py::object& camera,
-                              const py::object& instances, const py::object& uncertain, bool solids, bool backdrops,
-                              bool fill_holes, bool evaluate) {
-  const MeshInput in = meshInput(scene, depth, camera, instances, uncertain);
+                              const py::object& instances, const py::object& uncertain, const py::object& normals,
+                              bool solids, bool backdrops, bool fill_holes, bool evaluate) {
+  const MeshInput in = meshInput(scene, depth, camera, instances, uncertain, normals);
   DepthMeshCleanupOptions options;
   options.close_solids = solids;
   options.backdrops = backdrops;
@@ -144,7 +149,8 @@ py::dict meshFromDepthBinding(const py::object& scene, const py::object& depth, 
   {
     const py::gil_scoped_release release;
     requireAFaceOfDepth(in.depth_m, in.source);
-    const DepthMesh mesh = meshFromScene(in.depth_m, in.camera, in.instances, in.uncertain, options, stage);
+    const DepthMesh mesh =
+        meshFromScene(in.depth_m, in.camera, in.instances, in.uncertain, options, stage, {}, {}, in.normals);
     if (in.street_light_pixels >= 0) stage.add("street_light_pixels_relabelled", in.street_light_pixels);
     triangles = toTriangleMesh(mesh.mesh);
   }
@@ -200,7 +206,7 @@ void bindGeometry(py::module_& m) {
         "normal-guided optimisation. optimize_iterations 0 and optimize_tolerance < 0 keep the library's defaults.");
   m.def("mesh_from_depth", &meshFromDepthBinding, py::arg("scene") = py::none(), py::kw_only(),
         py::arg("depth") = py::none(), py::arg("camera") = py::none(), py::arg("instances") = py::none(),
-        py::arg("uncertain") = py::none(), py::arg("solids") = true, py::arg("backdrops") = true,
+        py::arg("uncertain") = py::none(), py::arg("normals") = py::none(), py::arg("solids") = true, py::arg("backdrops") = true,
         py::arg("fill_holes") = true, py::arg("evaluate") = true,
         "The mesh stage as `solo mesh from-depth` runs it, on a scene or on a depth array (metres) and a camera "
         "dict: {vertices Nx3 float64 m, faces Mx3 uint32, report}.");

@@ -35,19 +35,22 @@ struct DepthMeshCleanupOptions {
 /// Cleans a mesh made by meshFromDepth from `depth_m` in place and collects its garbage
 /// (vertex_of_pixel is rebuilt). instances (CV_32S) and uncertain (CV_8U) are of the depth map's
 /// size or empty. The report's name is "mesh". With `spurious_truth` (per face, from
-/// spuriousFacesFromGroundTruth) the report adds the removal's precision and recall.
+/// spuriousFacesFromGroundTruth) the report adds the removal's precision and recall. normals
+/// (CV_32FC3 camera frame, of the depth map's size, or empty) go to the spurious-face test.
 StageReport cleanDepthMesh(DepthMesh& mesh, const cv::Mat& depth_m, const cv::Mat& instances,
                            const cv::Mat& uncertain, const DepthMeshCleanupOptions& options = {},
-                           const std::vector<std::uint8_t>* spurious_truth = nullptr);
+                           const std::vector<std::uint8_t>* spurious_truth = nullptr, const cv::Mat& normals = {});
 
 /// The whole stage from a scene's maps: the instance map (when present) is resampled to the
 /// depth map's size (nearest), the mesh is built at the depth map's resolution and cleaned.
-/// `uncertain` (CV_8U, any size, or empty) is resampled likewise. With exact maps of the depth
-/// map's size (true_depth_m CV_32F, true_normals CV_32FC3), the spurious-face removal is scored
-/// against them (spuriousFacesFromGroundTruth); otherwise a note says why it is not.
+/// `uncertain` (CV_8U, any size, or empty) and `normals` (the scene's normal map, CV_32FC3, any
+/// size, or empty: the spurious-face test uses it) are resampled likewise. With exact maps of the
+/// depth map's size (true_depth_m CV_32F, true_normals CV_32FC3), the spurious-face removal is
+/// scored against them (spuriousFacesFromGroundTruth); otherwise a note says why it is not.
 DepthMesh meshFromScene(const cv::Mat& depth_m, const PinholeCamera& camera, const cv::Mat& instances,
                         const cv::Mat& uncertain, const DepthMeshCleanupOptions& options, StageReport& report,
-                        const cv::Mat& true_depth_m = {}, const cv::Mat& true_normals = {});
+                        const cv::Mat& true_depth_m = {}, const cv::Mat& true_normals = {},
+                        const cv::Mat& normals = {});
 
 struct MeshCleanupOptions {
   bool fill_holes = true;

@@ -80,6 +80,12 @@ struct SpuriousFaceOptions {
   /// wall and window faces, 20-30 footprints: the line follows the facade). 64 measured (twice
   /// the edge-of-data threshold); 0 = the line always counts (docs/mesh.md).
   double occluded_line_factor = 64.0;
+  /// With a normal map, the step is also measured from the plane through each side's point
+  /// with its normal, where the two sides' normals agree within normal_plane_max_angle_deg: the
+  /// windows of a facade seen at grazing, whose pixels alternate between window and wall faces
+  /// that no line or 2x2 block of depths follows (docs/mesh.md).
+  bool use_normals = true;
+  double normal_plane_max_angle_deg = 30.0;
   double grazing_angle_deg = 90.0;      ///< 90 = criterion off; MeshLab's 75 cuts every road beyond 6 m
   bool use_uncertain_mask = true;
   double uncertain_same_object_span_m = 3.0;
@@ -115,9 +121,13 @@ struct SpuriousFaceResult {
 
 /// Flags the spurious faces of `mesh` (not deleted: see removeFlaggedFaces). depth_m is the map
 /// the mesh was made from; instances (CV_32S) and uncertain (CV_8U, non-zero = uncertain) are of
-/// the same size or empty (their criteria then flag nothing).
+/// the same size or empty (their criteria then flag nothing). normals (CV_32FC3 unit vectors,
+/// camera frame, zero = unknown) of the same size or empty: the depth-jump criterion's step test
+/// also uses them (SpuriousFaceOptions::use_normals). Throws std::invalid_argument for a normal
+/// map of another type or size.
 SpuriousFaceResult findSpuriousFaces(const DepthMesh& mesh, const cv::Mat& depth_m, const cv::Mat& instances,
-                                     const cv::Mat& uncertain, const SpuriousFaceOptions& options = {});
+                                     const cv::Mat& uncertain, const SpuriousFaceOptions& options = {},
+                                     const cv::Mat& normals = {});
 
 /// Ground truth of spuriousness from exact maps: a face is spurious when two of its vertices lie
 /// on different true surfaces across a depth jump, i.e. the planes through them (true depth and
