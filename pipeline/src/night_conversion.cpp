@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <new>
 
 namespace solo {
 
@@ -138,12 +139,28 @@ void runRefineStage(const Scene& scene, const NightConversionOptions& o, NightCo
   if (!o.refine) r.stages.back().notes.push_back("refinement switched off (--no-refine): upsampling and completion only");
 }
 
+// Replaces `mesh` with make()'s result, constructed where `mesh` lives: OpenMesh meshes have no
+// move assignment, so assigning the result would copy every array of a 1080p mesh (about half a
+// second) and then free the temporary. `mesh` is left empty when make() throws.
+template <typename Make>
+void buildInPlace(DepthMesh& mesh, const Make& make) {
+  mesh.~DepthMesh();
+  try {
+    new (&mesh) DepthMesh(make());
+  } catch (...) {
+    new (&mesh) DepthMesh();
+    throw;
+  }
+}
+
 void runMeshStage(const Scene& scene, const NightConversionOptions& o, NightConversionResult& r) {
   const DepthRefinementResult& refined = r.refined;
   StageReport mesh_report;
   const cv::Mat mesh_depth_m =
       o.mesh_downsample > 1 ? downsampleDepth(refined.depth_m, o.mesh_downsample) : refined.depth_m;
-  r.mesh = meshFromScene(mesh_depth_m, scene.camera, refined.maps.instances, refined.uncertain, o.mesh, mesh_report);
+  buildInPlace(r.mesh, [&] {
+    return meshFromScene(mesh_depth_m, scene.camera, refined.maps.instances, refined.uncertain, o.mesh, mesh_report);
+  });
   if (o.mesh_downsample > 1) {
     char note[160];
     std::snprintf(note, sizeof note, "mesh made from the refined depth downsampled %dx (%dx%d): --mesh-downsample",
