@@ -29,7 +29,7 @@ struct ProposalInputs {
   cv::Mat image;      ///< CV_32FC3 sRGB
   cv::Mat depth_m;    ///< CV_32F, 0 = invalid
   PinholeCamera camera;
-  ProposalGroundPlane ground;
+  GroundPlaneFit ground;
   Eigen::Vector3d right{1, 0, 0}, forward{0, 0, 1};
   double pixel_scale = 1;  ///< image width / 1920: pixel thresholds are given at 1920 px wide
 

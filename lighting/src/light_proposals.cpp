@@ -76,22 +76,16 @@ ProposalInputs resampledInputs(const Scene& scene) {
 
 // The ground plane of the light priors (light_priors.h: RANSAC over road and sidewalk points,
 // seeded, refitted on its inliers), with the proposals' inlier band; the level camera when it
-// finds none (points = 0).
-ProposalGroundPlane fitGroundPlane(const ProposalInputs& in) {
+// finds none (inliers = 0).
+GroundPlaneFit fitGroundPlane(const ProposalInputs& in) {
   GroundFitOptions options;
   options.inlier_m = 0.08;
   options.inlier_fraction = 0.004;
   options.max_tilt_deg = 35;
-  const GroundPlaneFit fit = fitGroundPlaneToRoad(in.depth_m, in.labels, in.camera, options);
-  ProposalGroundPlane plane;
-  if (!fit.fitted) return plane;
-  plane.up = fit.up;
-  plane.offset_m = fit.offset_m;
-  plane.points = fit.inliers;
-  return plane;
+  return fitGroundPlaneToRoad(in.depth_m, in.labels, in.camera, options);
 }
 
-void setGroundFrame(ProposalInputs& in, const ProposalGroundPlane& ground) {
+void setGroundFrame(ProposalInputs& in, const GroundPlaneFit& ground) {
   in.ground = ground;
   const Eigen::Vector3d z(0, 0, 1);
   in.forward = (z - ground.up * ground.up.dot(z)).normalized();
@@ -151,7 +145,7 @@ void summarise(LightProposalResult& result) {
   for (int c = kFirstLightCategory; c <= kLastLightCategory; ++c)
     if (census.instances[c] > 0)
       report.add(std::string("lights_") + lightCategoryName(static_cast<LightCategory>(c)), census.instances[c]);
-  report.add("ground_plane_points", result.ground.points);
+  report.add("ground_plane_points", result.ground.inliers);
   report.add("camera_height", result.ground.offset_m, "m");
   for (const auto& [step, seconds] : result.seconds) report.add(step + "_seconds", seconds, "s");
 }
@@ -165,7 +159,7 @@ LightProposalResult proposeLights(const Scene& scene, const LightProposalOptions
   Stopwatch clock;
   setGroundFrame(in, fitGroundPlane(in));
   result.ground = in.ground;
-  if (in.ground.points == 0)
+  if (in.ground.inliers == 0)
     result.report.notes.push_back("no ground plane from road pixels: a level camera 1.5 m above the ground assumed");
   result.seconds.emplace_back("ground", clock.seconds());
 
@@ -204,7 +198,7 @@ std::string lightProposalsJson(const LightProposalResult& result, const std::str
   j["image"] = {{"width", result.lights.cols}, {"height", result.lights.rows}};
   j["ground_plane"] = {{"up", {result.ground.up.x(), result.ground.up.y(), result.ground.up.z()}},
                        {"camera_height_m", result.ground.offset_m},
-                       {"points", result.ground.points}};
+                       {"points", result.ground.inliers}};
   ordered_json seconds = ordered_json::object();
   for (const auto& [step, s] : result.seconds) seconds[step] = s;
   seconds["total"] = result.total_seconds;

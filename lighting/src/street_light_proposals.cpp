@@ -147,7 +147,7 @@ int proposeSkyHeads(const ProposalInputs& in, const LightProposalOptions& option
       continue;
     DraftLight light;
     light.position_m = in.point(cu, cv_, depth);
-    light.height_m = in.ground.height(light.position_m);
+    light.height_m = in.ground.heightOf(light.position_m);
     if (light.height_m < options.min_pole_top_m || light.height_m > options.max_pole_top_m) continue;
     light.pixels = pixels;
     light.category = streetLightCategory(light.height_m, options);
@@ -175,7 +175,7 @@ void proposeStreetLights(const ProposalInputs& in, const LightProposalOptions& o
       continue;
     }
     const double top_u = medianColumn(blob, blob.box.y, blob.box.y + in.scaledPixels(2));
-    const double top_height = in.ground.height(in.point(top_u, blob.box.y, depth));
+    const double top_height = in.ground.heightOf(in.point(top_u, blob.box.y, depth));
     if (top_height < options.min_pole_top_m || top_height > options.max_pole_top_m) {
       if (blob.box.y > 0 || top_height > options.max_pole_top_m) ++out_of_range;
       else ++cut_by_frame;
@@ -193,7 +193,7 @@ void proposeStreetLights(const ProposalInputs& in, const LightProposalOptions& o
     for (const cv::Point& p : light.pixels) centre += cv::Point2d(p.x, p.y);
     centre *= 1.0 / static_cast<double>(light.pixels.size());
     light.position_m = in.point(centre.x, centre.y, depth);
-    light.height_m = in.ground.height(light.position_m);
+    light.height_m = in.ground.heightOf(light.position_m);
     light.category = streetLightCategory(light.height_m, options);
     light.score = std::clamp(1.0 - std::abs(top_height - 8.0) / 8.0, 0.1, 1.0) * (arm ? 1.0 : 0.8);
     light.rule = arm ? "pole_top_arm_end" : "pole_top_lantern";

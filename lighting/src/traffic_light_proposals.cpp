@@ -134,7 +134,7 @@ void proposeTrafficLights(const ProposalInputs& in, const LightProposalOptions&,
     const double depth = depths.empty() ? 0 : quantile(depths, 0.25);
     if (depth > 0) {
       light.position_m = in.point(centre.x, centre.y, depth);
-      light.height_m = in.ground.height(light.position_m);
+      light.height_m = in.ground.heightOf(light.position_m);
     }
     light.score = std::clamp(1.0 - runner_up / std::max(lamps.front().value, 1e-6), 0.0, 1.0);
     light.rule = "brightest_lamp";

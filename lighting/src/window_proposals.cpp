@@ -43,7 +43,7 @@ std::vector<FacadePoint> buildingPoints(const ProposalInputs& in) {
       const float z = in.depthAt(u, v);
       if (!(z > 0)) continue;
       const Eigen::Vector3d p = in.point(u, v, z);
-      points.push_back({u, v, in.lateral(p), in.along(p), in.ground.height(p)});
+      points.push_back({u, v, in.lateral(p), in.along(p), in.ground.heightOf(p)});
     }
   return points;
 }

@@ -71,7 +71,7 @@ std::vector<const solo::LightProposal*> ofFamily(const solo::LightProposalResult
 
 TEST(LightProposals, AGroundPlaneFromTheRoadGivesTheCameraHeight) {
   const solo::LightProposalResult result = solo::proposeLights(flatStreet());
-  EXPECT_GT(result.ground.points, 1000);
+  EXPECT_GT(result.ground.inliers, 1000);
   EXPECT_NEAR(result.ground.offset_m, 1.5, 0.02);
   EXPECT_NEAR(result.ground.up.y(), -1.0, 1e-3);
   EXPECT_TRUE(result.proposals.empty());

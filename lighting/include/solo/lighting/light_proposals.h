@@ -8,6 +8,7 @@
 #include "solo/core/report.h"
 #include "solo/core/scene.h"
 #include "solo/lighting/light_category.h"
+#include "solo/lighting/light_priors.h"
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
@@ -37,14 +38,6 @@ struct LightProposalOptions {
   double facade_cell_m = 0.1;
 };
 
-/// The ground plane: height above ground h(p) = up . p + offset for a camera-frame point p.
-struct ProposalGroundPlane {
-  Eigen::Vector3d up{0, -1, 0};  ///< unit, camera frame, pointing away from the ground
-  double offset_m = 1.5;         ///< the camera's height above the ground
-  std::int64_t points = 0;       ///< road/sidewalk points that fitted it; 0: the level-camera prior
-  double height(const Eigen::Vector3d& p) const { return up.dot(p) + offset_m; }
-};
-
 /// One proposed light and why.
 struct LightProposal {
   int map_id = 0;  ///< categoryId * 1000 + k in the written map
@@ -64,7 +57,7 @@ struct LightProposalResult {
   cv::Mat lights;        ///< CV_32S categoryId * 1000 + k at the image resolution, 0 = none
   cv::Mat light_groups;  ///< CV_32S facade-floor group ids, 0 = none
   std::vector<LightProposal> proposals;  ///< in map order
-  ProposalGroundPlane ground;
+  GroundPlaneFit ground;  ///< inliers = 0: the level-camera prior
   std::vector<std::pair<std::string, double>> seconds;  ///< step -> wall time
   double total_seconds = 0;
   StageReport report;  ///< name "light_proposals": counts per category, timings, notes
