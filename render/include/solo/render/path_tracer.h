@@ -63,7 +63,7 @@ struct PathTracerOptions {
   /// `error_replicates` independently scrambled point sets the samples alternate between
   /// (batch means over replicates); both are unbiased for the mean's variance. By default the
   /// replicate spread is pooled over the pixel's tile (pool_error_gain).
-  double relative_error = 0.05;
+  double relative_error = 0.1;
   /// 1, 2, 4 or 8; used with the Sobol sampler by the PixelThreshold rule. More
   /// replicates give a less noisy error estimate but smaller, less stratified point sets; 1
   /// falls back to sample variance / n. min_samples is rounded up to a multiple of it.
