@@ -5,8 +5,10 @@
 // The geometry is solo night's: the refined depth (default options) meshed and cleaned.
 // Run:
 //   for s in 1 2 3; do build/release/tools/solo synth -o /tmp/dl/s$s --seed $s --day-render path; done
-//   build/release/tests/benchmarks/bench_day_light [--pictures DIR] [--exact-geometry] /tmp/dl/s1 /tmp/dl/s2 ...
+//   build/release/tests/benchmarks/bench_day_light [--pictures DIR] [--exact-geometry | --exact-depth-mesh] /tmp/dl/s1 ...
 // --exact-geometry: synth's exact mesh, normals and instances instead of solo night's.
+// --exact-depth-mesh: the depth mesh of synth's exact depth (what the camera sees of the exact
+// geometry, cleaned as solo night cleans it) with the exact normals and instances.
 // Errors: "fit" scales each channel of both estimates by its least-squares gain to the exact
 // albedo (the shading left, not the exposure); "rule" is each estimate with the removal's own
 // white balance and scale (the day image given the same rule).
@@ -130,17 +132,25 @@ cv::Mat linearised(const cv::Mat& srgb) {
   return out;
 }
 
-void runScene(const fs::path& dir, const fs::path& pictures, bool exact_geometry) {
-  const Scene scene = loadScene(dir / "scene.json");
+enum class Geometry { SoloNight, ExactMesh, ExactDepthMesh };
+
+// The removal's geometry for one of the three modes (file header).
+DayLightGeometry removalGeometry(const fs::path& dir, const Scene& scene, const PinholeCamera& camera, Geometry mode) {
   const NightConversionOptions o;
+  if (mode == Geometry::ExactDepthMesh) {
+    const Scene gt = loadScene(dir / "gt" / "scene.json");
+    StageReport report;
+    const DepthMesh mesh = meshFromScene(gt.depth_m, gt.camera, gt.instances, cv::Mat(), o.mesh, report);
+    DayLightGeometry geometry = dayLightGeometry(mesh, camera, gt.normals);
+    geometry.instances = gt.instances;
+    return geometry;
+  }
   const DepthRefinementResult refined = refineDepth(sceneForRefinement(scene), o.refinement);
   StageReport mesh_report;
   const DepthMesh mesh =
       meshFromScene(refined.depth_m, scene.camera, refined.maps.instances, refined.uncertain, o.mesh, mesh_report);
-  const cv::Mat day = linearised(scene.image);
-  const PinholeCamera camera = scene.camera.scaledTo(day.cols, day.rows);
   DayLightGeometry geometry = dayLightGeometry(mesh, camera, refined.normals);
-  if (exact_geometry) {
+  if (mode == Geometry::ExactMesh) {
     const TriangleMesh exact = readMesh(dir / "gt" / "mesh.ply");
     geometry.vertices.clear();
     geometry.triangles.clear();
@@ -152,7 +162,14 @@ void runScene(const fs::path& dir, const fs::path& pictures, bool exact_geometry
     geometry.normals = readNormals(dir / "gt" / "normals.png");
     geometry.instances = readLabels(dir / "gt" / "instanceIds.png");
   }
-  const DayLightRemoval removal = removeDayLight(day, geometry);
+  return geometry;
+}
+
+void runScene(const fs::path& dir, const fs::path& pictures, Geometry mode) {
+  const Scene scene = loadScene(dir / "scene.json");
+  const cv::Mat day = linearised(scene.image);
+  const PinholeCamera camera = scene.camera.scaledTo(day.cols, day.rows);
+  const DayLightRemoval removal = removeDayLight(day, removalGeometry(dir, scene, camera, mode));
 
   const cv::Mat truth = readColorImage(dir / "gt" / "albedo.png");
   const cv::Mat labels = readLabels(dir / "gt" / "labelIds.png");
@@ -189,25 +206,27 @@ void runScene(const fs::path& dir, const fs::path& pictures, bool exact_geometry
 
 int main(int argc, char** argv) {
   fs::path pictures;
-  bool exact_geometry = false;
+  Geometry mode = Geometry::SoloNight;
   std::vector<fs::path> scenes;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--pictures" && i + 1 < argc)
       pictures = argv[++i];
     else if (arg == "--exact-geometry")
-      exact_geometry = true;
+      mode = Geometry::ExactMesh;
+    else if (arg == "--exact-depth-mesh")
+      mode = Geometry::ExactDepthMesh;
     else
       scenes.emplace_back(arg);
   }
   if (scenes.empty()) {
-    std::fprintf(stderr, "usage: bench_day_light [--pictures DIR] SCENE_DIR...\n");
+    std::fprintf(stderr, "usage: bench_day_light [--pictures DIR] [--exact-geometry | --exact-depth-mesh] SCENE_DIR...\n");
     return 2;
   }
   std::printf("%-14s %-12s %13s  %13s  %13s  %13s  %6s  %5s  %7s\n", "scene", "method", "day fit", "delit fit",
               "day rule", "delit rule", "sun", "gain", "time");
   std::printf("%-14s %-12s %6s %6s  %6s %6s  %6s %6s  %6s %6s  %6s\n", "", "", "MAE", "rel", "MAE", "rel", "MAE", "rel",
               "MAE", "rel", "deg");
-  for (const fs::path& dir : scenes) runScene(dir, pictures, exact_geometry);
+  for (const fs::path& dir : scenes) runScene(dir, pictures, mode);
   return 0;
 }
