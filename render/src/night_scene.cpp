@@ -77,7 +77,7 @@ struct NightSceneBuilder {
   void chooseResolution(const cv::Mat& albedo);
   void prepareReflectance(const cv::Mat& albedo, const cv::Mat& day_image);
   void mapLights();
-  void reserveFaceArrays(std::size_t faces, std::size_t vertices);
+  void reserveFaceArrays(std::size_t mesh_faces, std::size_t mesh_vertices);
   void addMeshFaces();
   Eigen::Vector3f shadingNormal(const FaceVertices& fv, double scale_x, double scale_y) const;
   FaceVertices addFaceVertices(SurfaceMesh::FaceHandle f, const std::optional<ImageVertexProperties>& props,
@@ -286,9 +286,12 @@ void NightSceneBuilder::addMeshFaces() {
   }
 }
 
-// Room in the scene's per-face and per-vertex arrays for a mesh of `faces` and `vertices` (the
-// proxies and the sky add a few more): they are not copied to grow.
-void NightSceneBuilder::reserveFaceArrays(std::size_t faces, std::size_t vertices) {
+// Room in the scene's per-face and per-vertex arrays for a mesh of `mesh_faces` and
+// `mesh_vertices`, and a sixteenth more for the light proxies after it: they are not copied to
+// grow.
+void NightSceneBuilder::reserveFaceArrays(std::size_t mesh_faces, std::size_t mesh_vertices) {
+  const std::size_t faces = mesh_faces + mesh_faces / 16 + 1024;
+  const std::size_t vertices = mesh_vertices + mesh_vertices / 16 + 1024;
   scene.vertices.reserve(scene.vertices.size() + vertices);
   scene.faces.reserve(scene.faces.size() + faces);
   scene.face_reflectance.reserve(scene.face_reflectance.size() + faces);
