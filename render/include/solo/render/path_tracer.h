@@ -33,8 +33,9 @@ struct RecordedRay {
 enum class AdaptiveRule {
   /// relative_error is a target for the image's relative RMSE: a pilot render at a quarter of the
   /// resolution gives the image's scale, then every pixel takes, after its min_samples, a count
-  /// proportional to its neighbours' per-sample standard deviation (the allocation that minimises
-  /// the summed squared error for a total; docs/rendering.md, "Adaptive sampling"). Applies when
+  /// half even, half proportional to its neighbours' per-sample standard deviation (the
+  /// allocation that minimises the summed squared error for a total, hedged against spreads
+  /// that min_samples underestimates; docs/rendering.md, "Adaptive sampling"). Applies when
   /// relative_error is the only target (no absolute_error, no noise_sigma); otherwise, and with
   /// relative_error 0, PixelThreshold.
   ImageError,
