@@ -881,7 +881,9 @@ class TileRenderer {
     std::int64_t samples_taken = 0;
     for (const PixelState& p : pixels_) {
       if (p.stopped_variance >= 0) ++totals.stopped_by_target;
-      double standard_error = std::sqrt(p.stopped_variance >= 0 ? p.stopped_variance : variance(p));
+      // At least the pixel's own samples' spread: a pixel stopped on its neighbours' estimate
+      // may hold a rare bright sample they do not show, and the denoiser weighs it by this.
+      double standard_error = std::sqrt(p.stopped_variance >= 0 ? std::max(p.stopped_variance, variance(p)) : variance(p));
       if (!std::isfinite(standard_error)) standard_error = std::sqrt(p.independentVariance());
       samples_taken += p.taken;
       const Eigen::Vector3d mean = p.n > 0 ? Eigen::Vector3d(p.sum / p.n) : Eigen::Vector3d::Zero();
