@@ -241,6 +241,50 @@ TEST(PathTracer, StoppingOnTheNeighboursLeavesTheMeanUnbiased) {
   EXPECT_LT(spp_neighbours, 32) << "and it still stops early";
 }
 
+TEST(PathTracer, AStandardErrorFromTheNeighboursCoversThePixelsOwnRareBrightSamples) {
+  // The scene above, stopping on the neighbours' samples: a pixel whose few samples hold a rare
+  // bright path (the emitter reached by the bounce) stops on its neighbours' smaller spread. The
+  // standard error it reports (what the denoiser weighs its luminance by) is at least its own
+  // samples' spread, so fewer pixels lie far above the converged value in units of it.
+  solo::RenderScene s = planeWithEmitterStandingOnIt();
+  s.camera = cameraLookingAt(6, 4000, 0.995 / 5, 1.0 / 5);
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.max_bounces = 1;
+  o.solid_angle_emitter_sampling = false;
+  o.sampler = solo::SamplerKind::Independent;
+  o.relative_error = 0;
+  o.absolute_error = cv::Mat(6, 6, CV_32F, cv::Scalar(0.8));
+  o.progress = false;
+  o.stop_on_neighbours = true;
+  o.min_samples = o.max_samples = 256;
+  cv::Mat reference = cv::Mat::zeros(6, 6, CV_64F);
+  for (int seed = 1; seed <= 20; ++seed) {
+    o.seed = static_cast<std::uint64_t>(seed);
+    const solo::RenderOutput out = solo::renderPathTraced(s, o);
+    for (int y = 0; y < 6; ++y)
+      for (int x = 0; x < 6; ++x) reference.at<double>(y, x) += out.radiance.at<cv::Vec3f>(y, x)[1] / 20.0;
+  }
+  o.min_samples = 2;
+  o.max_samples = 64;
+  int pixels = 0, beyond_5 = 0, stopped_early = 0;
+  for (int seed = 101; seed <= 400; ++seed) {
+    o.seed = static_cast<std::uint64_t>(seed);
+    const solo::RenderOutput out = solo::renderPathTraced(s, o);
+    for (int y = 0; y < 6; ++y)
+      for (int x = 0; x < 6; ++x) {
+        const double deviation = out.radiance.at<cv::Vec3f>(y, x)[1] - reference.at<double>(y, x);
+        ++pixels;
+        stopped_early += out.samples.at<int>(y, x) < 64;
+        beyond_5 += deviation > 5.0 * out.std_error.at<float>(y, x);
+      }
+  }
+  std::printf("pixels %d, stopped before 64 spp %d, brighter than the converged value by over 5 standard errors %d\n",
+              pixels, stopped_early, beyond_5);
+  EXPECT_GT(stopped_early, pixels / 2);
+  EXPECT_LT(beyond_5, pixels / 250);  // measured 35 of 10 800; 63 with the neighbours' estimate alone
+}
+
 namespace {
 
 // A plane z = 5 (reflectance 0.5) under two 0.4 m square rectangle lights at z = 4 facing it,
