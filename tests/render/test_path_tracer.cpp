@@ -5,6 +5,8 @@
 #include <solo/render/light_sampler.h>
 #include <solo/render/path_tracer.h>
 
+#include "render_quads.h"
+
 #include "rectangle_irradiance.h"
 #include "test_support.h"
 
@@ -19,18 +21,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// Adds the quad corner, corner + u, corner + u + v, corner + v as two faces.
-void addQuad(solo::RenderScene& s, const Eigen::Vector3f& corner, const Eigen::Vector3f& u, const Eigen::Vector3f& v,
-             float reflectance, int emitter = -1) {
-  const auto base = static_cast<std::uint32_t>(s.vertices.size());
-  s.vertices.insert(s.vertices.end(), {corner, corner + u, corner + u + v, corner + v});
-  s.faces.push_back({base, base + 1, base + 2});
-  s.faces.push_back({base, base + 2, base + 3});
-  for (int k = 0; k < 2; ++k) {
-    s.face_reflectance.push_back(Eigen::Vector3f::Constant(reflectance));
-    s.face_emitter.push_back(emitter);
-  }
-}
+using solo::test::addQuad;
 
 solo::PinholeCamera camera(int size, double focal) { return {focal, focal, (size - 1) / 2.0, (size - 1) / 2.0, size, size}; }
 

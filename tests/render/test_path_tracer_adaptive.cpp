@@ -4,6 +4,8 @@
 
 #include <solo/render/path_tracer.h>
 
+#include "render_quads.h"
+
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
@@ -12,18 +14,7 @@
 
 namespace {
 
-// Adds the quad corner, corner + u, corner + u + v, corner + v as two faces.
-void addQuad(solo::RenderScene& s, const Eigen::Vector3f& corner, const Eigen::Vector3f& u, const Eigen::Vector3f& v,
-             float reflectance, int emitter = -1) {
-  const auto base = static_cast<std::uint32_t>(s.vertices.size());
-  s.vertices.insert(s.vertices.end(), {corner, corner + u, corner + u + v, corner + v});
-  s.faces.push_back({base, base + 1, base + 2});
-  s.faces.push_back({base, base + 2, base + 3});
-  for (int k = 0; k < 2; ++k) {
-    s.face_reflectance.push_back(Eigen::Vector3f::Constant(reflectance));
-    s.face_emitter.push_back(emitter);
-  }
-}
+using solo::test::addQuad;
 
 // Camera frame (x right, y down, z forward): a floor at y = 1, a back wall at z = 10, a screen
 // at x = 0 from z = 3 to 10, and a 0.2 m lamp of radiance 300 at (1.5, -0.5, 6), right of the
