@@ -190,18 +190,22 @@ bool chordEnclosesSheet(const DepthMesh& m, const VertexLoop& run) {
 // Whether hole i of `source` gets the image-space fill only. A large frame hole closed by its
 // chord whose image-space patch fails gets no 3D method: its chord crosses the mesh, and every
 // 3D patch failed on such holes (measured on the synthetic 1080p streets: 0 of 11, 506 to 3 689
-// boundary vertices), after seconds of CGAL. Nor does a sky-line hole whose chord encloses its sheet.
+// boundary vertices), after seconds of CGAL. Nor does a sky-line hole whose chord encloses its sheet,
+// nor a large frame hole that a backdrop closes when its own closing fails (`backdrop_retry`).
 bool imageSpaceOnly(const DepthMesh& m, const DepthMeshCleanupOptions& options, const DepthLoops& source,
-                    std::size_t i) {
-  return ((source.chord_closed[i] || source.sky_line_closed[i]) &&
-          static_cast<int>(source.holes[i].size()) > options.hole_filling.max_cubic_boundary_vertices) ||
+                    std::size_t i, bool backdrop_retry) {
+  const bool large = static_cast<int>(source.holes[i].size()) > options.hole_filling.max_cubic_boundary_vertices;
+  return ((source.chord_closed[i] || source.sky_line_closed[i]) && large) ||
+         (backdrop_retry && source.frame_hole[i] && !source.backdrop[i] && large) ||
          (source.sky_line_closed[i] && chordEnclosesSheet(m, source.holes[i])) ||
          source.merged[i];  // its runs belong to several sheets: no chord closes it
 }
 
-// Closes the holes `which` of `source` (backdrops stay behind `farthest` and `observed` when given).
+// Closes the holes `which` of `source` (backdrops stay behind `farthest` and `observed` when given;
+// `backdrop_retry`: the frame holes left open are tried again as backdrops).
 HoleClosing closeSomeHoles(DepthMesh& m, const DepthMeshCleanupOptions& options, const DepthLoops& source,
-                           const std::vector<std::size_t>& which, const cv::Mat* farthest, const cv::Mat* observed) {
+                           const std::vector<std::size_t>& which, const cv::Mat* farthest, const cv::Mat* observed,
+                           bool backdrop_retry) {
   DepthLoops subset;
   std::vector<std::uint8_t> only;
   for (const std::size_t i : which) {
@@ -209,7 +213,7 @@ HoleClosing closeSomeHoles(DepthMesh& m, const DepthMeshCleanupOptions& options,
     subset.frame_paths.push_back(source.frame_paths[i]);
     subset.path_after.push_back(source.path_after[i]);
     subset.backdrop.push_back(source.backdrop[i]);
-    only.push_back(imageSpaceOnly(m, options, source, i));
+    only.push_back(imageSpaceOnly(m, options, source, i, backdrop_retry));
   }
   PixelMapping mapping{m.properties, m.camera, m.width, m.height, &m.vertex_of_pixel};
   mapping.frame_paths = &subset.frame_paths;
@@ -230,7 +234,8 @@ HoleClosing closeDepthHoles(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat&
   std::vector<std::size_t> first_pass, backdrop_holes;
   for (std::size_t i = 0; i < loops.holes.size(); ++i)
     (loops.backdrop[i] ? backdrop_holes : first_pass).push_back(i);
-  HoleClosing holes = closeSomeHoles(m, options, loops, first_pass, nullptr, nullptr);
+  HoleClosing holes =
+      closeSomeHoles(m, options, loops, first_pass, nullptr, nullptr, backdrop_mode != BackdropMode::Off);
   // A frame hole its own closing left open (its patch met the mesh) is tried again in a
   // backdrop: the loops are classified again, every frame hole left a backdrop run.
   std::int64_t retried = 0;
@@ -251,7 +256,8 @@ HoleClosing closeDepthHoles(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat&
     const Stopwatch backdrop_clock;
     cv::Mat farthest, observed;
     backdropDepthBounds(m, depth_m, had_depth, options, farthest, observed);
-    const HoleClosing more = closeSomeHoles(m, options, *backdrop_source, backdrop_holes, &farthest, &observed);
+    const HoleClosing more =
+        closeSomeHoles(m, options, *backdrop_source, backdrop_holes, &farthest, &observed, false);
     if (backdrop_source == &again && more.left_open == 0) {
       // The frame holes left open are closed now, inside the backdrops (counted there).
       holes.holes -= retried;
