@@ -180,6 +180,10 @@ void addNightRenderFlags(CLI::App* night_cmd, NightOptions& night) {
       ->capture_default_str()->check(CLI::Range(1, 8));
   night_cmd->add_flag("--denoise,!--no-denoise", night.conversion.denoise.enabled,
                       "Edge-aware filter of the render's Monte Carlo noise, guided by its AOVs (preset)");
+  night_cmd->add_option("--firefly-sigma", night.conversion.denoise.firefly_sigma,
+                        "Before denoising, scale down rare bright samples this many standard deviations above their "
+                        "neighbours and spread the rest of their light wide (no blotches); 0 = off")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
 }
 
 // The night camera's and the post-process's flags.

@@ -76,6 +76,7 @@ std::string nightConfigText(const NightOptions& options) {
   line("mesh-downsample", std::to_string(o.mesh_downsample));
   line("render-downsample", std::to_string(o.render_downsample));
   flag("denoise", o.denoise.enabled);
+  line("firefly-sigma", number(o.denoise.firefly_sigma));
   flag("glare", o.post.glare);
   flag("noise", o.post.noise);
   line("sensor-white", number(o.sensor_white_cd_m2));

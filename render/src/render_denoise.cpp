@@ -66,10 +66,15 @@ void validate(const RenderOutput& r, const PinholeCamera& camera, const RenderDe
   if (o.iterations < 1 || o.iterations > 10)
     throw std::invalid_argument("denoiseRender: iterations must be 1 to 10, got " + std::to_string(o.iterations));
   if (!(o.albedo_floor > 0) || !(o.normal_exponent >= 0) || !(o.albedo_sigma >= 0) || !(o.plane_tolerance > 0) ||
-      !(o.luminance_sigma > 0))
+      !(o.luminance_sigma > 0) || !(o.firefly_sigma >= 0) || !std::isfinite(o.firefly_sigma))
     throw std::invalid_argument(
         "denoiseRender: albedo_floor, plane_tolerance and luminance_sigma must be > 0, "
-        "normal_exponent and albedo_sigma >= 0");
+        "normal_exponent, albedo_sigma and firefly_sigma >= 0 (firefly_sigma finite)");
+  if (!(o.firefly_spread_px >= 0) || !std::isfinite(o.firefly_spread_px))
+    throw std::invalid_argument("denoiseRender: firefly_spread_px must be finite and >= 0");
+  if (o.firefly_radius_px < 1)
+    throw std::invalid_argument("denoiseRender: firefly_radius_px must be >= 1, got " +
+                                std::to_string(o.firefly_radius_px));
 }
 
 bool isEmitter(const RenderOutput& r, int y, int x) {
@@ -161,6 +166,94 @@ cv::Mat initialVariance(const RenderOutput& r, const Guides& g, const cv::Mat& a
   cv::divide(blurred, blurred_weight, out);
   out.setTo(0, g.filtered == 0);
   return out;
+}
+
+// A firefly's own standard error is at least this share of its value: one rare sample carries
+// most of it (one bright sample of four: about 0.87); a steady highlight's is far below.
+constexpr float kFireflyMinRelativeError = 0.25f;
+
+// What the firefly clamp did: pixels scaled down and the share of the filtered pixels' light (Y)
+// above their bounds.
+struct FireflyClamp {
+  std::int64_t pixels = 0;
+  double excess_share = 0;
+};
+
+// A wide Gaussian blur of `image` (sigma_px) through a pyramid: down by area to a fraction of
+// the size, blurred there, up again (the wide kernel at full size would cost seconds at 1080p).
+cv::Mat wideBlur(const cv::Mat& image, float sigma_px) {
+  const int factor = std::max(1, std::min(8, static_cast<int>(sigma_px / 4)));
+  cv::Mat small, blurred, out;
+  cv::resize(image, small, cv::Size((image.cols + factor - 1) / factor, (image.rows + factor - 1) / factor), 0, 0,
+             cv::INTER_AREA);
+  cv::GaussianBlur(small, blurred, cv::Size(0, 0), sigma_px / factor, sigma_px / factor, cv::BORDER_CONSTANT);
+  cv::resize(blurred, out, image.size(), 0, 0, cv::INTER_LINEAR);
+  return out;
+}
+
+// Adds `excess_radiance` (CV_32FC3) back as irradiance spread over the filtered pixels: each
+// source pixel p's light goes to pixel q in proportion to G(q - p) x albedo(q), so that the
+// radiance added is the radiance taken: blur(excess / blur(albedo)).
+void spreadExcess(const Guides& g, const cv::Mat& albedo, const cv::Mat& excess_radiance, float sigma_px,
+                  cv::Mat& irradiance) {
+  cv::Mat mask, weight, mask3;
+  g.filtered.convertTo(mask, CV_32F);
+  cv::merge(std::vector<cv::Mat>{mask, mask, mask}, mask3);
+  cv::multiply(albedo, mask3, weight);
+  const cv::Mat reach = wideBlur(weight, sigma_px);  // sum over q of G(q - p) albedo(q), per source p
+  cv::Mat per_reach = cv::Mat::zeros(excess_radiance.size(), CV_32FC3);
+  for (int y = 0; y < per_reach.rows; ++y)
+    for (int x = 0; x < per_reach.cols; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const float e = excess_radiance.at<cv::Vec3f>(y, x)[c], w = reach.at<cv::Vec3f>(y, x)[c];
+        if (e > 0.f && w > 1e-12f) per_reach.at<cv::Vec3f>(y, x)[c] = e / w;
+      }
+  const cv::Mat added = wideBlur(per_reach, sigma_px);
+  cv::Mat added_masked;
+  cv::multiply(added, mask3, added_masked);
+  irradiance += added_masked;
+}
+
+// Scales down the fireflies of `irradiance` (see RenderDenoiseOptions::firefly_sigma) and
+// spreads the light above their bounds: the window's sums of Y and Y^2 over the filtered
+// pixels, without the pixel itself, give each pixel's bound.
+FireflyClamp clampFireflies(const RenderOutput& r, const Guides& g, const cv::Mat& albedo, cv::Mat& irradiance,
+                            const RenderDenoiseOptions& o) {
+  FireflyClamp result;
+  if (r.std_error.empty() || o.firefly_sigma <= 0) return result;
+  cv::Mat y, mask;
+  cv::extractChannel(irradiance, y, 1);
+  g.filtered.convertTo(mask, CV_32F);
+  y = y.mul(mask);
+  const cv::Size window(2 * o.firefly_radius_px + 1, 2 * o.firefly_radius_px + 1);
+  cv::Mat sum_y, sum_y2, count;
+  cv::boxFilter(y, sum_y, CV_64F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+  cv::boxFilter(y.mul(y), sum_y2, CV_64F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+  cv::boxFilter(mask, count, CV_64F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+  cv::Mat excess = cv::Mat::zeros(irradiance.size(), CV_32FC3);  // radiance above the bounds
+  double total = 0, above = 0;
+  for (int row = 0; row < irradiance.rows; ++row)
+    for (int x = 0; x < irradiance.cols; ++x) {
+      if (!g.filtered.at<std::uint8_t>(row, x)) continue;
+      const double value = y.at<float>(row, x), albedo_y = albedo.at<cv::Vec3f>(row, x)[1];
+      total += value * albedo_y;
+      const double n = count.at<double>(row, x) - 1;
+      if (n < 2 || !(value > 0)) continue;
+      const double mean = (sum_y.at<double>(row, x) - value) / n;
+      const double spread = std::sqrt(std::max(0.0, (sum_y2.at<double>(row, x) - value * value) / n - mean * mean));
+      const double bound = mean + o.firefly_sigma * spread;
+      const double own_error = r.std_error.at<float>(row, x) / albedo_y;
+      if (value <= bound || !(own_error >= kFireflyMinRelativeError * value)) continue;
+      cv::Vec3f& pixel = irradiance.at<cv::Vec3f>(row, x);
+      const cv::Vec3f kept = pixel * static_cast<float>(bound / value);
+      excess.at<cv::Vec3f>(row, x) = (pixel - kept).mul(albedo.at<cv::Vec3f>(row, x));
+      pixel = kept;
+      above += (value - bound) * albedo_y;
+      ++result.pixels;
+    }
+  result.excess_share = total > 0 ? above / total : 0;
+  if (result.pixels > 0 && o.firefly_spread_px > 0) spreadExcess(g, albedo, excess, o.firefly_spread_px, irradiance);
+  return result;
 }
 
 // What the weights of a pixel's neighbours read of the pixel itself.
@@ -260,6 +353,7 @@ StageReport denoiseRender(RenderOutput& render, const PinholeCamera& camera, con
 
   Estimate estimate;
   cv::divide(render.radiance, albedo, estimate.irradiance);
+  const FireflyClamp fireflies = clampFireflies(render, guides, albedo, estimate.irradiance, options);
   estimate.variance = initialVariance(render, guides, albedo);
   for (int pass = 0; pass < options.iterations; ++pass) estimate = atrousPass(guides, estimate, 1 << pass, options);
 
@@ -277,7 +371,9 @@ StageReport denoiseRender(RenderOutput& render, const PinholeCamera& camera, con
       .add("iterations", static_cast<std::int64_t>(options.iterations))
       .add("footprint_radius", static_cast<std::int64_t>(2 * ((1 << options.iterations) - 1)), "px")
       .add("luminance_weight", !render.std_error.empty())
-      .add("luminance_ratio", y_before > 0 ? y_after / y_before : 1.0);
+      .add("luminance_ratio", y_before > 0 ? y_after / y_before : 1.0)
+      .add("fireflies_clamped", fireflies.pixels)
+      .add(options.firefly_spread_px > 0 ? "firefly_light_spread" : "firefly_light_removed", fireflies.excess_share);
   report.notes.push_back(
       "a-trous filter of the albedo-demodulated radiance, guided by normal, tangent plane and "
       "luminance against the standard error; emitter and sky pixels kept exact");

@@ -230,3 +230,104 @@ TEST(RenderDenoise, RefusesMismatchedAovsCameraAndOptions) {
   wrong.depth_m = cv::Mat();
   EXPECT_THROW(solo::denoiseRender(wrong, camera()), std::invalid_argument);
 }
+
+// A rare bright sample on a noisy plane: a firefly of 1000 (its own standard error half its
+// value, as one bright sample of four gives) among pixels of radiance 1.
+solo::RenderOutput planeWithFirefly(int x, int y, float value, float std_error) {
+  solo::RenderOutput r = noisyRender([](int, int) { return SurfaceTruth{}; }, 0.2f, 17);
+  r.radiance.at<cv::Vec3f>(y, x) = cv::Vec3f::all(value);
+  r.std_error.at<float>(y, x) = std_error;
+  return r;
+}
+
+// The largest |Y - 1| over the 41x41 pixels around (x, y), the pixel itself left out.
+double largestErrorAround(const cv::Mat& radiance, int x, int y) {
+  double largest = 0;
+  for (int v = y - 20; v <= y + 20; ++v)
+    for (int u = x - 20; u <= x + 20; ++u)
+      if (u != x || v != y) largest = std::max(largest, std::abs(radiance.at<cv::Vec3f>(v, u)[1] - 1.0));
+  return largest;
+}
+
+double meanY(const cv::Mat& radiance) { return cv::mean(radiance)[1]; }
+
+TEST(RenderDenoise, AFireflyIsClampedAndItsLightSpreadInsteadOfABlotch) {
+  const int x = 80, y = 60;
+  solo::RenderOutput spread = planeWithFirefly(x, y, 1000.f, 500.f);
+  solo::RenderOutput blotch = planeWithFirefly(x, y, 1000.f, 500.f);  // its own pixels (Mats share theirs)
+  solo::RenderOutput removed = planeWithFirefly(x, y, 1000.f, 500.f);
+  const double mean_before = meanY(spread.radiance);  // about (19 199 + 1 000) / 19 200
+  const solo::StageReport report = solo::denoiseRender(spread, camera());
+  solo::RenderDenoiseOptions off;
+  off.firefly_sigma = 0;
+  solo::denoiseRender(blotch, camera(), off);
+  solo::RenderDenoiseOptions remove;
+  remove.firefly_spread_px = 0;
+  const solo::StageReport removed_report = solo::denoiseRender(removed, camera(), remove);
+  // Unclamped, its 999 extra units of light stay within the 62 px footprint and raise the plane
+  // around it by more than a third. Clamped to 20 standard deviations of its neighbours (about
+  // 0.2 each: 1 + 20 x 0.2 = 5), the rest spread by a Gaussian of 96 px (wider than this
+  // 160x120 image: +0.05 on average, a little more near its centre), the plane around it stays
+  // within 0.02 of the image's mean.
+  EXPECT_GT(largestErrorAround(blotch.radiance, x, y), 0.3);
+  const double mean_after = meanY(spread.radiance);
+  double largest_bump = 0;
+  for (int v = y - 20; v <= y + 20; ++v)
+    for (int u = x - 20; u <= x + 20; ++u)
+      largest_bump = std::max(largest_bump, std::abs(spread.radiance.at<cv::Vec3f>(v, u)[1] - mean_after));
+  EXPECT_LT(largest_bump, 0.02);
+  // The light is kept: the image's mean moves by less than the filter's own bias on a plane.
+  EXPECT_NEAR(mean_after, mean_before, 0.005);
+  EXPECT_EQ(solo::test::metricNumber(report, "fireflies_clamped"), 1);
+  // About 995 of the 19 200 + 999 units of the plane lie above the bound.
+  EXPECT_NEAR(solo::test::metricNumber(report, "firefly_light_spread"), 995.0 / 20199.0, 0.002);
+  // Removed instead, the image loses them and the plane keeps its level.
+  EXPECT_NEAR(solo::test::metricNumber(removed_report, "firefly_light_removed"), 995.0 / 20199.0, 0.002);
+  EXPECT_LT(largestErrorAround(removed.radiance, x, y), 0.06);
+  EXPECT_NEAR(meanY(removed.radiance), 1.0, 0.005);
+}
+
+TEST(RenderDenoise, ASteadyHighlightIsNoFirefly) {
+  // As bright as the firefly above but measured steadily (standard error 1 % of its value):
+  // a lamp's reflection that every sample finds. The clamp leaves it and the image alike.
+  const int x = 80, y = 60;
+  solo::RenderOutput with_clamp = planeWithFirefly(x, y, 1000.f, 10.f);
+  solo::RenderOutput without = planeWithFirefly(x, y, 1000.f, 10.f);
+  const solo::StageReport report = solo::denoiseRender(with_clamp, camera());
+  solo::RenderDenoiseOptions off;
+  off.firefly_sigma = 0;
+  solo::denoiseRender(without, camera(), off);
+  EXPECT_EQ(solo::test::metricNumber(report, "fireflies_clamped"), 0);
+  EXPECT_TRUE(bitIdentical(with_clamp.radiance, without.radiance));
+  EXPECT_GT(with_clamp.radiance.at<cv::Vec3f>(y, x)[1], 900.f);
+}
+
+TEST(RenderDenoise, SparseSamplesOfOneBrightnessAreNoFireflies) {
+  // A dim region lit by rare paths: one pixel in twenty holds 20, the rest 0, every standard
+  // error that of one hit in four samples. Their neighbours' spread covers them: no light is
+  // removed (the bound is about 0.05 x 20 + 20 x 0.22 x 20 = 88).
+  solo::RenderOutput r = noisyRender([](int, int) { return SurfaceTruth{}; }, 0.f, 1);
+  cv::RNG rng(5);
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const bool hit = rng.uniform(0.0, 1.0) < 0.05;
+      r.radiance.at<cv::Vec3f>(y, x) = cv::Vec3f::all(hit ? 20.f : 0.f);
+      r.std_error.at<float>(y, x) = hit ? 10.f : 0.f;
+    }
+  const solo::StageReport report = solo::denoiseRender(r, camera());
+  EXPECT_EQ(solo::test::metricNumber(report, "fireflies_clamped"), 0);
+  EXPECT_EQ(solo::test::metricNumber(report, "firefly_light_spread"), 0);
+}
+
+TEST(RenderDenoise, RefusesNegativeFireflySettingsAndAnEmptyWindow) {
+  solo::RenderOutput r = noisyRender([](int, int) { return SurfaceTruth{}; }, 0.1f, 3);
+  solo::RenderDenoiseOptions bad;
+  bad.firefly_sigma = -1;
+  EXPECT_THROW(solo::denoiseRender(r, camera(), bad), std::invalid_argument);
+  bad = {};
+  bad.firefly_radius_px = 0;
+  EXPECT_THROW(solo::denoiseRender(r, camera(), bad), std::invalid_argument);
+  bad = {};
+  bad.firefly_spread_px = -1;
+  EXPECT_THROW(solo::denoiseRender(r, camera(), bad), std::invalid_argument);
+}

@@ -44,6 +44,19 @@ struct RenderDenoiseOptions {
   /// paths (a pixel whose few samples missed them reports a small error): on the default scene
   /// 4 lost 3 % of the mean, 8 2 %, no luminance weight none (docs/accuracy.md).
   float luminance_sigma = 8.f;
+  /// Firefly clamp before filtering: a pixel whose irradiance Y exceeds the mean of the other
+  /// filtered pixels within `firefly_radius_px` by more than firefly_sigma times their standard
+  /// deviation, and whose own standard error is at least a quarter of its value (a rare bright
+  /// sample, not a steady highlight), is scaled down to that bound. Without it the filter spreads
+  /// such a sample over its footprint as a blotch of light. 0 = off. >= 0; needs the render's
+  /// std_error.
+  float firefly_sigma = 20.f;
+  /// Half-width of the square window of the firefly statistics, pixels. >= 1.
+  int firefly_radius_px = 7;
+  /// The light above the bound is spread over the filtered pixels around, by a Gaussian of
+  /// this standard deviation (pixels; albedo-weighted, so the light added is the light taken),
+  /// wide enough that no blotch comes back; 0 removes it (biased dark). >= 0.
+  float firefly_spread_px = 96.f;
 };
 
 /// Filters `render.radiance` (CV_32FC3, XYZ) in place with the options above, guided by
