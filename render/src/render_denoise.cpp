@@ -226,9 +226,10 @@ FireflyClamp clampFireflies(const RenderOutput& r, const Guides& g, const cv::Ma
   g.filtered.convertTo(mask, CV_32F);
   y = y.mul(mask);
   const cv::Size window(2 * o.firefly_radius_px + 1, 2 * o.firefly_radius_px + 1);
-  cv::Mat sum_y, sum_y2, count;
-  cv::boxFilter(y, sum_y, CV_64F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
-  cv::boxFilter(y.mul(y), sum_y2, CV_64F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+  cv::Mat y64, sum_y, sum_y2, count;
+  y.convertTo(y64, CV_64F);  // squares in double: a render may hold values whose square overflows a float
+  cv::boxFilter(y64, sum_y, CV_64F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+  cv::boxFilter(y64.mul(y64), sum_y2, CV_64F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
   cv::boxFilter(mask, count, CV_64F, window, cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
   cv::Mat excess = cv::Mat::zeros(irradiance.size(), CV_32FC3);  // radiance above the bounds
   double total = 0, above = 0;
@@ -243,7 +244,7 @@ FireflyClamp clampFireflies(const RenderOutput& r, const Guides& g, const cv::Ma
       const double spread = std::sqrt(std::max(0.0, (sum_y2.at<double>(row, x) - value * value) / n - mean * mean));
       const double bound = mean + o.firefly_sigma * spread;
       const double own_error = r.std_error.at<float>(row, x) / albedo_y;
-      if (value <= bound || !(own_error >= kFireflyMinRelativeError * value)) continue;
+      if (!std::isfinite(bound) || value <= bound || !(own_error >= kFireflyMinRelativeError * value)) continue;
       cv::Vec3f& pixel = irradiance.at<cv::Vec3f>(row, x);
       const cv::Vec3f kept = pixel * static_cast<float>(bound / value);
       excess.at<cv::Vec3f>(row, x) = (pixel - kept).mul(albedo.at<cv::Vec3f>(row, x));

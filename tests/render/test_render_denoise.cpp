@@ -331,3 +331,18 @@ TEST(RenderDenoise, RefusesNegativeFireflySettingsAndAnEmptyWindow) {
   bad.firefly_spread_px = -1;
   EXPECT_THROW(solo::denoiseRender(r, camera(), bad), std::invalid_argument);
 }
+
+TEST(RenderDenoise, AFireflyOfAnyMagnitudeLeavesFiniteValuesAndKeepsTheLight) {
+  // 1e30 squares beyond a float's range. Every pixel stays finite, the firefly is clamped and
+  // its light, spread over this small image, raises it evenly (about 1e30 / 19 200 each): the
+  // image's mean is kept to the spread's pyramid approximation (2 % on an image narrower than the
+  // Gaussian) and the firefly's pixel ends within twice it.
+  const int x = 80, y = 60;
+  solo::RenderOutput r = planeWithFirefly(x, y, 1e30f, 5e29f);
+  const double mean_before = meanY(r.radiance);
+  const solo::StageReport report = solo::denoiseRender(r, camera());
+  EXPECT_TRUE(cv::checkRange(r.radiance));
+  EXPECT_GE(solo::test::metricNumber(report, "fireflies_clamped"), 1);
+  EXPECT_NEAR(meanY(r.radiance) / mean_before, 1.0, 0.03);
+  EXPECT_LT(r.radiance.at<cv::Vec3f>(y, x)[1], 2 * mean_before);
+}
