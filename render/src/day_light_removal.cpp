@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <unordered_map>
 
 namespace solo {
 
@@ -639,6 +640,492 @@ void findSun(const SurfaceMap& map, const cv::Mat& smooth, const std::vector<Eig
   out.report.notes.push_back(note);
 }
 
+// Sun and shadows read from the image: within a material region (one instance, one surface
+// orientation) the sunlit and shadowed pixels form two modes of log(I / E); the gap between
+// them gives the sun's shading of that orientation, the modes give the visibility.
+constexpr float kMinShadowGapLog = 0.5f;    // least log gap between a region's lit and shadowed modes
+constexpr double kMinModeShare = 0.08;      // each mode holds at least this share of its region
+constexpr int kMinRegionPixels = 200;       // usable pixels a region needs to be split
+constexpr double kMinModeSeparation = 0.6;  // Otsu's between-class share of the region's variance
+constexpr int kHistogramBins = 64;
+constexpr int kGuidedRadiusPx = 3;          // the visibility's edge-aware softening (penumbrae)
+constexpr float kGuidedEps = 0.02f;
+constexpr double kMinDarkPieceShare = 0.5;  // of the dark mode in its largest connected piece
+constexpr float kMinSunCosine = 0.05f;      // a face with n.s at most this is in its own shadow
+constexpr double kSunGridDeg = 2;           // the image sun search's grid step
+constexpr int kMinStatsPixels = 50;         // usable pixels a region needs to count in the sun search
+constexpr float kSunColourTolerance = 0.2f; // log deviation of a region's lit / shadowed colour from the sun's
+
+// The region of every pixel (-1 without a surface): its instance and the signed axis of the
+// up-aligned frame closest to its normal.
+std::vector<int> materialRegions(const SurfaceMap& map, const HemisphereFrame& frame, int& region_count) {
+  std::unordered_map<std::int64_t, int> ids;
+  std::vector<int> region(map.valid.size(), -1);
+  for (std::size_t i = 0; i < map.valid.size(); ++i) {
+    if (!map.valid[i]) continue;
+    const Eigen::Vector3f& n = map.normal[i];
+    const std::array<float, 3> d = {n.dot(frame.up), n.dot(frame.east), n.dot(frame.north)};
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+      if (std::abs(d[static_cast<std::size_t>(k)]) > std::abs(d[static_cast<std::size_t>(axis)])) axis = k;
+    const int bin = 2 * axis + (d[static_cast<std::size_t>(axis)] < 0.f ? 1 : 0);
+    const std::int64_t key = static_cast<std::int64_t>(map.instance[i]) * 8 + bin;
+    region[i] = ids.emplace(key, static_cast<int>(ids.size())).first->second;
+  }
+  region_count = static_cast<int>(ids.size());
+  return region;
+}
+
+// log(luminance(I) / luminance(E)) of every usable pixel of the smoothed day image; NaN elsewhere.
+std::vector<float> ambientLogRatio(const SurfaceMap& map, const cv::Mat& smooth, const std::vector<Eigen::Vector3f>& ambient,
+                                   const Eigen::Vector3f& floor) {
+  std::vector<float> ratio(map.valid.size(), std::numeric_limits<float>::quiet_NaN());
+  for (std::size_t i = 0; i < map.valid.size(); ++i) {
+    if (!usablePixel(map, smooth, i)) continue;
+    const cv::Vec3f c = smooth.at<cv::Vec3f>(static_cast<int>(i / map.width), static_cast<int>(i % map.width));
+    const Eigen::Vector3f e = ambient[i].cwiseMax(floor);
+    ratio[i] = std::log(luminance(c)) - std::log(luminance(cv::Vec3f(e[0], e[1], e[2])));
+  }
+  return ratio;
+}
+
+// The median of a non-empty vector (reorders it).
+float medianOf(std::vector<float>& values) {
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2), values.end());
+  return values[values.size() / 2];
+}
+
+// Otsu's split of `values` on a histogram between their 1st and 99th percentiles.
+struct ModeSplit {
+  float threshold = 0, low_mean = 0, high_mean = 0;
+  double low_share = 0, separation = 0;  // separation: between-class share of the variance
+};
+
+ModeSplit otsuSplit(std::vector<float> values) {
+  ModeSplit out;
+  std::sort(values.begin(), values.end());
+  const float lo = values[values.size() / 100], hi = values[values.size() - 1 - values.size() / 100];
+  if (!(hi > lo)) return out;
+  std::array<double, kHistogramBins> count{}, sum{};
+  double total_sum = 0, total_sq = 0;
+  for (const float v : values) {
+    const int b = std::clamp(static_cast<int>((v - lo) / (hi - lo) * kHistogramBins), 0, kHistogramBins - 1);
+    count[static_cast<std::size_t>(b)] += 1;
+    sum[static_cast<std::size_t>(b)] += v;
+    total_sum += v;
+    total_sq += double(v) * v;
+  }
+  const double n = static_cast<double>(values.size()), mean = total_sum / n;
+  const double variance = std::max(total_sq / n - mean * mean, 1e-12);
+  double n0 = 0, s0 = 0, best = -1;
+  for (int b = 0; b + 1 < kHistogramBins; ++b) {
+    n0 += count[static_cast<std::size_t>(b)];
+    s0 += sum[static_cast<std::size_t>(b)];
+    if (n0 <= 0 || n0 >= n) continue;
+    const double m0 = s0 / n0, m1 = (total_sum - s0) / (n - n0);
+    const double between = (n0 / n) * (1 - n0 / n) * (m1 - m0) * (m1 - m0);
+    if (between <= best) continue;
+    best = between;
+    out = {lo + (hi - lo) * static_cast<float>(b + 1) / kHistogramBins, static_cast<float>(m0), static_cast<float>(m1),
+           n0 / n, between / variance};
+  }
+  return out;
+}
+
+// A region split into a sunlit and a shadowed mode (`bimodal`): the split's threshold on
+// log(I / E), the lit pixels' mean normal and the observation y_c = (exp(median log(I_c / E_c)
+// of the lit pixels - that of the shadowed ones) - 1) x the lit pixels' median E_c, the sun's
+// term that makes both modes one albedo (the model's n.w_c).
+struct RegionModes {
+  bool bimodal = false;
+  float threshold = 0;
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+  Eigen::Vector3f observed = Eigen::Vector3f::Zero();
+  double weight = 0;
+};
+
+// Whether the region's dark mode is mostly one connected piece, as a cast shadow is, and not
+// many small ones, as the windows of a wall are.
+bool darkModeConnected(const std::vector<std::size_t>& pixels, int width, const std::vector<float>& log_ratio,
+                       float threshold) {
+  int x0 = width, y0 = std::numeric_limits<int>::max(), x1 = -1, y1 = -1;
+  for (const std::size_t i : pixels) {
+    const int y = static_cast<int>(i / width), x = static_cast<int>(i % width);
+    x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+  }
+  cv::Mat dark(y1 - y0 + 1, x1 - x0 + 1, CV_8U, cv::Scalar(0));
+  int dark_count = 0;
+  for (const std::size_t i : pixels)
+    if (log_ratio[i] <= threshold) {
+      dark.at<std::uint8_t>(static_cast<int>(i / width) - y0, static_cast<int>(i % width) - x0) = 255;
+      ++dark_count;
+    }
+  cv::morphologyEx(dark, dark, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)));
+  cv::Mat labels, stats, centroids;
+  const int count = cv::connectedComponentsWithStats(dark, labels, stats, centroids, 8);
+  int largest = 0;
+  for (int k = 1; k < count; ++k) largest = std::max(largest, stats.at<int>(k, cv::CC_STAT_AREA));
+  return largest >= kMinDarkPieceShare * dark_count;
+}
+
+// The region's modes when Otsu's split of its log(I / E) is a shadow split (gap, shares,
+// separation, one dark piece); else not bimodal.
+RegionModes regionModes(const std::vector<std::size_t>& pixels, const SurfaceMap& map, const cv::Mat& smooth,
+                        const std::vector<Eigen::Vector3f>& ambient, const Eigen::Vector3f& floor,
+                        const std::vector<float>& log_ratio) {
+  RegionModes out;
+  std::vector<float> values;
+  for (const std::size_t i : pixels) values.push_back(log_ratio[i]);
+  const ModeSplit split = otsuSplit(values);
+  if (split.high_mean - split.low_mean < kMinShadowGapLog || split.separation < kMinModeSeparation ||
+      std::min(split.low_share, 1 - split.low_share) < kMinModeShare)
+    return out;
+  if (!darkModeConnected(pixels, map.width, log_ratio, split.threshold)) return out;
+  std::array<std::vector<float>, 3> log_lit, log_dark, e_lit;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  for (const std::size_t i : pixels) {
+    const cv::Vec3f c = smooth.at<cv::Vec3f>(static_cast<int>(i / map.width), static_cast<int>(i % map.width));
+    const Eigen::Vector3f e = ambient[i].cwiseMax(floor);
+    const bool lit = log_ratio[i] > split.threshold;
+    if (lit) normal += map.normal[i].cast<double>();
+    for (std::size_t k = 0; k < 3; ++k) {
+      const float l = std::log(c[static_cast<int>(k)] / e[static_cast<int>(k)]);
+      (lit ? log_lit : log_dark)[k].push_back(l);
+      if (lit) e_lit[k].push_back(e[static_cast<int>(k)]);
+    }
+  }
+  out.bimodal = normal.norm() > 0;
+  out.threshold = split.threshold;
+  out.normal = normal.normalized().cast<float>();
+  for (std::size_t k = 0; k < 3; ++k)  // medians: the pixels the smoothing mixed across an edge do not count
+    out.observed[static_cast<int>(k)] =
+        std::expm1(medianOf(log_lit[k]) - medianOf(log_dark[k])) * medianOf(e_lit[k]);
+  out.weight = std::sqrt(static_cast<double>(pixels.size()));
+  return out;
+}
+
+// Drops the regions whose lit / shadowed colour ratio is not the sun's: the sun's colour is
+// one for the whole image (the weighted median of the regions' observed_c / observed_g).
+void keepSunColouredRegions(std::vector<RegionModes>& regions) {
+  std::array<std::vector<std::pair<float, double>>, 2> chroma;
+  for (const RegionModes& r : regions)
+    if (r.bimodal && r.observed.minCoeff() > 0.f)
+      for (int k = 0; k < 2; ++k) chroma[static_cast<std::size_t>(k)].emplace_back(std::log(r.observed[2 * k] / r.observed[1]), r.weight);
+  std::array<float, 2> median{};
+  for (int k = 0; k < 2; ++k) {
+    auto& v = chroma[static_cast<std::size_t>(k)];
+    if (v.empty()) return;
+    std::sort(v.begin(), v.end());
+    double total = 0, acc = 0;
+    for (const auto& e : v) total += e.second;
+    for (const auto& e : v)
+      if ((acc += e.second) >= total / 2) {
+        median[static_cast<std::size_t>(k)] = e.first;
+        break;
+      }
+  }
+  for (RegionModes& r : regions)
+    if (r.bimodal && (r.observed.minCoeff() <= 0.f ||
+                      std::abs(std::log(r.observed[0] / r.observed[1]) - median[0]) > kSunColourTolerance ||
+                      std::abs(std::log(r.observed[2] / r.observed[1]) - median[1]) > kSunColourTolerance))
+      r.bimodal = false;
+}
+
+// A region's luminance statistics for the sun search: the mean log luminance of I and the
+// mean luminance of E over its lit mode (the whole region when it is not split) and its
+// shadowed mode.
+struct RegionStats {
+  int instance = 0;
+  bool split = false;
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+  double weight = 0;
+  std::array<float, 2> log_i{}, e{};  // [0] lit mode or whole region, [1] shadowed mode
+};
+
+RegionStats regionStats(const std::vector<std::size_t>& pixels, const SurfaceMap& map, const cv::Mat& smooth,
+                        const std::vector<Eigen::Vector3f>& ambient, const Eigen::Vector3f& floor,
+                        const RegionModes& modes, const std::vector<float>& log_ratio) {
+  RegionStats out;
+  out.instance = map.instance[pixels.front()];
+  out.split = modes.bimodal;
+  std::array<double, 2> log_i{}, e{};
+  std::array<int, 2> count{};
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  for (const std::size_t i : pixels) {
+    const cv::Vec3f c = smooth.at<cv::Vec3f>(static_cast<int>(i / map.width), static_cast<int>(i % map.width));
+    const Eigen::Vector3f a = ambient[i].cwiseMax(floor);
+    const std::size_t m = modes.bimodal && log_ratio[i] <= modes.threshold ? 1 : 0;
+    log_i[m] += std::log(luminance(c));
+    e[m] += luminance(cv::Vec3f(a[0], a[1], a[2]));
+    ++count[m];
+    if (m == 0) normal += map.normal[i].cast<double>();
+  }
+  for (std::size_t m = 0; m < 2; ++m)
+    if (count[m] > 0) out.log_i[m] = static_cast<float>(log_i[m] / count[m]), out.e[m] = static_cast<float>(e[m] / count[m]);
+  out.normal = normal.norm() > 0 ? Eigen::Vector3f(normal.normalized().cast<float>()) : Eigen::Vector3f::Zero();
+  out.weight = std::sqrt(static_cast<double>(pixels.size()));
+  return out;
+}
+
+// The cost of sun direction s with strength k (in units of E): a split region's lit and
+// shadowed modes must give one albedo, and the regions of one instance (one material) must
+// agree with the weighted median of those whose visibility is known (split, or turned away
+// from the sun); the others take whichever of lit and shadowed agrees better (written to
+// `lit` when given: 1 lit, 0 shadowed, 2 undecided).
+double sunCost(const std::vector<RegionStats>& stats, const std::vector<std::vector<int>>& instances,
+               const Eigen::Vector3f& s, float k, std::vector<std::uint8_t>* lit) {
+  const float clip = kClassCostClip * kClassCostClip;
+  double cost = 0, counted = 0;
+  std::vector<std::pair<float, double>> known;
+  for (const std::vector<int>& members : instances) {
+    known.clear();
+    for (const int r : members) {
+      const RegionStats& st = stats[static_cast<std::size_t>(r)];
+      const float cosine = st.normal.dot(s);
+      if (st.split) {
+        const float h_lit = st.log_i[0] - std::log(std::max(0.f, k * cosine) + st.e[0]);
+        const float d = h_lit - (st.log_i[1] - std::log(st.e[1]));
+        cost += st.weight * std::min(d * d, clip);
+        counted += st.weight;
+        known.emplace_back(h_lit, st.weight);
+      } else if (cosine <= kMinSunCosine) {
+        known.emplace_back(st.log_i[0] - std::log(st.e[0]), st.weight);
+      }
+    }
+    float centre = 0;
+    if (!known.empty()) {
+      std::sort(known.begin(), known.end());
+      double total = 0, acc = 0;
+      for (const auto& e : known) total += e.second;
+      for (const auto& e : known)
+        if ((acc += e.second) >= total / 2) {
+          centre = e.first;
+          break;
+        }
+    }
+    for (const int r : members) {
+      const RegionStats& st = stats[static_cast<std::size_t>(r)];
+      const float cosine = st.normal.dot(s);
+      const float h_shadow = st.log_i[0] - std::log(st.e[0]);
+      const float h_lit = st.log_i[0] - std::log(std::max(0.f, k * cosine) + st.e[0]);
+      bool choose_lit = st.split;
+      if (!st.split && cosine > kMinSunCosine) choose_lit = std::abs(h_lit - centre) < std::abs(h_shadow - centre);
+      if (lit) (*lit)[static_cast<std::size_t>(r)] = known.empty() && !st.split && cosine > kMinSunCosine ? 2 : choose_lit;
+      if (known.empty()) continue;
+      const float d = (choose_lit ? h_lit : h_shadow) - centre;
+      cost += st.weight * std::min(d * d, clip);
+      counted += st.weight;
+    }
+  }
+  return counted > 0 ? cost / counted : std::numeric_limits<double>::infinity();
+}
+
+struct SunCandidate {
+  Eigen::Vector3f direction = Eigen::Vector3f::Zero();
+  float strength = 0;
+  double cost = std::numeric_limits<double>::infinity();
+};
+
+// The best (s, k) on a grid: elevations and azimuths every kSunGridDeg, strengths log-spaced.
+SunCandidate searchImageSun(const std::vector<RegionStats>& stats, const std::vector<std::vector<int>>& instances,
+                            const HemisphereFrame& frame) {
+  const std::vector<float> strengths = ambientScaleGrid(24);
+  std::vector<Eigen::Vector3f> directions;
+  const double step = kSunGridDeg * kPi / 180;
+  for (double elevation = step; elevation < kPi / 2; elevation += step)
+    for (double azimuth = 0; azimuth < 2 * kPi - 1e-9; azimuth += step / std::max(0.1, std::cos(elevation)))
+      directions.push_back(frame.direction(elevation, azimuth));
+  std::vector<SunCandidate> best(directions.size());
+  tbb::parallel_for(std::size_t{0}, directions.size(), [&](std::size_t d) {
+    for (const float k : strengths) {
+      const double cost = sunCost(stats, instances, directions[d], k, nullptr);
+      if (cost < best[d].cost) best[d] = {directions[d], k, cost};
+    }
+  });
+  SunCandidate out;
+  for (const SunCandidate& c : best)
+    if (c.cost < out.cost) out = c;
+  return out;
+}
+
+// w_c = k_c s: k_c the least squares fit of the split regions' observed_c to k_c n.s; without
+// a split region every channel takes the search's strength.
+std::array<Eigen::Vector3f, 3> channelSunVectors(const std::vector<RegionModes>& modes, const SunCandidate& sun) {
+  std::array<Eigen::Vector3f, 3> w;
+  for (int c = 0; c < 3; ++c) {
+    double num = 0, den = 0;
+    for (const RegionModes& m : modes) {
+      if (!m.bimodal) continue;
+      const double cosine = std::max(0.f, m.normal.dot(sun.direction));
+      num += m.weight * cosine * m.observed[c];
+      den += m.weight * cosine * cosine;
+    }
+    w[static_cast<std::size_t>(c)] = sun.direction * (den > 0 ? static_cast<float>(num / den) : sun.strength);
+  }
+  return w;
+}
+
+// He's guided filter of `p` by `guide` (both CV_32F) over a (2r + 1)^2 box.
+cv::Mat guidedFilter(const cv::Mat& guide, const cv::Mat& p, int radius, float eps) {
+  const cv::Size box(2 * radius + 1, 2 * radius + 1);
+  cv::Mat mean_i, mean_p, corr_ip, corr_ii;
+  cv::boxFilter(guide, mean_i, CV_32F, box);
+  cv::boxFilter(p, mean_p, CV_32F, box);
+  cv::boxFilter(guide.mul(p), corr_ip, CV_32F, box);
+  cv::boxFilter(guide.mul(guide), corr_ii, CV_32F, box);
+  const cv::Mat a = (corr_ip - mean_i.mul(mean_p)) / (corr_ii - mean_i.mul(mean_i) + eps);
+  const cv::Mat b = mean_p - a.mul(mean_i);
+  cv::Mat mean_a, mean_b;
+  cv::boxFilter(a, mean_a, CV_32F, box);
+  cv::boxFilter(b, mean_b, CV_32F, box);
+  return mean_a.mul(guide) + mean_b;
+}
+
+// The sun's visibility where the image cannot split a region: 0 where the surface turns away
+// from the sun, else a shadow ray through the mesh.
+float rayVisibility(const SurfaceMap& map, std::size_t i, const RayCaster& caster, const Eigen::Vector3f& sun) {
+  if (map.normal[i].dot(sun) <= 0.f) return 0.f;
+  const RayStart start = rayStart(map.point[i], map.normal[i]);
+  return caster.occluded(start.origin, sun, start.t_near, std::numeric_limits<float>::infinity()) ? 0.f : 1.f;
+}
+
+// What the image says of the sun: the material regions, their modes, the visibility chosen for
+// the regions without a split, and w_c (zero without a sun).
+struct ImageSun {
+  std::vector<int> region;
+  std::vector<RegionModes> modes;
+  std::vector<std::uint8_t> lit;  // per region without a split: 1 lit, 0 shadowed, 2 undecided (a shadow ray)
+  std::vector<float> log_ratio;
+  std::array<Eigen::Vector3f, 3> w{Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero()};
+  int split = 0;  // regions split into a lit and a shadowed mode
+};
+
+// The sun's visibility per pixel: in a bimodal region its lit mode (a clipped pixel counts as
+// lit, a dark one as shadowed), softened by a guided filter on the image's log luminance so
+// that penumbrae blend; in the other regions rayVisibility.
+cv::Mat sunVisibility(const SurfaceMap& map, const cv::Mat& smooth, const ImageSun& sun_fit, const RayCaster& caster,
+                      const Eigen::Vector3f& sun) {
+  cv::Mat hard(map.height, map.width, CV_32F, cv::Scalar(0)), guide(map.height, map.width, CV_32F, cv::Scalar(0));
+  std::vector<std::uint8_t> split(map.valid.size(), 0);
+  tbb::parallel_for(0, map.height, [&](int y) {
+    for (int x = 0; x < map.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * map.width + x;
+      const cv::Vec3f c = smooth.at<cv::Vec3f>(y, x);
+      guide.at<float>(y, x) = std::log(luminance(c) + 1e-3f);
+      if (sun_fit.region[i] < 0) continue;
+      const RegionModes& modes = sun_fit.modes[static_cast<std::size_t>(sun_fit.region[i])];
+      if (!modes.bimodal) {
+        const std::uint8_t lit = sun_fit.lit[static_cast<std::size_t>(sun_fit.region[i])];
+        hard.at<float>(y, x) = lit == 2 ? rayVisibility(map, i, caster, sun) : static_cast<float>(lit);
+        continue;
+      }
+      split[i] = 1;
+      const float r = sun_fit.log_ratio[i];
+      hard.at<float>(y, x) = std::isfinite(r) ? (r > modes.threshold ? 1.f : 0.f)
+                                              : (std::max({c[0], c[1], c[2]}) >= kClippedValue ? 1.f : 0.f);
+    }
+  });
+  const cv::Mat soft = guidedFilter(guide, hard, kGuidedRadiusPx, kGuidedEps);
+  for (std::size_t i = 0; i < split.size(); ++i)
+    if (split[i]) {
+      const int y = static_cast<int>(i / map.width), x = static_cast<int>(i % map.width);
+      hard.at<float>(y, x) = std::clamp(soft.at<float>(y, x), 0.f, 1.f);
+    }
+  return hard;
+}
+
+// The statistics of every region with kMinStatsPixels usable pixels (`stats`, by region) and
+// the regions grouped by instance, in a fixed order.
+std::vector<std::vector<int>> instanceGroups(const std::vector<std::vector<std::size_t>>& members, const SurfaceMap& map,
+                                             const cv::Mat& smooth, const std::vector<Eigen::Vector3f>& ambient,
+                                             const Eigen::Vector3f& floor, const ImageSun& sun_fit,
+                                             std::vector<RegionStats>& stats) {
+  stats.assign(members.size(), RegionStats{});
+  std::unordered_map<int, std::vector<int>> by_instance;
+  for (std::size_t r = 0; r < members.size(); ++r)
+    if (members[r].size() >= static_cast<std::size_t>(kMinStatsPixels)) {
+      stats[r] = regionStats(members[r], map, smooth, ambient, floor, sun_fit.modes[r], sun_fit.log_ratio);
+      by_instance[stats[r].instance].push_back(static_cast<int>(r));
+    }
+  std::vector<std::vector<int>> instances;
+  for (auto& entry : by_instance) instances.push_back(std::move(entry.second));
+  std::sort(instances.begin(), instances.end());
+  return instances;
+}
+
+// Splits every region with enough usable pixels into its modes; when some region keeps a
+// split of the sun's colour, searches the sun and decides the other regions' visibility.
+ImageSun fitImageSun(const SurfaceMap& map, const cv::Mat& smooth, const std::vector<Eigen::Vector3f>& ambient,
+                     const Eigen::Vector3f& floor, const HemisphereFrame& frame) {
+  ImageSun out;
+  int region_count = 0;
+  out.region = materialRegions(map, frame, region_count);
+  out.log_ratio = ambientLogRatio(map, smooth, ambient, floor);
+  std::vector<std::vector<std::size_t>> members(static_cast<std::size_t>(region_count));
+  for (std::size_t i = 0; i < map.valid.size(); ++i)
+    if (out.region[i] >= 0 && std::isfinite(out.log_ratio[i])) members[static_cast<std::size_t>(out.region[i])].push_back(i);
+  out.modes.resize(members.size());
+  tbb::parallel_for(std::size_t{0}, members.size(), [&](std::size_t r) {
+    if (members[r].size() >= static_cast<std::size_t>(kMinRegionPixels))
+      out.modes[r] = regionModes(members[r], map, smooth, ambient, floor, out.log_ratio);
+  });
+  keepSunColouredRegions(out.modes);
+  for (const RegionModes& m : out.modes) out.split += m.bimodal ? 1 : 0;
+  out.lit.assign(members.size(), 2);
+  if (out.split == 0) return out;
+  std::vector<RegionStats> stats;
+  const std::vector<std::vector<int>> instances = instanceGroups(members, map, smooth, ambient, floor, out, stats);
+  const SunCandidate sun = searchImageSun(stats, instances, frame);
+  if (!std::isfinite(sun.cost)) return out;
+  sunCost(stats, instances, sun.direction, sun.strength, &out.lit);
+  for (std::size_t r = 0; r < members.size(); ++r)
+    if (members[r].size() < static_cast<std::size_t>(kMinStatsPixels)) out.lit[r] = 2;
+  out.w = channelSunVectors(out.modes, sun);
+  return out;
+}
+
+// The albedo I / (V max(0, n.w_c) + E_c) at every pixel, E floored; sky pixels keep the day image.
+cv::Mat divideImageShading(const cv::Mat& day, const SurfaceMap& map, const std::vector<Eigen::Vector3f>& ambient,
+                           const Eigen::Vector3f& floor, const cv::Mat& visibility, const std::array<Eigen::Vector3f, 3>& w) {
+  cv::Mat albedo = day.clone();
+  tbb::parallel_for(0, map.height, [&](int y) {
+    for (int x = 0; x < map.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * map.width + x;
+      if (!map.valid[i]) continue;
+      const float v = visibility.at<float>(y, x);
+      cv::Vec3f& a = albedo.at<cv::Vec3f>(y, x);
+      for (int c = 0; c < 3; ++c) {
+        const float direct = v * std::max(0.f, map.normal[i].dot(w[static_cast<std::size_t>(c)]));
+        a[c] = std::max(a[c], 0.f) / (direct + std::max(ambient[i][c], floor[c]));
+      }
+    }
+  });
+  return albedo;
+}
+
+// The image's sun and shadows divided out (fills out.albedo before the white balance, and the
+// method, sun and scales); without a split region only the ambient light is divided out.
+void removeImageShadows(const cv::Mat& day, const SurfaceMap& map, const cv::Mat& smooth,
+                        const std::vector<Eigen::Vector3f>& ambient, const Eigen::Vector3f& floor,
+                        const HemisphereFrame& frame, const RayCaster& caster, DayLightRemoval& out) {
+  const ImageSun sun_fit = fitImageSun(map, smooth, ambient, floor, frame);
+  out.report.add("shadow_regions", static_cast<std::int64_t>(sun_fit.split));
+  const std::array<Eigen::Vector3f, 3>& w = sun_fit.w;
+  if (!(w[1].norm() > 0.f)) {
+    out.method = DayLightMethod::SkyOnly;
+    out.ambient_scale = Eigen::Vector3f::Ones();
+    out.report.notes.push_back("no clear sun: no region shows a lit and a shadowed mode of the sun's colour; the "
+                               "ambient light alone is divided out");
+    out.albedo = divideShading(day, map, ambient, floor, caster, Eigen::Vector3f::Zero(), false, out.ambient_scale);
+    return;
+  }
+  out.method = DayLightMethod::SunAndSky;
+  out.sun_direction = w[1].normalized();
+  for (int c = 0; c < 3; ++c) out.ambient_scale[c] = 1.f / std::max(w[static_cast<std::size_t>(c)].norm(), 1e-6f);
+  const cv::Mat visibility = sunVisibility(map, smooth, sun_fit, caster, out.sun_direction);
+  out.albedo = divideImageShading(day, map, ambient, floor, visibility, w);
+}
+
 void writeReport(const Eigen::Vector3f& up, DayLightRemoval& out) {
   out.report.add("method", std::string(dayLightMethodName(out.method)));
   out.report.add("sun_gain", out.sun_gain);
@@ -728,10 +1215,15 @@ DayLightRemoval removeDayLight(const cv::Mat& day_linear, const DayLightGeometry
   const AmbientSources sources{smooth, sky, geometry.camera, surface_median, surfacePercentile(day, map, 25), up};
   const std::vector<Eigen::Vector3f> ambient = ambientIrradiance(map, caster, sources, o.ambient_rays);
   out.report.add("ambient_seconds", clock.seconds(), "s");
-  findSun(map, smooth, ambient, caster, HemisphereFrame(up), o, out);
-  out.report.add("sun_search_seconds", clock.seconds(), "s");
-  out.albedo = divideShading(day, map, ambient, kAmbientFloor * surface_median, caster, out.sun_direction,
-                             out.method == DayLightMethod::SunAndSky, out.ambient_scale);
+  if (o.shadows_from_image) {
+    removeImageShadows(day, map, smooth, ambient, kAmbientFloor * surface_median, HemisphereFrame(up), caster, out);
+    out.report.add("sun_search_seconds", clock.seconds(), "s");
+  } else {
+    findSun(map, smooth, ambient, caster, HemisphereFrame(up), o, out);
+    out.report.add("sun_search_seconds", clock.seconds(), "s");
+    out.albedo = divideShading(day, map, ambient, kAmbientFloor * surface_median, caster, out.sun_direction,
+                               out.method == DayLightMethod::SunAndSky, out.ambient_scale);
+  }
   out.white_balance = whiteBalance(out.albedo, map, o.median_reflectance, out.report);
   writeReport(up, out);
   out.report.seconds = clock.seconds();

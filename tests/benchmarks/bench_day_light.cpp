@@ -1,6 +1,8 @@
 // Albedo from the day image on synthetic scenes with exact albedo: the linearised day image
-// (what stands in for a missing albedo map without removal) against removeDayLight, by the
-// error of linear albedo over the non-sky pixels, and the found sun against synth.json's.
+// (what stands in for a missing albedo map without removal) against removeDayLight with its
+// sun searched by shadow rays and with the shadows read from the image
+// (DayLightRemovalOptions::shadows_from_image), by the error of linear albedo over the non-sky
+// pixels, and each found sun against synth.json's (sun: degrees, -1 without a sun).
 // Not a Google Benchmark: one run per scene, a table on stdout (docs/rendering.md).
 // The geometry is solo night's: the refined depth (default options) meshed and cleaned.
 // Run:
@@ -11,7 +13,8 @@
 // geometry, cleaned as solo night cleans it) with the exact normals and instances.
 // Errors: "fit" scales each channel of both estimates by its least-squares gain to the exact
 // albedo (the shading left, not the exposure); "rule" is each estimate with the removal's own
-// white balance and scale (the day image given the same rule).
+// white balance and scale (the day image given the same rule). --pictures DIR writes each
+// albedo and a side-by-side of the day image, the image-shadow removal and the truth.
 
 #include <solo/core/image_io.h>
 #include <solo/core/scene.h>
@@ -24,6 +27,7 @@
 #include <solo/synth/scene_raster.h>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <array>
@@ -165,41 +169,74 @@ DayLightGeometry removalGeometry(const fs::path& dir, const Scene& scene, const 
   return geometry;
 }
 
+// One removal's errors against the truth and its sun's angle to synth's (-1 without a sun).
+struct Scored {
+  DayLightRemoval removal;
+  AlbedoError fit, rule;
+  double sun_error_deg = -1;
+};
+
+Scored score(DayLightRemoval removal, const cv::Mat& truth, const cv::Mat& mask, const Eigen::Vector3f& sun) {
+  Scored s;
+  s.fit = albedoError(removal.albedo, truth, mask, true);
+  s.rule = albedoError(removal.albedo, truth, mask, false);
+  if (removal.method == DayLightMethod::SunAndSky)
+    s.sun_error_deg = std::acos(std::clamp(double(sun.dot(removal.sun_direction)), -1.0, 1.0)) * 180 / 3.14159265358979;
+  s.removal = std::move(removal);
+  return s;
+}
+
+void printNotes(const char* label, const DayLightRemoval& removal) {
+  for (const std::string& note : removal.report.notes) std::printf("    %s: %s\n", label, note.c_str());
+  if (std::getenv("SOLO_BENCH_VERBOSE"))
+    for (const Metric& m : removal.report.metrics)
+      std::visit([&](const auto& v) { std::printf("    %s: %s = %s\n", label, m.name.c_str(), valueText(v).c_str()); },
+                 m.value);
+}
+
+// The PNGs of --pictures: each albedo alone, and the day image (the removal's rule), the
+// image-shadow removal and the truth side by side at half size.
+void writePictures(const fs::path& pictures, const std::string& name, const cv::Mat& day_rule, const cv::Mat& rays,
+                   const cv::Mat& image, const cv::Mat& truth) {
+  fs::create_directories(pictures);
+  writeImage(pictures / (name + "_day_albedo.png"), srgbEncode8(day_rule));
+  writeImage(pictures / (name + "_delit_albedo.png"), srgbEncode8(rays));
+  writeImage(pictures / (name + "_image_shadows_albedo.png"), srgbEncode8(image));
+  writeImage(pictures / (name + "_true_albedo.png"), srgbEncode8(truth));
+  cv::Mat row, half;
+  cv::hconcat(std::vector<cv::Mat>{day_rule, image, truth}, row);
+  cv::resize(row, half, cv::Size(row.cols / 2, row.rows / 2), 0, 0, cv::INTER_AREA);
+  writeImage(pictures / (name + "_side_by_side.png"), srgbEncode8(half));
+}
+
 void runScene(const fs::path& dir, const fs::path& pictures, Geometry mode) {
   const Scene scene = loadScene(dir / "scene.json");
   const cv::Mat day = linearised(scene.image);
   const PinholeCamera camera = scene.camera.scaledTo(day.cols, day.rows);
-  const DayLightRemoval removal = removeDayLight(day, removalGeometry(dir, scene, camera, mode));
+  const DayLightGeometry geometry = removalGeometry(dir, scene, camera, mode);
+  DayLightRemovalOptions image_options;
+  image_options.shadows_from_image = true;
 
   const cv::Mat truth = readColorImage(dir / "gt" / "albedo.png");
   const cv::Mat labels = readLabels(dir / "gt" / "labelIds.png");
   cv::Mat mask = cv::Mat::zeros(truth.size(), CV_8U);
   for (int y = 0; y < mask.rows; ++y)
     for (int x = 0; x < mask.cols; ++x) mask.at<std::uint8_t>(y, x) = labels.at<int>(y, x) != kSkyLabel ? 1 : 0;
-  const cv::Mat day_rule = balanced(day, labels, mask);
-  const AlbedoError day_fit = albedoError(day, truth, mask, true), ours_fit = albedoError(removal.albedo, truth, mask, true);
-  const AlbedoError day_rule_err = albedoError(day_rule, truth, mask, false),
-                    ours_rule = albedoError(removal.albedo, truth, mask, false);
   const Eigen::Vector3f sun = synthSun(dir);
-  const double sun_error_deg =
-      removal.method == DayLightMethod::SunAndSky
-          ? std::acos(std::clamp(double(sun.dot(removal.sun_direction)), -1.0, 1.0)) * 180 / 3.14159265358979
-          : -1;
-  std::printf("%-14s %-12s %6.3f %6.3f  %6.3f %6.3f  %6.3f %6.3f  %6.3f %6.3f  %6.2f  %5.2f  %5.2f s\n",
-              dir.filename().string().c_str(), dayLightMethodName(removal.method), day_fit.mae, day_fit.relative,
-              ours_fit.mae, ours_fit.relative, day_rule_err.mae, day_rule_err.relative, ours_rule.mae,
-              ours_rule.relative, sun_error_deg, removal.sun_gain, removal.report.seconds);
-  for (const std::string& note : removal.report.notes) std::printf("    %s\n", note.c_str());
-  if (std::getenv("SOLO_BENCH_VERBOSE"))
-    for (const Metric& m : removal.report.metrics)
-      std::visit([&m](const auto& v) { std::printf("    %s = %s\n", m.name.c_str(), valueText(v).c_str()); }, m.value);
+  const Scored rays = score(removeDayLight(day, geometry), truth, mask, sun);
+  const Scored image = score(removeDayLight(day, geometry, image_options), truth, mask, sun);
+  const cv::Mat day_rule = balanced(day, labels, mask);
+  const AlbedoError day_fit = albedoError(day, truth, mask, true), day_rule_err = albedoError(day_rule, truth, mask, false);
+  std::printf("%-6s %6.3f %5.2f | %-11s %6.3f %5.2f %6.1f %5.1f s | %-11s %6.3f %5.2f %6.1f %5.1f s | %6.3f %6.3f %6.3f\n",
+              dir.filename().string().c_str(), day_fit.mae, day_fit.relative, dayLightMethodName(rays.removal.method),
+              rays.fit.mae, rays.fit.relative, rays.sun_error_deg, rays.removal.report.seconds,
+              dayLightMethodName(image.removal.method), image.fit.mae, image.fit.relative, image.sun_error_deg,
+              image.removal.report.seconds, day_rule_err.mae, rays.rule.mae, image.rule.mae);
+  printNotes("shadow rays", rays.removal);
+  printNotes("image shadows", image.removal);
   std::fflush(stdout);
-  if (!pictures.empty()) {
-    fs::create_directories(pictures);
-    writeImage(pictures / (dir.filename().string() + "_day_albedo.png"), srgbEncode8(day_rule));
-    writeImage(pictures / (dir.filename().string() + "_delit_albedo.png"), srgbEncode8(removal.albedo));
-    writeImage(pictures / (dir.filename().string() + "_true_albedo.png"), srgbEncode8(truth));
-  }
+  if (!pictures.empty())
+    writePictures(pictures, dir.filename().string(), day_rule, rays.removal.albedo, image.removal.albedo, truth);
 }
 
 }  // namespace
@@ -223,10 +260,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: bench_day_light [--pictures DIR] [--exact-geometry | --exact-depth-mesh] SCENE_DIR...\n");
     return 2;
   }
-  std::printf("%-14s %-12s %13s  %13s  %13s  %13s  %6s  %5s  %7s\n", "scene", "method", "day fit", "delit fit",
-              "day rule", "delit rule", "sun", "gain", "time");
-  std::printf("%-14s %-12s %6s %6s  %6s %6s  %6s %6s  %6s %6s  %6s\n", "", "", "MAE", "rel", "MAE", "rel", "MAE", "rel",
-              "MAE", "rel", "deg");
+  std::printf("%-6s %12s | %-11s %25s | %-11s %25s | %20s\n", "", "day", "shadow rays", "", "image shadows", "",
+              "rule MAE");
+  std::printf("%-6s %6s %5s | %-11s %6s %5s %6s %7s | %-11s %6s %5s %6s %7s | %6s %6s %6s\n", "scene", "fit", "rel",
+              "method", "fit", "rel", "sun", "time", "method", "fit", "rel", "sun", "time", "day", "rays", "image");
   for (const fs::path& dir : scenes) runScene(dir, pictures, mode);
   return 0;
 }

@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -221,4 +222,134 @@ TEST(DayLightRemoval, DegenerateInputsFallBackFinite) {
   noisy.at<cv::Vec3f>(150, 100) = cv::Vec3f(std::numeric_limits<float>::quiet_NaN(), -1.f, 0.f);
   const solo::DayLightRemoval nan = solo::removeDayLight(noisy, scene.geometry);
   EXPECT_TRUE(all_finite(nan.albedo));
+}
+
+namespace {
+
+// The image-based removal's test scene: the PlaneAndBox road alone, the left half of the
+// image road and the right half sidewalk (two materials on one plane), and its day image
+// I_c = A_c (V S_c + L_c): L the sky radiance the sky pixels show (a uniform sky lights a
+// plane with radiance A L), S the sun's term, V = 0 inside one rectangle on each half (cast
+// shadows whose casters are not in the mesh). Lit / shadowed = (S + L) / L per channel:
+// 5.0, 4.0 and 2.9.
+constexpr int kSidewalkInstance = 8;
+const cv::Vec3f kRoadAlbedo(0.30f, 0.30f, 0.32f), kSidewalkAlbedo(0.55f, 0.50f, 0.45f);
+const cv::Vec3f kSkyRgb(0.25f, 0.32f, 0.45f), kSunRgb(1.00f, 0.95f, 0.85f);
+const cv::Rect kRoadShadow(40, 120, 70, 40), kSidewalkShadow(200, 110, 80, 40);
+
+struct TwoMaterialPlane {
+  solo::DayLightGeometry geometry;
+  cv::Mat day, truth;  // truth: the albedo, -1 where no surface
+};
+
+TwoMaterialPlane twoMaterialPlane(bool shadows) {
+  TwoMaterialPlane s;
+  PlaneAndBox road;
+  road.geometry.camera = planeAndBox().geometry.camera;
+  addQuad(road, {{{-30, 1.5f, 2}, {30, 1.5f, 2}, {30, 1.5f, 60}, {-30, 1.5f, 60}}}, kRoadInstance);
+  s.geometry = road.geometry;
+  s.geometry.instances = cv::Mat(kHeight, kWidth, CV_32S, cv::Scalar(kRoadInstance));
+  s.geometry.instances.colRange(kWidth / 2, kWidth).setTo(kSidewalkInstance);
+  s.day = cv::Mat(kHeight, kWidth, CV_32FC3, kSkyRgb);
+  s.truth = cv::Mat(kHeight, kWidth, CV_32FC3, cv::Scalar::all(-1));
+  const solo::RayCaster caster(s.geometry.vertices, s.geometry.triangles);
+  forEachSurfacePixel(s.geometry, caster, [&](int x, int y, const Eigen::Vector3f&, const Eigen::Vector3f&,
+                                              const Eigen::Vector3f&) {
+    const bool sidewalk = x >= kWidth / 2;
+    const cv::Vec3f a = sidewalk ? kSidewalkAlbedo : kRoadAlbedo;
+    const bool shadowed = shadows && (sidewalk ? kSidewalkShadow : kRoadShadow).contains(cv::Point(x, y));
+    for (int c = 0; c < 3; ++c) s.day.at<cv::Vec3f>(y, x)[c] = a[c] * ((shadowed ? 0.f : kSunRgb[c]) + kSkyRgb[c]);
+    s.truth.at<cv::Vec3f>(y, x) = a;
+  });
+  return s;
+}
+
+solo::DayLightRemovalOptions imageShadows() {
+  solo::DayLightRemovalOptions o;
+  o.shadows_from_image = true;
+  return o;
+}
+
+// Whether (x, y) lies within `margin` px of a shadow rectangle's border or beyond row 106
+// (z = 27 m): the plane ends at row 97 (z = 60 m), and up to 9 rows from there the ambient
+// light's smoothing and the day image's mix the plane with the sky.
+bool nearShadowEdge(int x, int y, int margin) {
+  if (y < 106) return true;
+  for (const cv::Rect& r : {kRoadShadow, kSidewalkShadow}) {
+    const cv::Rect outer(r.x - margin, r.y - margin, r.width + 2 * margin, r.height + 2 * margin);
+    const cv::Rect inner(r.x + margin, r.y + margin, r.width - 2 * margin, r.height - 2 * margin);
+    if (outer.contains(cv::Point(x, y)) && !inner.contains(cv::Point(x, y))) return true;
+  }
+  return false;
+}
+
+// The largest relative error of `albedo` against the truth over the surface pixels away from
+// the shadow edges, after each channel's least-squares gain (white balance and scale are free).
+double largestRelativeError(const cv::Mat& albedo, const cv::Mat& truth) {
+  std::array<double, 3> ee{}, et{};
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x)
+      if (truth.at<cv::Vec3f>(y, x)[0] >= 0.f && !nearShadowEdge(x, y, 4))
+        for (int c = 0; c < 3; ++c) {
+          ee[static_cast<std::size_t>(c)] += double(albedo.at<cv::Vec3f>(y, x)[c]) * albedo.at<cv::Vec3f>(y, x)[c];
+          et[static_cast<std::size_t>(c)] += double(albedo.at<cv::Vec3f>(y, x)[c]) * truth.at<cv::Vec3f>(y, x)[c];
+        }
+  double worst = 0;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x)
+      if (truth.at<cv::Vec3f>(y, x)[0] >= 0.f && !nearShadowEdge(x, y, 4))
+        for (int c = 0; c < 3; ++c) {
+          const double gain = et[static_cast<std::size_t>(c)] / ee[static_cast<std::size_t>(c)];
+          const double t = truth.at<cv::Vec3f>(y, x)[c];
+          worst = std::max(worst, std::abs(gain * albedo.at<cv::Vec3f>(y, x)[c] - t) / t);
+        }
+  return worst;
+}
+
+}  // namespace
+
+TEST(DayLightRemoval, ImageShadowsOfUnseenCastersAreRelitOnTwoMaterials) {
+  const TwoMaterialPlane scene = twoMaterialPlane(true);
+  const double day_error = largestRelativeError(scene.day, scene.truth);
+  const solo::DayLightRemoval out = solo::removeDayLight(scene.day, scene.geometry, imageShadows());
+  ASSERT_EQ(out.method, solo::DayLightMethod::SunAndSky);
+  const double error = largestRelativeError(out.albedo, scene.truth);
+  std::printf("largest relative albedo error: day image %.3f, removed %.4f\n", day_error, error);
+  EXPECT_GT(day_error, 0.5);  // the shadows keep a fifth to a third of the lit radiance
+  EXPECT_LT(error, 0.01);
+  // The sun's term on the plane, n.w_c = n.s / q_c, is S_c in units of the measured ambient
+  // light: its colour is the sun's, 1 : 0.95 : 0.85.
+  const Eigen::Vector3f sun_term = out.ambient_scale.cwiseInverse() * out.sun_direction.dot(Eigen::Vector3f(0, -1, 0));
+  EXPECT_NEAR(sun_term[0] / sun_term[1], kSunRgb[0] / kSunRgb[1], 0.03);
+  EXPECT_NEAR(sun_term[2] / sun_term[1], kSunRgb[2] / kSunRgb[1], 0.03);
+}
+
+TEST(DayLightRemoval, ImageShadowsLeaveAShadowlessSceneAsItIsUpToTheWhiteBalance) {
+  const TwoMaterialPlane scene = twoMaterialPlane(false);
+  const solo::DayLightRemoval out = solo::removeDayLight(scene.day, scene.geometry, imageShadows());
+  EXPECT_EQ(out.method, solo::DayLightMethod::SkyOnly);
+  EXPECT_NE(out.report.notes.front().find("no clear sun"), std::string::npos);
+  std::array<double, 3> lo{1e9, 1e9, 1e9}, hi{0, 0, 0};
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x)
+      if (scene.truth.at<cv::Vec3f>(y, x)[0] >= 0.f)
+        for (int c = 0; c < 3; ++c) {
+          const double ratio = out.albedo.at<cv::Vec3f>(y, x)[c] / scene.day.at<cv::Vec3f>(y, x)[c];
+          lo[static_cast<std::size_t>(c)] = std::min(lo[static_cast<std::size_t>(c)], ratio);
+          hi[static_cast<std::size_t>(c)] = std::max(hi[static_cast<std::size_t>(c)], ratio);
+        }
+  for (int c = 0; c < 3; ++c) EXPECT_LT(hi[static_cast<std::size_t>(c)] / lo[static_cast<std::size_t>(c)], 1.01) << c;
+}
+
+TEST(DayLightRemoval, ImageShadowsFallBackFiniteOnDegenerateInputs) {
+  const cv::Mat day(kHeight, kWidth, CV_32FC3, cv::Scalar::all(0.5));
+  solo::DayLightGeometry empty;
+  empty.camera = planeAndBox().geometry.camera;
+  EXPECT_EQ(solo::removeDayLight(day, empty, imageShadows()).method, solo::DayLightMethod::DayImage);
+  PlaneAndBox scene = planeAndBox();
+  scene.geometry.normals = cv::Mat(kHeight, kWidth, CV_32FC3, cv::Scalar::all(std::numeric_limits<float>::quiet_NaN()));
+  cv::Mat noisy = renderDay(scene.geometry, sunDirection(), kSunIrradiance);
+  noisy.at<cv::Vec3f>(150, 100) = cv::Vec3f(std::numeric_limits<float>::quiet_NaN(), -1.f, 0.f);
+  EXPECT_TRUE(cv::checkRange(solo::removeDayLight(noisy, scene.geometry, imageShadows()).albedo, true, nullptr, 0.0,
+                             1.0 + 1e-6));
 }

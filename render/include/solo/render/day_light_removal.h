@@ -9,9 +9,13 @@
 // is scored by the spread of the de-lit log intensity within each Cityscapes class. Then
 // A = I / shading, white-balanced (the road and sidewalk are grey, else grey-world) and scaled
 // to a median reflectance. Without a clear sun only the ambient light is divided out; without
-// enough geometry the day image is kept; either with a note. docs/rendering.md, "Albedo from
-// the day image", has the measurements (on solo's estimated geometry the search does not yet
-// find the sun).
+// enough geometry the day image is kept; either with a note. With
+// DayLightRemovalOptions::shadows_from_image the shadows are read from the image instead:
+// each material region (one instance, one surface orientation) whose log(I / E) splits into
+// a lit and a shadowed mode of the sun's colour is a shadow edge, the sun is the direction
+// that makes the modes of a region and the regions of an instance one albedo, and the
+// visibility is the mode (softened by a guided filter). docs/rendering.md, "Albedo from the
+// day image", has the measurements (on solo's estimated geometry neither finds the sun).
 
 #include <solo/core/camera.h>
 #include <solo/core/report.h>
@@ -41,6 +45,10 @@ struct DayLightRemovalOptions {
   /// The de-lit albedo is scaled so that the median luminance of the non-sky pixels is this.
   double median_reflectance = 0.2;
   std::uint64_t seed = 1;
+  /// The sun and its shadows read from the image (each material region's lit and shadowed
+  /// modes) instead of searched with shadow rays through the mesh; search_pairs,
+  /// refine_pairs, the steps and min_sun_gain then do not apply.
+  bool shadows_from_image = false;
 };
 
 /// The scene as the removal sees it: a triangle mesh in the camera frame (metres) with the
@@ -77,7 +85,7 @@ struct DayLightRemoval {
   /// q per channel: the sun's irradiance per unit of ambient irradiance measured in the image.
   Eigen::Vector3f ambient_scale = Eigen::Vector3f::Zero();
   Eigen::Vector3f white_balance = Eigen::Vector3f::Ones();  ///< per-channel gains applied, scale included
-  double sun_gain = 0;  ///< the share of the sky-only cost the sun removes
+  double sun_gain = 0;  ///< the share of the sky-only cost the sun removes (shadow-ray search only)
   StageReport report;   ///< "day_light": method, sun direction, gains, time; notes on fallbacks
 };
 
