@@ -293,7 +293,7 @@ class WaveTracer {
         active_.push_back(static_cast<std::uint32_t>(i));
       traceWave(paths);
     }
-    for (Path& p : paths) p.radiance = clampIndirect(p);
+    for (Path& p : paths) p.radiance = pathValue(p);
   }
 
   std::int64_t rays = 0, clamped = 0, split_vertices = 0, shadow_rays_skipped = 0;
@@ -634,6 +634,17 @@ class WaveTracer {
       return p.direct + indirect;
     }
     return p.radiance;
+  }
+
+  // The path's value: clampIndirect's, restricted to the component asked for.
+  Eigen::Vector3f pathValue(const Path& p) {
+    const Eigen::Vector3f value = clampIndirect(p);
+    if (c_.options.component == PathComponent::All) return value;
+    // A path that ended at its first vertex, or whose second ray hit nothing, scattered its light
+    // at most once.
+    const Eigen::Vector3f direct = std::isnan(p.direct.x()) ? p.radiance : p.direct;
+    if (c_.options.component == PathComponent::Direct) return direct;
+    return value - direct;
   }
 
   const Context& c_;

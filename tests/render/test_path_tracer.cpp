@@ -534,6 +534,51 @@ TEST(PathTracer, IndirectClampBoundsOnlyLightScatteredTwice) {
   EXPECT_GT(std::get<double>(*share), 0.9);  // a^2 = 0.25 > 0.1 on nearly every sample
 }
 
+TEST(PathTracer, DirectAndIndirectComponentsSumToTheWholeImage) {
+  // The furnace with two scatterings at most (a = 0.5, emission 1): direct 1 + a, indirect a^2.
+  // The same seed traces the same paths, so the components sum to the whole image pixel by pixel.
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.max_bounces = 2;
+  o.russian_roulette_after = 100;
+  o.min_samples = o.max_samples = 64;
+  o.progress = false;
+  const cv::Mat all = solo::renderPathTraced(furnace(0.5f), o).radiance;
+  o.component = solo::PathComponent::Direct;
+  const cv::Mat direct = solo::renderPathTraced(furnace(0.5f), o).radiance;
+  o.component = solo::PathComponent::Indirect;
+  const cv::Mat indirect = solo::renderPathTraced(furnace(0.5f), o).radiance;
+  EXPECT_NEAR(meanY(direct), 1.5, 0.01);
+  EXPECT_NEAR(meanY(indirect), 0.25, 0.01);
+  EXPECT_LT(cv::norm(direct + indirect, all, cv::NORM_INF), 1e-5);
+}
+
+TEST(PathTracer, APlaneLitByARectangleLightHasNoIndirectLight) {
+  // A plane facing the camera under a rectangle light (no geometry besides the plane): every
+  // bounce off the plane leaves the scene, so all the light is direct.
+  solo::RenderScene s;
+  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
+  solo::RectangleLight light;
+  light.centre = {0, 0, 4};
+  light.normal = {0, 0, 1};
+  light.edge_u = {1, 0, 0};
+  light.edge_v = {0, 1, 0};
+  light.radiance = Eigen::Vector3f::Constant(3.f);
+  s.rectangle_lights.push_back(light);
+  s.camera = camera(8, 8);
+  solo::PathTracerOptions o;
+  o.min_samples = o.max_samples = 16;
+  o.progress = false;
+  const cv::Mat all = solo::renderPathTraced(s, o).radiance;
+  o.component = solo::PathComponent::Direct;
+  const cv::Mat direct = solo::renderPathTraced(s, o).radiance;
+  o.component = solo::PathComponent::Indirect;
+  const cv::Mat indirect = solo::renderPathTraced(s, o).radiance;
+  EXPECT_GT(meanY(all), 0.0);
+  EXPECT_EQ(cv::norm(direct, all, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(indirect, cv::NORM_INF), 0.0);
+}
+
 TEST(PathTracer, DirectionalProfileMatchesG) {
   // A small profiled emitter seen by a plane point at angle theta off its normal:
   // E = L g(cos theta) cos theta cos theta_r A / d^2.

@@ -29,6 +29,15 @@
 //       samples per pixel.
 //       The runs take the seed from the environment variable SOLO_SEED (7 unless set), so that a
 //       firefly-ruled error can be averaged over seeds.
+//   export_blender_scene error-sources SCENE OUT_DIR [WIDTHxHEIGHT] [REFERENCE_SPP] [SPP] [SEEDS] [ADAPTIVE_SEEDS]
+//       Where solo's error comes from (docs/rendering.md, "Where the error comes from"): a
+//       reference of each light component (PathComponent Direct and Indirect, REFERENCE_SPP Sobol
+//       spp, 1024 by default, seed 1000; kept in OUT_DIR and reused), solo's SPP-spp image (16 by
+//       default) of each, the same paths for both, and the default adaptive settings' image (the
+//       whole light only), for SEEDS (8) and ADAPTIVE_SEEDS (2) seeds from SOLO_SEED (7 unless
+//       set) on, their squared errors pooled. Prints the shares of the squared error of Y on the
+//       pixels that see no emitter: direct, indirect, their cross term, and the worst 0.1 % of
+//       each image's pixels (fireflies); the last line, `row: ...`, is the table's row.
 //   export_blender_scene compare OUT_DIR IMAGE.exr
 //       Relative RMSE of IMAGE's Y (second channel) against the reference on the pixels where no
 //       emitter is seen, the ratio of their means there, the share of the squared error in the
@@ -62,6 +71,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <numeric>
 #include <set>
 #include <sstream>
 #include <sys/resource.h>
@@ -451,6 +461,198 @@ int compare(int argc, char** argv) {
   return 0;
 }
 
+// A render split into its light components (PathTracerOptions::component).
+struct ComponentImages {
+  cv::Mat direct, indirect;  // CV_32FC3
+  cv::Mat all() const { return direct + indirect; }
+};
+
+// An image's squared errors of Y against the reference on the pixels a mask leaves, by source;
+// sums, so that several seeds' images pool.
+struct ErrorSums {
+  double total = 0;                  // the image's (direct + indirect) squared error
+  double direct = 0, indirect = 0;   // each component's own; the rest of total is their cross term
+  double worst = 0;                  // the worst 0.1 % of the pixels' (fireflies)
+  double worst_direct = 0, worst_indirect = 0;  // the components' own squared errors on those pixels
+  double worst_above = 0;  // the part of worst on pixels where the image is above the reference
+  double beside_emitter = 0;  // the part of total on pixels within 1 pixel of a seen emitter
+  double norm = 0;                   // the reference's squared Y
+  double direct_light = 0, indirect_light = 0;  // the reference's summed Y of each component
+
+  ErrorSums& operator+=(const ErrorSums& o) {
+    total += o.total, direct += o.direct, indirect += o.indirect, worst += o.worst;
+    worst_direct += o.worst_direct, worst_indirect += o.worst_indirect, worst_above += o.worst_above, norm += o.norm;
+    beside_emitter += o.beside_emitter;
+    direct_light += o.direct_light, indirect_light += o.indirect_light;
+    return *this;
+  }
+  double relativeRmse() const { return norm > 0 ? std::sqrt(total / norm) : 0; }
+  double share(double part) const { return total > 0 ? part / total : 0; }
+  double fireflyIndirect() const {
+    return worst_direct + worst_indirect > 0 ? worst_indirect / (worst_direct + worst_indirect) : 0;
+  }
+  double indirectLight() const {
+    return direct_light + indirect_light > 0 ? indirect_light / (direct_light + indirect_light) : 0;
+  }
+};
+
+// Error sums of `image` against `reference` on the pixels where `mask` is 0.
+ErrorSums errorSums(const ComponentImages& image, const ComponentImages& reference, const cv::Mat& mask) {
+  const auto luminance = [](const cv::Mat& m, int x, int y) {
+    return static_cast<double>(m.ptr<float>(y)[x * m.channels() + 1]);
+  };
+  std::vector<double> squares, direct_squares, indirect_squares;
+  std::vector<bool> above;
+  cv::Mat grown;  // the mask grown by a pixel: its new pixels are beside a seen emitter
+  cv::dilate(mask, grown, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)));
+  ErrorSums e;
+  for (int y = 0; y < mask.rows; ++y)
+    for (int x = 0; x < mask.cols; ++x) {
+      if (mask.at<float>(y, x) != 0) continue;
+      const double direct_reference = luminance(reference.direct, x, y);
+      const double indirect_reference = luminance(reference.indirect, x, y);
+      const double direct_error = luminance(image.direct, x, y) - direct_reference;
+      const double indirect_error = luminance(image.indirect, x, y) - indirect_reference;
+      squares.push_back((direct_error + indirect_error) * (direct_error + indirect_error));
+      direct_squares.push_back(direct_error * direct_error);
+      indirect_squares.push_back(indirect_error * indirect_error);
+      above.push_back(direct_error + indirect_error > 0);
+      if (grown.at<float>(y, x) != 0) e.beside_emitter += squares.back();
+      e.norm += (direct_reference + indirect_reference) * (direct_reference + indirect_reference);
+      e.direct_light += direct_reference;
+      e.indirect_light += indirect_reference;
+    }
+  const auto sum = [](const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); };
+  e.total = sum(squares);
+  e.direct = sum(direct_squares);
+  e.indirect = sum(indirect_squares);
+  if (squares.empty()) return e;
+  std::vector<std::size_t> order(squares.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  const std::size_t worst = std::max<std::size_t>(1, squares.size() / 1000);
+  std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(worst), order.end(),
+                    [&](std::size_t a, std::size_t b) { return squares[a] > squares[b]; });
+  for (std::size_t k = 0; k < worst; ++k) {
+    e.worst += squares[order[k]];
+    e.worst_direct += direct_squares[order[k]];
+    e.worst_indirect += indirect_squares[order[k]];
+    if (above[order[k]]) e.worst_above += squares[order[k]];
+  }
+  return e;
+}
+
+// The scene rendered once per component with `options`; `cpu_seconds` receives the CPU time.
+ComponentImages renderComponents(const solo::PreparedRenderScene& prepared, solo::PathTracerOptions options,
+                                 double* cpu_seconds, cv::Mat* emitter_coverage = nullptr) {
+  const double cpu_start = processCpuSeconds();
+  ComponentImages images;
+  options.component = solo::PathComponent::Direct;
+  const solo::RenderOutput direct = solo::renderPathTraced(prepared, prepared.scene().camera, options);
+  images.direct = direct.radiance;
+  options.component = solo::PathComponent::Indirect;
+  images.indirect = solo::renderPathTraced(prepared, prepared.scene().camera, options).radiance;
+  if (emitter_coverage) *emitter_coverage = direct.emitter_coverage;
+  *cpu_seconds = processCpuSeconds() - cpu_start;
+  return images;
+}
+
+// The reference of each component in `dir` (error_reference_direct.exr, _indirect.exr and
+// error_emitter_mask.exr), rendered at `spp` Sobol samples with seed 1000 unless already there.
+ComponentImages componentReference(const solo::PreparedRenderScene& prepared, const solo::PathTracerOptions& base,
+                                   int spp, const fs::path& dir, cv::Mat* mask) {
+  const fs::path direct_file = dir / "error_reference_direct.exr", indirect_file = dir / "error_reference_indirect.exr";
+  const fs::path mask_file = dir / "error_emitter_mask.exr";
+  if (fs::exists(direct_file) && fs::exists(indirect_file) && fs::exists(mask_file)) {
+    *mask = solo::readImageRaw(mask_file);
+    std::printf("reference: the one in %s\n", dir.c_str());
+    return {solo::readImageRaw(direct_file), solo::readImageRaw(indirect_file)};
+  }
+  solo::PathTracerOptions o = base;
+  o.min_samples = o.max_samples = spp;
+  o.seed = 1000;
+  double cpu_seconds = 0;
+  cv::Mat coverage;
+  const ComponentImages reference = renderComponents(prepared, o, &cpu_seconds, &coverage);
+  std::printf("reference: %d spp per component, seed 1000, %.1f cpu s\n", spp, cpu_seconds);
+  *mask = cv::Mat::zeros(coverage.size(), CV_32F);
+  mask->setTo(1.f, coverage > 0.f);
+  fs::create_directories(dir);
+  solo::writeImage(direct_file, reference.direct);
+  solo::writeImage(indirect_file, reference.indirect);
+  solo::writeImage(mask_file, *mask);
+  return reference;
+}
+
+// The seeds of the error-sources runs: SOLO_SEED (7 unless set) and the `count` - 1 after it.
+std::vector<std::uint64_t> runSeeds(int count) {
+  const char* seed = std::getenv("SOLO_SEED");
+  const std::uint64_t first = seed ? static_cast<std::uint64_t>(std::atoi(seed)) : 7;
+  std::vector<std::uint64_t> seeds;
+  for (int k = 0; k < std::max(1, count); ++k) seeds.push_back(first + static_cast<std::uint64_t>(k));
+  return seeds;
+}
+
+int errorSourcesCommand(int argc, char** argv) {
+  if (argc < 4)
+    throw std::runtime_error(
+        "usage: export_blender_scene error-sources SCENE OUT_DIR [WxH] [REFERENCE_SPP] [SPP] [SEEDS] [ADAPTIVE_SEEDS]");
+  const std::string name = argv[2];
+  const fs::path dir = argv[3];
+  int width = 240, height = 135;
+  if (argc > 4 && std::sscanf(argv[4], "%dx%d", &width, &height) != 2) throw std::runtime_error("bad size");
+  const int reference_spp = argc > 5 ? std::atoi(argv[5]) : 1024, spp = argc > 6 ? std::atoi(argv[6]) : 16;
+  const int seed_count = argc > 7 ? std::atoi(argv[7]) : 8, adaptive_seed_count = argc > 8 ? std::atoi(argv[8]) : 2;
+  const solo::RenderScene scene = name == "night" ? nightStreet(width, height) : sceneKind(name, width, height);
+  const solo::PreparedRenderScene prepared(scene);
+  solo::PathTracerOptions base;
+  base.progress = false;
+  base.diffuse = solo::DiffuseModel::Lambert;
+  cv::Mat mask;
+  const ComponentImages reference = componentReference(prepared, base, reference_spp, dir, &mask);
+
+  // Fixed sampling, each component from the same paths: the error's split by source.
+  solo::PathTracerOptions fixed = base;
+  fixed.min_samples = fixed.max_samples = spp;
+  ErrorSums e;
+  double fixed_cpu = 0;
+  for (const std::uint64_t seed : runSeeds(seed_count)) {
+    fixed.seed = seed;
+    double cpu_seconds = 0;
+    e += errorSums(renderComponents(prepared, fixed, &cpu_seconds), reference, mask);
+    fixed_cpu += cpu_seconds;
+  }
+  std::printf("fixed %d spp, %d seeds (%.1f cpu s): relative_rmse %.4f; squared error: direct %.3f indirect %.3f "
+              "cross %.3f; worst 0.1 %% of pixels %.3f (indirect %.3f of theirs, %.3f above the reference); indirect "
+              "light %.3f; pixels beside a seen emitter %.3f\n",
+              spp, seed_count, fixed_cpu, e.relativeRmse(), e.share(e.direct), e.share(e.indirect),
+              e.share(e.total - e.direct - e.indirect), e.share(e.worst), e.fireflyIndirect(),
+              e.worst > 0 ? e.worst_above / e.worst : 0, e.indirectLight(), e.share(e.beside_emitter));
+
+  // The default adaptive settings render the whole light only: their error and firefly share.
+  solo::PathTracerOptions adaptive = base;
+  ErrorSums a;
+  double adaptive_spp = 0;
+  const double cpu_start = processCpuSeconds();
+  const std::vector<std::uint64_t> adaptive_seeds = runSeeds(adaptive_seed_count);
+  for (const std::uint64_t seed : adaptive_seeds) {
+    adaptive.seed = seed;
+    const solo::RenderOutput out = solo::renderPathTraced(prepared, scene.camera, adaptive);
+    adaptive_spp += cv::mean(out.samples)[0] / static_cast<double>(adaptive_seeds.size());
+    if (const solo::MetricValue* pilot = out.report.find("pilot_samples_per_pixel"))
+      adaptive_spp += std::get<double>(*pilot) / static_cast<double>(adaptive_seeds.size());
+    const cv::Mat zeros = cv::Mat::zeros(out.radiance.size(), out.radiance.type());
+    a += errorSums({out.radiance, zeros}, {reference.all(), zeros}, mask);
+  }
+  std::printf("default adaptive, %zu seeds (%.0f spp, %.1f cpu s): relative_rmse %.4f; worst 0.1 %% of pixels %.3f\n",
+              adaptive_seeds.size(), adaptive_spp, processCpuSeconds() - cpu_start, a.relativeRmse(), a.share(a.worst));
+  const auto percent = [](double share) { return static_cast<int>(std::lround(100 * share)); };
+  std::printf("row: %d %% | %.3f | %d %% | %d %% | %d %% | %d %% (%d %% indirect) | %.0f spp: %.3f, %d %%\n",
+              percent(e.indirectLight()), e.relativeRmse(), percent(e.share(e.direct)), percent(e.share(e.indirect)),
+              percent(e.share(e.total - e.direct - e.indirect)), percent(e.share(e.worst)),
+              percent(e.fireflyIndirect()), adaptive_spp, a.relativeRmse(), percent(a.share(a.worst)));
+  return 0;
+}
+
 }  // namespace
 
 // Where a pixel's error comes from: N estimates of SPP samples (default 2, independent) of one pixel (a 1x1
@@ -512,6 +714,7 @@ int main(int argc, char** argv) {
     if (argc > 1 && std::string(argv[1]) == "runs") return exportScene(argc, argv, true);
     if (argc > 1 && std::string(argv[1]) == "compare") return compare(argc, argv);
     if (argc > 1 && std::string(argv[1]) == "probe") return probe(argc, argv);
+    if (argc > 1 && std::string(argv[1]) == "error-sources") return errorSourcesCommand(argc, argv);
     std::fprintf(stderr, "usage: export_blender_scene export|compare ...\n");
     return 2;
   } catch (const std::exception& e) {

@@ -15,6 +15,13 @@
 # sampler; Cycles' renders are kept). A kind whose reference or Cycles log exists in WORK_DIR is
 # not rendered again. SOLO_RELATIVE_ERROR and SOLO_ADAPTIVE_RULE=threshold reach the exporter's
 # default adaptive run. About an hour of CPU time on 2 cores.
+#
+#   ERROR_SOURCES=1 tests/benchmarks/blender/run_scene_kinds.sh [WORK_DIR]
+#
+# instead splits solo's error on each kind by its source (export_blender_scene error-sources:
+# direct light, light scattered twice or more, the worst 0.1 % of the pixels) and prints that
+# table; no Cycles, no Blender. Environment: ERROR_REFERENCE_SPP (512 per component),
+# ERROR_SPP (16), ERROR_SEEDS (8), ADAPTIVE_SEEDS (2). About 20 minutes on 2 cores.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "$0")/../../.." && pwd)
@@ -50,6 +57,27 @@ street-1080p-compact-lamps pipeline:$WORK/streets/seed3-1080p/scene.json 1
 windows-no-street-lights windows:$DEFAULT_SCENE 1
 headlights-only headlights:$DEFAULT_SCENE 1
 "
+
+# Where solo's error comes from, kind by kind (docs/rendering.md, "Where the error comes from").
+if [ "${ERROR_SOURCES:-0}" = 1 ]; then
+  rows=""
+  while read -r name spec cycles; do
+    [ -n "$name" ] || continue
+    if [ -n "${KINDS:-}" ] && [[ " $KINDS " != *" $name "* ]]; then continue; fi
+    dir=$WORK/kinds/$name/error_sources
+    mkdir -p "$dir"
+    echo "== $name ($spec): error sources" >&2
+    "$EXPORT" error-sources "$spec" "$dir" "$SIZE" "${ERROR_REFERENCE_SPP:-512}" "${ERROR_SPP:-16}" \
+      "${ERROR_SEEDS:-8}" "${ADAPTIVE_SEEDS:-2}" > "$dir/error_sources.log"
+    rows+="| $name | $(sed -n 's/^row: //p' "$dir/error_sources.log") |"$'\n'
+  done <<< "$KIND_TABLE"
+  echo
+  echo "| scene kind | indirect share of the light | fixed ${ERROR_SPP:-16} spp: relative RMSE | direct | indirect" \
+    "| cross term | worst 0.1 % of pixels (their indirect share) | default adaptive: spp, relative RMSE, worst 0.1 % |"
+  echo "|---|---|---|---|---|---|---|---|"
+  printf '%s' "$rows"
+  exit 0
+fi
 
 while read -r name spec cycles; do
   [ -n "$name" ] || continue

@@ -44,6 +44,17 @@ enum class AdaptiveRule {
   PixelThreshold,
 };
 
+/// Which part of each sample's light the render keeps (PathTracerOptions::component).
+enum class PathComponent {
+  All,
+  /// Light scattered at most once: emission the camera ray's hit shows, and light reaching that
+  /// hit straight from an emitter, a headlight, the sky or the sun (next-event estimation and the
+  /// first bounce's emitter and sky hits).
+  Direct,
+  /// Light scattered twice or more: All minus Direct, sample by sample (indirect_clamp applies).
+  Indirect,
+};
+
 /// The path tracer's settings. Its defaults are the renderer's on its own (converged reference
 /// renders, benchmarks, tests); the night conversion's are set once in NightConversionOptions
 /// (pipeline/night_conversion.h: 2 to 8 spp to the sensor noise, power light sampling, seed 0).
@@ -110,6 +121,10 @@ struct PathTracerOptions {
   /// (darker), but it removes the fireflies of paths that find the bright surroundings of a
   /// lamp by chance. 0 = off.
   float indirect_clamp = 0.f;
+  /// The part of the light rendered: for the same seed and fixed sample counts, the Direct and
+  /// Indirect images sum to the All image pixel by pixel (the same paths); for measuring where
+  /// the error comes from (export_blender_scene error-sources).
+  PathComponent component = PathComponent::All;
   /// Emission splitting: at a vertex whose light pick (an emitting triangle's centroid) lies
   /// within split_distance_m, the emission its bounce finds is estimated from this many BSDF
   /// directions, each casting a ray, averaged (the path goes on along the first). Next to a
