@@ -146,7 +146,8 @@ std::string renderScript(const SweepTable& t, const std::string& scene_text) {
       {"uniform, fixed spp", {{"mode", "fixed"}, {"light_sampler", "uniform"}}, "with linespoints pt 5 lw 1", ""},
       {"hierarchy, fixed spp", {{"mode", "fixed"}, {"light_sampler", "hierarchy"}}, "with linespoints pt 9 lw 1", ""},
       {"power, adaptive (target)", {{"mode", "adaptive"}}, "with linespoints pt 13 ps 1.5 lw 1 dt 2",
-       "relative_error_target"}};
+       "relative_error_target"},
+      {"power, noise target 2-8 spp (shadow roulette)", {{"mode", "noise_target"}}, "with points pt 11 ps 1.5", ""}};
   std::string g = scriptHeader(t, "Rendering: relative RMSE of non-emitting pixels against time, " + scene_text, 2);
   g += "set logscale xy\nset xlabel \"seconds (render)\"\nset ylabel \"relative RMSE of luminance\"\n";
   g += plotCommand(t, series, "seconds", "relative_rmse");

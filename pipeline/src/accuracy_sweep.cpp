@@ -131,14 +131,17 @@ std::pair<double, int> timed(Run&& run, int repeats, double cheap_s) {
 struct RadianceError {
   double white = 0;                    ///< the clipping level, render units (cd/m^2)
   double relative_rmse = 0;            ///< sqrt(sum (y' - r')^2 / sum r'^2), y' = min(y, white)
-  double reference_noise = 0;          ///< sqrt(sum se_ref^2 / sum r'^2) over the reference's unclipped pixels
-  double noise_corrected = 0;          ///< sqrt(max(0, sum (y' - r')^2 - sum se_ref^2) / sum r'^2)
+  /// sqrt(sum var_ref / sum r'^2): var_ref is the given per-pixel variance of the clipped
+  /// reference, or else se_ref^2 over the reference's unclipped pixels
+  double reference_noise = 0;
+  double noise_corrected = 0;          ///< sqrt(max(0, sum (y' - r')^2 - sum var_ref) / sum r'^2)
   double relative_rmse_unclipped = 0;  ///< sqrt(sum (y - r)^2 / sum r^2)
   double luminance_ratio = 0;          ///< sum y' / sum r': a bias (brighter > 1, darker < 1)
   std::int64_t pixels = 0;
 };
 
-RadianceError radianceError(const RenderOutput& image, const RenderOutput& reference) {
+RadianceError radianceError(const RenderOutput& image, const RenderOutput& reference,
+                            const cv::Mat& reference_variance = cv::Mat()) {
   CV_Assert(image.radiance.size() == reference.radiance.size());
   RadianceError e;
   e.white = meteredSensorWhite(reference.radiance, reference.emitter_coverage);
@@ -153,7 +156,10 @@ RadianceError radianceError(const RenderOutput& image, const RenderOutput& refer
       squared += (vc - rc) * (vc - rc);
       sum += vc, sum_ref += rc;
       norm += rc * rc;
-      if (r < e.white) variance += se * se;
+      if (!reference_variance.empty())
+        variance += reference_variance.at<float>(y, x);
+      else if (r < e.white)
+        variance += se * se;
       squared_raw += (v - r) * (v - r);
       norm_raw += r * r;
       ++e.pixels;
@@ -166,6 +172,37 @@ RadianceError radianceError(const RenderOutput& image, const RenderOutput& refer
   if (sum_ref > 0) e.luminance_ratio = sum / sum_ref;
   if (norm_raw > 0) e.relative_rmse_unclipped = std::sqrt(squared_raw / norm_raw);
   return e;
+}
+
+/// A reference rendered as two independent halves: their average, and the per-pixel variance of
+/// that average clipped at the white metered on it, ((min(a, W) - min(b, W)) / 2)^2. Unbiased for
+/// the noise of pixels below W, and a firefly in either half adds at most W^2 / 4: the tracer's
+/// own standard error is unclipped, and one firefly in a tile inflates its pooled estimate for
+/// the whole tile.
+struct SplitReference {
+  RenderOutput image;
+  cv::Mat clipped_variance;  ///< CV_32F
+};
+
+SplitReference fromHalves(const RenderOutput& a, const RenderOutput& b) {
+  SplitReference ref{a, cv::Mat()};
+  RenderOutput& m = ref.image;
+  m.radiance = 0.5 * (a.radiance + b.radiance);
+  m.emitter_coverage = 0.5 * (a.emitter_coverage + b.emitter_coverage);
+  m.samples = a.samples + b.samples;
+  cv::Mat se_a, se_b;
+  cv::multiply(a.std_error, a.std_error, se_a);
+  cv::multiply(b.std_error, b.std_error, se_b);
+  cv::sqrt(0.25 * (se_a + se_b), m.std_error);
+  const double white = meteredSensorWhite(m.radiance, m.emitter_coverage);
+  ref.clipped_variance.create(m.radiance.size(), CV_32F);
+  for (int y = 0; y < m.radiance.rows; ++y)
+    for (int x = 0; x < m.radiance.cols; ++x) {
+      const double d = 0.5 * (std::min<double>(a.radiance.at<cv::Vec3f>(y, x)[1], white) -
+                              std::min<double>(b.radiance.at<cv::Vec3f>(y, x)[1], white));
+      ref.clipped_variance.at<float>(y, x) = static_cast<float>(d * d);
+    }
+  return ref;
 }
 
 /// One setting of the whole pipeline: the night conversion's options (a preset applied).
@@ -268,6 +305,26 @@ struct AccuracySweep::Impl {
     RenderOutput out = renderPathTraced(render_scene, t);
     seconds_out = clock.seconds();
     return out;
+  }
+
+  /// Samples per pixel of the render sweep's reference: reference_spp rounded to an even count.
+  int splitReferenceSpp() const { return 2 * std::max(1, o.reference_spp / 2); }
+
+  /// The render sweep's reference: reference_spp samples in two independent halves (seeds seed +
+  /// kReferenceSeedOffset and seed + 2 kReferenceSeedOffset), so that its own noise is measured
+  /// on the clipped image the errors are taken on (SplitReference).
+  SplitReference splitReference(const RenderScene& render_scene, double& seconds_out) {
+    PathTracerOptions t;
+    t.min_samples = t.max_samples = splitReferenceSpp() / 2;
+    t.light_sampler = LightSamplerKind::Power;
+    t.progress = false;
+    Stopwatch clock;
+    t.seed = o.seed + kReferenceSeedOffset;
+    const RenderOutput a = renderPathTraced(render_scene, t);
+    t.seed = o.seed + 2 * kReferenceSeedOffset;
+    const RenderOutput b = renderPathTraced(render_scene, t);
+    seconds_out = clock.seconds();
+    return fromHalves(a, b);
   }
 
   // ---- refine -------------------------------------------------------------------------------
@@ -466,10 +523,12 @@ struct AccuracySweep::Impl {
                  "relative_rmse_noise_corrected", "relative_rmse_unclipped", "luminance_ratio", "white_cd_m2",
                  "reference_spp", "reference_relative_noise", "load_1min"};
     const NightScene& n = defaultNight();
-    say("[render] reference: " + integer(o.reference_spp) + " spp, power sampler ...");
+    const int reference_spp = splitReferenceSpp();
+    say("[render] reference: " + integer(reference_spp) + " spp in two halves, power sampler ...");
     double reference_s = 0;
-    const RenderOutput ref = reference(n.scene, reference_s);
-    const RadianceError self = radianceError(ref, ref);
+    const SplitReference split = splitReference(n.scene, reference_s);
+    const RenderOutput& ref = split.image;
+    const RadianceError self = radianceError(ref, ref, split.clipped_variance);
     say("[render] reference: " + seconds(reference_s) + " s");
 
     // The noise-matched target's sensor noise, at the reference's auto-exposure white (solo
@@ -495,14 +554,14 @@ struct AccuracySweep::Impl {
       options.progress = false;
       RenderOutput out;
       const auto [s, repeats] = timed([&] { out = renderPathTraced(n.scene, options); }, o.repeats, o.cheap_seconds);
-      const RadianceError e = radianceError(out, ref);
+      const RadianceError e = radianceError(out, ref, split.clipped_variance);
       std::vector<std::string> row = head();
       row.insert(row.end(), {mode, lightSamplerName(kind), integer(min_spp), integer(max_spp),
                              target > 0 ? num(target) : "", roulette >= 0 ? num(kNoiseFactor) : "",
                              roulette >= 0 ? num(roulette) : "", num(metricDouble(out.report, "samples_per_pixel_mean")),
                              integer(repeats), seconds(s), num(metricDouble(out.report, "rays")), num(e.relative_rmse),
                              num(e.noise_corrected),
-                             num(e.relative_rmse_unclipped), num(e.luminance_ratio), num(e.white), integer(o.reference_spp),
+                             num(e.relative_rmse_unclipped), num(e.luminance_ratio), num(e.white), integer(reference_spp),
                              num(self.reference_noise), num(loadAverage1Min())});
       t.rows.push_back(row);
       say("[render] " + mode + " " + lightSamplerName(kind) + " " + integer(min_spp) + "-" + integer(max_spp) +
@@ -530,14 +589,20 @@ struct AccuracySweep::Impl {
                                                   : std::vector<double>{0, 0.1, preset_roulette, 1};
     for (double roulette : roulettes) point("noise_target", LightSamplerKind::Power, 2, 8, 0, roulette);
     t.notes.push_back("the night scene of the default refinement, mesh and lights (seed " +
-                      integer(static_cast<std::int64_t>(o.seed)) + "); reference: " + integer(o.reference_spp) +
-                      " spp, power sampler, seed " + integer(static_cast<std::int64_t>(o.seed + kReferenceSeedOffset)) +
-                      ", " + seconds(reference_s) + " s, its own relative noise " + num(self.reference_noise));
+                      integer(static_cast<std::int64_t>(o.seed)) + "); reference: " + integer(reference_spp) +
+                      " spp, power sampler, the average of two independent halves (seeds " +
+                      integer(static_cast<std::int64_t>(o.seed + kReferenceSeedOffset)) + " and " +
+                      integer(static_cast<std::int64_t>(o.seed + 2 * kReferenceSeedOffset)) + "), " +
+                      seconds(reference_s) + " s, its own relative noise " + num(self.reference_noise) +
+                      " (of the clipped reference, from the halves' difference)");
     t.notes.push_back("relative_rmse: of the luminance Y over the " + integer(self.pixels) +
                       " non-emitting pixels, both images clipped at the reference's auto-exposure white (" +
                       num(self.white) + " cd/m2, what the final image maps to white); relative_rmse_noise_corrected "
-                      "removes the reference's own variance (its per-pixel standard error squared, unclipped pixels) "
-                      "from the squared error; relative_rmse_unclipped is dominated by fireflies");
+                      "removes the clipped reference's own variance (per pixel ((min(a, W) - min(b, W)) / 2)^2 of its "
+                      "halves a and b) from the squared error; relative_rmse_unclipped is dominated by fireflies");
+    t.notes.push_back("adaptive rows: a relative-error target alone, which the tracer meets with its image-error "
+                      "rule (AdaptiveRule::ImageError); noise_target rows: the sensor-noise target at the default "
+                      "preset's noise_factor");
     return t;
   }
 
