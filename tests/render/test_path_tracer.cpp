@@ -52,6 +52,32 @@ solo::RenderScene furnace(float reflectance) {
 
 double meanY(const cv::Mat& radiance) { return cv::mean(radiance)[1]; }
 
+// A Lambertian plane of reflectance 0.5 at z = 5 (40 x 40 m) under a square rectangle light of
+// `edge_m` and radiance 3 at z = 4, facing +z; no camera.
+solo::RenderScene planeUnderSquareLight(float edge_m) {
+  solo::RenderScene s;
+  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
+  solo::RectangleLight light;
+  light.centre = {0, 0, 4};
+  light.normal = {0, 0, 1};
+  light.edge_u = {edge_m, 0, 0};
+  light.edge_v = {0, edge_m, 0};
+  light.radiance = Eigen::Vector3f::Constant(3.f);
+  s.rectangle_lights.push_back(light);
+  return s;
+}
+
+// Lambertian paths of at most `max_bounces` scatterings (no roulette), 64 samples per pixel.
+solo::PathTracerOptions lambertOptions(int max_bounces) {
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.max_bounces = max_bounces;
+  o.russian_roulette_after = 100;
+  o.min_samples = o.max_samples = 64;
+  o.progress = false;
+  return o;
+}
+
 using solo::test::rectangleIntegral;
 
 }  // namespace
@@ -514,12 +540,7 @@ TEST(PathTracer, EmissionSplittingKeepsTheMeanAndLowersTheVarianceBesideALargeEm
 TEST(PathTracer, IndirectClampBoundsOnlyLightScatteredTwice) {
   // The furnace with two scatterings at most: direct 1 + a, indirect a^2 (a = 0.5, emission 1).
   // Clamping each sample's indirect luminance at 0.1 leaves the direct part and at most 0.1.
-  solo::PathTracerOptions o;
-  o.diffuse = solo::DiffuseModel::Lambert;
-  o.max_bounces = 2;
-  o.russian_roulette_after = 100;
-  o.min_samples = o.max_samples = 64;
-  o.progress = false;
+  solo::PathTracerOptions o = lambertOptions(2);
   const auto unclamped = solo::renderPathTraced(furnace(0.5f), o);
   EXPECT_NEAR(meanY(unclamped.radiance), 1.75, 0.01);
   EXPECT_EQ(unclamped.report.find("indirect_clamp"), nullptr);
@@ -537,12 +558,7 @@ TEST(PathTracer, IndirectClampBoundsOnlyLightScatteredTwice) {
 TEST(PathTracer, DirectAndIndirectComponentsSumToTheWholeImage) {
   // The furnace with two scatterings at most (a = 0.5, emission 1): direct 1 + a, indirect a^2.
   // The same seed traces the same paths, so the components sum to the whole image pixel by pixel.
-  solo::PathTracerOptions o;
-  o.diffuse = solo::DiffuseModel::Lambert;
-  o.max_bounces = 2;
-  o.russian_roulette_after = 100;
-  o.min_samples = o.max_samples = 64;
-  o.progress = false;
+  solo::PathTracerOptions o = lambertOptions(2);
   const cv::Mat all = solo::renderPathTraced(furnace(0.5f), o).radiance;
   o.component = solo::PathComponent::Direct;
   const cv::Mat direct = solo::renderPathTraced(furnace(0.5f), o).radiance;
@@ -556,15 +572,7 @@ TEST(PathTracer, DirectAndIndirectComponentsSumToTheWholeImage) {
 TEST(PathTracer, APlaneLitByARectangleLightHasNoIndirectLight) {
   // A plane facing the camera under a rectangle light (no geometry besides the plane): every
   // bounce off the plane leaves the scene, so all the light is direct.
-  solo::RenderScene s;
-  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
-  solo::RectangleLight light;
-  light.centre = {0, 0, 4};
-  light.normal = {0, 0, 1};
-  light.edge_u = {1, 0, 0};
-  light.edge_v = {0, 1, 0};
-  light.radiance = Eigen::Vector3f::Constant(3.f);
-  s.rectangle_lights.push_back(light);
+  solo::RenderScene s = planeUnderSquareLight(1);
   s.camera = camera(8, 8);
   solo::PathTracerOptions o;
   o.min_samples = o.max_samples = 16;
@@ -866,12 +874,7 @@ TEST(PathTracer, SpecularLobeNeverCreatesEnergyInTheFurnace) {
   // Reflectance 1, every wall emitting 1, 5 bounces: exactly 6 with the diffuse lobe alone;
   // the GGX lobe takes what it reflects from the diffuse one, so never more (a little less
   // where the single-scattering microfacet model loses energy at high roughness).
-  solo::PathTracerOptions o;
-  o.diffuse = solo::DiffuseModel::Lambert;
-  o.max_bounces = 5;
-  o.russian_roulette_after = 100;
-  o.min_samples = o.max_samples = 64;
-  o.progress = false;
+  solo::PathTracerOptions o = lambertOptions(5);
   const auto diffuse = solo::renderPathTraced(furnace(1.0f), o);
   EXPECT_NEAR(meanY(diffuse.radiance), 6.0, 0.03);
   EXPECT_NE(std::find(diffuse.report.notes.begin(), diffuse.report.notes.end(), "no roughness map: diffuse only"),
@@ -1006,15 +1009,7 @@ TEST(PathTracer, SobolSamplerLowersTheVarianceOfDirectLighting) {
   // which stratify well), 16 samples per pixel. A pixel's variance is half the mean squared
   // difference of two renders with different seeds; the scrambled Sobol points must give at
   // most half the variance of independent ones (measured: 1/8.2), and the same mean.
-  solo::RenderScene s;
-  addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
-  solo::RectangleLight light;
-  light.centre = {0, 0, 4};
-  light.normal = {0, 0, 1};
-  light.edge_u = {4, 0, 0};
-  light.edge_v = {0, 4, 0};
-  light.radiance = Eigen::Vector3f::Constant(3.f);
-  s.rectangle_lights.push_back(light);
+  solo::RenderScene s = planeUnderSquareLight(4);
   s.camera = camera(32, 40);  // 32 x 32 pixels over 4 x 4 m of the plane, under the light
   solo::PathTracerOptions o;
   o.diffuse = solo::DiffuseModel::Lambert;
