@@ -61,6 +61,7 @@ struct NightSceneBuilder {
   std::vector<bool> light_on;
   std::vector<int> light_of_face;  // per scene face, index into record.tree.lights, -1 = none
   std::vector<std::vector<SeenFace>> seen_faces;  // per light
+  std::vector<std::vector<std::size_t>> light_faces;  // per light, every scene face noted as showing it
   cv::Mat nearest_depth_m;  // per light pixel, the depth of the nearest face that shows it
   std::vector<double> seen_area_m2;  // per light, the area of the faces that emit it
   std::vector<int> emitter_of_light;  // per light, index into scene.emitters, -1 = none
@@ -86,6 +87,7 @@ struct NightSceneBuilder {
   template <typename Drop>
   void dropFaces(std::vector<SeenFace>& faces, const Drop& drop, std::int64_t& count);
   void keepFacesAtLightDepth();
+  double proxyScaleInFrontOfFaces(std::size_t i, const Eigen::Vector3d& normal, double plane) const;
   double addProxy(std::size_t i);
   void addEmitters();
   void assignFaceEmitters();
@@ -155,6 +157,7 @@ void NightSceneBuilder::mapLights() {
     light_on[i] = lightIsLit(record.instantiation.lights[i]);
   }
   seen_faces.resize(record.tree.lights.size());
+  light_faces.resize(record.tree.lights.size());
   nearest_depth_m = cv::Mat(height, width, CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
 }
 
@@ -206,6 +209,7 @@ void NightSceneBuilder::noteLightFace(const std::array<std::uint32_t, 3>& face, 
   const float depth = (scene.vertices[face[0]].z() + scene.vertices[face[1]].z() + scene.vertices[face[2]].z()) / 3;
   seen_faces[static_cast<std::size_t>(light)].push_back(
       {scene.faces.size() - 1, depth, 0.5 * normal.norm(), y * width + x, filled, edge_on});
+  light_faces[static_cast<std::size_t>(light)].push_back(scene.faces.size() - 1);
   float& nearest = nearest_depth_m.at<float>(y, x);
   nearest = std::min(nearest, depth);
 }
@@ -342,6 +346,32 @@ void NightSceneBuilder::keepFacesAtLightDepth() {
   }
 }
 
+// A proxy lies this share of the depth in front of its light's nearest face, and moves at most
+// kProxyMaxMoveM toward the camera for them (a face farther in front is left there, dark).
+constexpr double kProxyClearance = 0.002, kProxyMaxMoveM = 1.0;
+
+// The factor (<= 1) that scales light i's proxy plane {p : normal . p = plane} toward the
+// camera so that, along every pixel ray of the light, it lies in front of the nearest face
+// showing that pixel.
+double NightSceneBuilder::proxyScaleInFrontOfFaces(std::size_t i, const Eigen::Vector3d& normal, double plane) const {
+  const PinholeCamera& camera = scene.camera;
+  double scale = 1.0;
+  for (const PixelRun& run : record.tree.lights[i].runs)
+    for (int c = run.first_col; c <= run.last_col; ++c) {
+      const float nearest = nearest_depth_m.at<float>(run.row, c);
+      if (!std::isfinite(nearest)) continue;
+      for (const double du : {-0.5, 0.5})
+        for (const double dv : {-0.5, 0.5}) {
+          const Eigen::Vector3d ray((c + du - camera.cx) / camera.fx, (run.row + dv - camera.cy) / camera.fy, 1.0);
+          const double depth = plane / normal.dot(ray);  // the plane's z along the ray
+          if (!(depth > 0) || !std::isfinite(depth)) continue;
+          const double limit = std::max(nearest * (1.0 - kProxyClearance), depth - kProxyMaxMoveM);
+          if (limit < depth) scale = std::min(scale, limit / depth);
+        }
+    }
+  return std::max(scale, 1e-3);
+}
+
 // Adds light i's proxy faces (see addEmitters); returns their area, 0 when the record has no
 // usable plane.
 double NightSceneBuilder::addProxy(std::size_t i) {
@@ -367,8 +397,12 @@ double NightSceneBuilder::addProxy(std::size_t i) {
       }
   // The emitting quads, and half way back to the centroid a black plate behind them: emitters
   // are two-sided, and a lamp's back, unlike a mesh face's (backed by the lamp's solid or the
-  // surface behind), would light the wall behind it.
-  const double plane = normal.dot(centre), plate = normal.dot(0.5 * (centre + geometry.centroid_m));
+  // surface behind), would light the wall behind it. Both move toward the camera, along the
+  // pixels' rays, until the quads lie in front of the light's own faces (kProxyClearance of
+  // their depth): faces left in front would hide the proxy and trap its light between them.
+  const double record_plane = normal.dot(centre);
+  const double plane = record_plane * proxyScaleInFrontOfFaces(i, normal, record_plane);
+  const double plate = plane + (normal.dot(0.5 * (centre + geometry.centroid_m)) - record_plane);
   std::vector<std::array<std::uint32_t, 3>> faces;
   double area = 0;
   const std::size_t first_vertex = scene.vertices.size();
@@ -439,6 +473,9 @@ void NightSceneBuilder::addEmitters() {
       const double area = addProxy(i);
       if (area > 0) {
         for (const SeenFace& face : seen_faces[i]) light_of_face[face.face] = -1;
+        // The lamp's own faces are the lamp the proxy stands for: like an emitting face they
+        // reflect nothing (lit by the proxy at centimetres, they held its light in creases).
+        for (const std::size_t face : light_faces[i]) scene.face_reflectance[face].setZero();
         emitting_area_m2 = area;
         ++light_proxies;
         light_proxies_moved += !without_faces && moved;

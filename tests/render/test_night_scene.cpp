@@ -584,3 +584,40 @@ TEST(NightScene, FacesShadeWithTheNormalMapsMeanNormalWhereItFacesTheCamera) {
   options.shading_normals = true;
   EXPECT_TRUE(solo::buildNightScene(mesh, {}, {}, {}, solo::LightRecord{}, options).scene.face_shading_normal.empty());
 }
+
+TEST(NightScene, AProxyLiesInFrontOfItsLampsFacesAndThoseReflectNothing) {
+  // The lamp's faces (the plane under columns 3-5, 4 m away) lie 0.5 m in front of the record's
+  // plane (centroid 4.5 m away): a proxy on that plane would sit behind them, hidden, its light
+  // trapped between them and it. It moves toward the camera along its pixels' rays to 0.2 %
+  // in front of them (3.992 m), its black plate with it, and the lamp's faces reflect nothing.
+  const solo::DepthMesh mesh = planeMesh();
+  solo::LightRecord record =
+      oneLightRecord(solo::LightCategory::StreetLightHighCct, 3, 5, 6000, solo::StrengthUnit::FluxLm, 7001, {0.38, 0.37}, 0);
+  setRecordPlane(record, {0, 0, -1});
+  record.geometry[0].centroid_m *= 4.5 / 4.0;
+  record.geometry[0].area_m2 = 0.5;  // the faces cover 1.2 m^2: too large, so the proxy emits
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
+  ASSERT_EQ(countMetric(night.report, "light_proxies_for_area"), 1);
+  ASSERT_EQ(night.scene.faces.size(), 30u + 16u);
+  int emitting = 0;
+  for (std::size_t f = 30; f < night.scene.faces.size(); ++f) {
+    if (night.scene.face_emitter[f] < 0) continue;  // the plate, 1 cm behind the quads
+    ++emitting;
+    for (const std::uint32_t v : night.scene.faces[f]) {
+      EXPECT_LT(night.scene.vertices[v].z(), 4.0f * (1 - 0.0019f)) << "proxy face " << f;
+      EXPECT_GT(night.scene.vertices[v].z(), 4.0f * (1 - 0.0021f)) << "proxy face " << f;
+    }
+  }
+  EXPECT_EQ(emitting, 8);
+  int dark = 0;
+  for (std::size_t f = 0; f < 30; ++f) {
+    bool left = true;  // all three corners in columns 0-2: a face that never shows the lamp
+    for (const std::uint32_t v : night.scene.faces[f]) left &= night.scene.vertices[v].x() / 4.0f * 10 + 2.5f < 2.5f;
+    const bool black = night.scene.face_reflectance[f].isZero();
+    dark += black;
+    if (left) EXPECT_FALSE(black) << "mesh face " << f;
+  }
+  EXPECT_GE(dark, 12) << "the lamp's faces under columns 3-5 (two per quad, two quads per row)";
+}
