@@ -308,6 +308,7 @@ StageReport cleanDepthMesh(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& 
  
   SurfaceMesh& mesh = m.mesh;
   const cv::Mat had_depth = hadDepthMask(m);
+  m.had_depth = had_depth;
   report.add("depth_width", std::int64_t{m.width}, "px").add("depth_height", std::int64_t{m.height}, "px");
   report.add("before_vertices", static_cast<std::int64_t>(mesh.n_vertices()));
   report.add("before_faces", liveFaceCount(mesh));

@@ -76,6 +76,7 @@ struct NightSceneBuilder {
   double proxy_area_m2 = 0;
 
   void chooseResolution(const cv::Mat& albedo);
+  void markSurfacePixels();
   void prepareReflectance(const cv::Mat& albedo, const cv::Mat& day_image);
   void mapLights();
   void reserveFaceArrays(std::size_t mesh_faces, std::size_t mesh_vertices);
@@ -109,6 +110,27 @@ void NightSceneBuilder::chooseResolution(const cv::Mat& albedo) {
   }
   scene.camera = (width == depth_mesh.width && height == depth_mesh.height) ? depth_mesh.camera
                                                                               : depth_mesh.camera.scaledTo(width, height);
+}
+
+// RenderScene::surface_pixels: the render pixels whose depth-map pixel made a vertex (depth, not
+// sky), also where cleanup removed it. None for a mesh that is not a depth map's.
+void NightSceneBuilder::markSurfacePixels() {
+  const std::size_t mesh_pixels = static_cast<std::size_t>(depth_mesh.width) * static_cast<std::size_t>(depth_mesh.height);
+  if (mesh_pixels == 0 || depth_mesh.vertex_of_pixel.size() != mesh_pixels) return;
+  const cv::Mat& had_depth = depth_mesh.had_depth;
+  const bool cleaned = had_depth.type() == CV_8U && had_depth.size() == cv::Size(depth_mesh.width, depth_mesh.height);
+  scene.surface_pixels.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);
+  std::int64_t marked = 0;
+  for (int y = 0; y < height; ++y) {
+    const int v = std::min(depth_mesh.height - 1, static_cast<int>((y + 0.5) * depth_mesh.height / height));
+    for (int x = 0; x < width; ++x) {
+      const int u = std::min(depth_mesh.width - 1, static_cast<int>((x + 0.5) * depth_mesh.width / width));
+      const bool surface = cleaned ? had_depth.at<std::uint8_t>(v, u) != 0 : depth_mesh.vertexAt(u, v) >= 0;
+      scene.surface_pixels[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)] = surface;
+      marked += surface;
+    }
+  }
+  report.add("surface_pixels", marked);
 }
 
 // The reflectance map: the albedo, else the linearised day image at the maps' resolution.
@@ -583,6 +605,7 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   out.report.name = "scene";
   NightSceneBuilder builder(depth_mesh, roughness, normals, record, options, out);
   builder.chooseResolution(albedo);
+  builder.markSurfacePixels();
   builder.prepareReflectance(albedo, day_image);
   builder.mapLights();
   builder.addMeshFaces();

@@ -20,6 +20,8 @@
 #include <stdexcept>
 #include <string>
 #include <unistd.h>
+#include <utility>
+#include <vector>
 
 namespace solo {
 namespace {
@@ -200,6 +202,8 @@ struct Context {
   bool has_roughness;  // a roughness map: the specular lobe
   std::vector<float> rectangle_area, rectangle_cos_half_spread;  // per rectangle light, computed once
   float shadow_roulette_y = 0.f;  // render units; 0 = off (PathTracerOptions::shadow_roulette)
+  // RenderScene::surface_pixels when cracks are covered and the camera is the scene's size; else null.
+  const std::uint8_t* surface_pixels = nullptr;
 };
 
 // The MIS weight of emission that a bounce from `from_point` (receiver normal `from_normal`,
@@ -246,6 +250,7 @@ struct Path {
   int bounce = 0;
   bool alive = true;
   bool sees_emitter = false;  // the camera ray hit an emitting face
+  bool camera_missed = false;  // the camera ray hit nothing
   SlotHit hit;
 };
 
@@ -363,6 +368,7 @@ class WaveTracer {
     const SlotHit& hit = path.hit;
     path.alive = false;  // until a next direction is drawn
     if (!hit.hit) {
+      path.camera_missed = path.bounce == 0;
       addSkyAndSunFound(path);
       return;
     }
@@ -372,7 +378,12 @@ class WaveTracer {
     addEmissionFound(path, face.emitter, face.emissive, abs_cos_hit);
     if (path.bounce == 1) path.direct = path.radiance;  // light scattered at most once; the rest is indirect
     const Eigen::Vector3f wo = -path.direction;
-    const SurfaceBsdf bsdf(n, wo, face.reflectance, face.roughness, c.options.diffuse, c.has_roughness);
+    // An emitting face has no specular lobe, as in the Cycles export (its diffuse lobe reflects
+    // its reflectance, which the night scene sets to 0): a lit window's glossy glass mirrored
+    // other lamps in a few of its pixels' samples, fireflies the denoiser keeps (it leaves
+    // emitter pixels exact).
+    const SurfaceBsdf bsdf(n, wo, face.reflectance, face.roughness, c.options.diffuse,
+                           c.has_roughness && face.emitter < 0);
     if (path.bounce == 0) recordCameraHit(path, bsdf, face.emitter);
     if (path.bounce == c.options.max_bounces) return;
     const Eigen::Vector3f shadow_origin = path.point + n * offsetFor(hit.distance);
@@ -748,6 +759,10 @@ Context makeContext(const RenderScene& scene, const PinholeCamera& camera, const
     context.rectangle_area.push_back(light.edge_u.cross(light.edge_v).norm());
     context.rectangle_cos_half_spread.push_back(std::cos(0.5f * light.spread_rad));
   }
+  const std::size_t pixels = static_cast<std::size_t>(camera.width) * static_cast<std::size_t>(camera.height);
+  if (options.cover_mesh_cracks && scene.surface_pixels.size() == pixels && camera.width == scene.camera.width &&
+      camera.height == scene.camera.height)
+    context.surface_pixels = scene.surface_pixels.data();
   if (options.noise_sigma && options.shadow_roulette > 0) {
     // A threshold that is not a finite positive float would skip every shadow ray (or none
     // reliably): the roulette is then off.
@@ -822,6 +837,8 @@ struct PixelState {
   int n = 0, taken = 0;  // finite samples, samples taken
   int allotted = 0;      // the ImageError rule's sample count for the pixel
   int emitter_hits = 0;  // samples whose camera ray hit an emitter
+  int crack_samples = 0; // samples not counted: a surface pixel's camera ray that hit nothing
+  bool surface = false;  // RenderScene::surface_pixels marks it (and cracks are covered)
   bool done = false;
   double stopped_variance = -1;  // variance of the mean when the target stopped it
   // Variance of the mean as if the samples were independent: sample variance / n.
@@ -843,7 +860,7 @@ struct PixelState {
 // What the tiles add up for the report.
 struct RenderTotals {
   std::atomic<std::int64_t> rays{0}, samples{0}, dropped{0}, clamped{0}, stopped_by_target{0}, split_vertices{0},
-      shadow_skipped{0};
+      shadow_skipped{0}, crack_samples{0};
 };
 
 // Renders one tile: every pixel's first samples, then rounds of more for the pixels short of
@@ -862,6 +879,9 @@ class TileRenderer {
                            {}});
     tile_width_ = std::min(x0 + kTile, width) - x0;
     tile_rows_ = static_cast<int>(pixels_.size()) / tile_width_;
+    if (c.surface_pixels)
+      for (PixelState& p : pixels_)
+        p.surface = c.surface_pixels[static_cast<std::size_t>(p.y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(p.x)] != 0;
   }
 
   // Every pixel's first samples, one wave per sample index; then rounds of up to 8 more for
@@ -887,10 +907,13 @@ class TileRenderer {
     }
   }
 
-  // The pixels' values and AOVs into `out`, the tile's counts into `totals`.
-  void write(RenderOutput& out, RenderTotals& totals) const {
-    std::int64_t samples_taken = 0;
+  // The pixels' values and AOVs into `out`, the tile's counts into `totals`; `unseen` (CV_8U)
+  // marks the surface pixels none of whose camera rays hit anything.
+  void write(RenderOutput& out, RenderTotals& totals, cv::Mat& unseen) const {
+    std::int64_t samples_taken = 0, crack_samples = 0;
     for (const PixelState& p : pixels_) {
+      crack_samples += p.crack_samples;
+      unseen.at<std::uint8_t>(p.y, p.x) = p.surface && p.n == 0 && p.crack_samples > 0;
       if (p.stopped_variance >= 0) ++totals.stopped_by_target;
       // At least the pixel's own samples' spread: a pixel stopped on its neighbours' estimate
       // may hold a rare bright sample they do not show, and the denoiser weighs it by this.
@@ -914,6 +937,7 @@ class TileRenderer {
     totals.clamped += tracer_.clamped;
     totals.split_vertices += tracer_.split_vertices;
     totals.shadow_skipped += tracer_.shadow_rays_skipped;
+    totals.crack_samples += crack_samples;
   }
 
  private:
@@ -924,9 +948,11 @@ class TileRenderer {
     for (PixelState* p : wave_) {
       p->rng.startSample(static_cast<std::uint32_t>(p->taken));
       const auto [jx, jy] = p->rng.get2D();
+      // A surface pixel's AOVs come from its first sample that hits.
+      const bool aovs = p->taken == 0 || (p->surface && p->n == 0);
       paths_.push_back(WaveTracer::cameraPath(c_, static_cast<float>(p->x) + jx - 0.5f,
                                               static_cast<float>(p->y) + jy - 0.5f, p->rng,
-                                              p->taken == 0 ? &p->first : nullptr));
+                                              aovs ? &p->first : nullptr));
     }
     tracer_.trace(paths_);
     for (std::size_t k = 0; k < wave_.size(); ++k) {
@@ -935,6 +961,10 @@ class TileRenderer {
       p.emitter_hits += paths_[k].sees_emitter;
       const int replicate = p.taken % replicates;
       ++p.taken;
+      if (p.surface && paths_[k].camera_missed) {
+        ++p.crack_samples;  // through a mesh crack: not part of the pixel's surface
+        continue;
+      }
       if (!std::isfinite(value.x()) || !std::isfinite(value.y()) || !std::isfinite(value.z())) {
         ++nonfinite_;  // never reaches the image
         continue;
@@ -1110,6 +1140,63 @@ void reportVarianceReduction(StageReport& r, const Context& context, const Rende
   }
 }
 
+// Rings of neighbours a crack pixel looks through for a pixel that shows a surface.
+constexpr int kCrackFillPasses = 4;
+
+// The surface pixels that `unseen` marks (every camera ray went through a mesh crack) take the
+// value and AOVs of their farthest 8-neighbour that shows a surface, ring by ring: the surface
+// behind the crack's near side. Each pass reads only pixels filled before it, so the result does
+// not depend on the scan order. Returns the number filled; `unseen` keeps those left.
+std::int64_t fillCrackPixels(RenderOutput& out, cv::Mat& unseen) {
+  std::vector<cv::Point> left;
+  for (int y = 0; y < unseen.rows; ++y)
+    for (int x = 0; x < unseen.cols; ++x)
+      if (unseen.at<std::uint8_t>(y, x)) left.emplace_back(x, y);
+  std::int64_t filled = 0;
+  for (int pass = 0; pass < kCrackFillPasses && !left.empty(); ++pass) {
+    std::vector<std::pair<cv::Point, cv::Point>> copies;  // (to, from)
+    std::vector<cv::Point> still;
+    for (const cv::Point& t : left) {
+      cv::Point from(-1, -1);
+      float farthest = 0.f;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const cv::Point q(t.x + dx, t.y + dy);
+          if (q.x < 0 || q.y < 0 || q.x >= unseen.cols || q.y >= unseen.rows || unseen.at<std::uint8_t>(q)) continue;
+          const float depth = out.depth_m.at<float>(q);
+          if (depth > farthest) farthest = depth, from = q;
+        }
+      if (from.x >= 0) copies.emplace_back(t, from);
+      else still.push_back(t);
+    }
+    for (const auto& [to, from] : copies) {
+      out.radiance.at<cv::Vec3f>(to) = out.radiance.at<cv::Vec3f>(from);
+      out.albedo.at<cv::Vec3f>(to) = out.albedo.at<cv::Vec3f>(from);
+      out.normal.at<cv::Vec3f>(to) = out.normal.at<cv::Vec3f>(from);
+      out.depth_m.at<float>(to) = out.depth_m.at<float>(from);
+      out.light_id.at<int>(to) = out.light_id.at<int>(from);
+      out.emitter_coverage.at<float>(to) = out.emitter_coverage.at<float>(from);
+      out.std_error.at<float>(to) = out.std_error.at<float>(from);
+    }
+    for (const auto& copy : copies) unseen.at<std::uint8_t>(copy.first) = 0;
+    filled += static_cast<std::int64_t>(copies.size());
+    left.swap(still);
+  }
+  return filled;
+}
+
+// The report's entries for the mesh cracks covered (PathTracerOptions::cover_mesh_cracks).
+void reportCracks(StageReport& r, const RenderTotals& totals, std::int64_t filled, std::int64_t left) {
+  const double samples = static_cast<double>(std::max<std::int64_t>(1, totals.samples.load()));
+  r.add("camera_samples_through_cracks", static_cast<double>(totals.crack_samples.load()) / samples);
+  r.add("crack_pixels_filled", filled);
+  r.add("crack_pixels_left", left);
+  if (totals.crack_samples.load() > 0)
+    r.notes.push_back("mesh cracks: " + std::to_string(totals.crack_samples.load()) +
+                      " camera samples in pixels with depth hit nothing and were not counted; " + std::to_string(filled) +
+                      " pixels with no hit took their farthest neighbour's value");
+}
+
 // The render's report: sampling, rays, BVH, lights and the techniques used.
 void reportRender(RenderOutput& out, double seconds, const Context& context, const PreparedRenderScene::Impl& p,
                   const RenderTotals& totals) {
@@ -1223,19 +1310,22 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   ProgressBar progress(options.progress, tiles_x * tiles_y);
   std::mutex ray_log_mutex;
   RenderTotals totals;
+  cv::Mat unseen(height, width, CV_8U, cv::Scalar(0));
   tbb::parallel_for(0, tiles_x * tiles_y, [&](int tile) {
     std::vector<RecordedRay> tile_rays;
     std::vector<RecordedRay>* log = options.ray_log ? &tile_rays : nullptr;
     TileRenderer renderer(context, budget, (tile % tiles_x) * kTile, (tile / tiles_x) * kTile, log);
     renderer.render();
-    renderer.write(out, totals);
+    renderer.write(out, totals, unseen);
     if (log) {
       const std::lock_guard<std::mutex> lock(ray_log_mutex);
       options.ray_log->insert(options.ray_log->end(), tile_rays.begin(), tile_rays.end());
     }
     progress.tick();
   });
+  const std::int64_t filled = context.surface_pixels ? fillCrackPixels(out, unseen) : 0;
   reportRender(out, clock.seconds(), context, p, totals);
+  if (context.surface_pixels) reportCracks(out.report, totals, filled, cv::countNonZero(unseen));
   if (budget.allocate) {
     out.report.add("adaptive_rule", std::string("image_error"));
     out.report.add("pilot_samples_per_pixel", static_cast<double>(pilot_samples) / (static_cast<double>(width) * height));

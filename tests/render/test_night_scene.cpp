@@ -192,6 +192,39 @@ TEST(NightScene, AMeshFromADownsampledDepthMapTakesTheAlbedoUnderItsFacesAtFullR
   EXPECT_EQ(right_faces, 12);  // quads 3-4 and 4-5
 }
 
+TEST(NightScene, SurfacePixelsAreThePixelsThatHadDepthAtTheRenderResolution) {
+  // A 12x8 image, its mesh from the depth downsampled 2x; coarse pixel (1, 1) is sky and (4, 2)
+  // lost its vertex in cleanup: both make no vertex, but only (4, 2) had depth.
+  const solo::PinholeCamera image_camera{20, 20, 5.5, 3.5, 12, 8};
+  cv::Mat coarse_depth(4, 6, CV_32F, cv::Scalar(4.f));
+  coarse_depth.at<float>(1, 1) = 0.f;
+  coarse_depth.at<float>(2, 4) = 0.f;
+  solo::DepthMesh mesh = solo::meshFromDepth(coarse_depth, image_camera);
+  cv::Mat albedo(8, 12, CV_32FC3, cv::Scalar(0.5f, 0.5f, 0.5f));
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const auto surface = [](const solo::RenderScene& scene, int x, int y) {
+    return static_cast<int>(scene.surface_pixels[static_cast<std::size_t>(y) * 12 + static_cast<std::size_t>(x)]);
+  };
+  // Before cleanup (no had_depth): the pixels with a vertex.
+  const solo::NightScene raw = solo::buildNightScene(mesh, albedo, {}, {}, solo::LightRecord{}, options);
+  ASSERT_EQ(raw.scene.surface_pixels.size(), 96u);
+  EXPECT_EQ(countMetric(raw.report, "surface_pixels"), 96 - 8);
+  for (int y = 2; y < 4; ++y)
+    for (int x = 2; x < 4; ++x) EXPECT_EQ(surface(raw.scene, x, y), 0) << x << "," << y;
+  EXPECT_EQ(surface(raw.scene, 9, 5), 0);
+  EXPECT_EQ(surface(raw.scene, 1, 1), 1);
+  EXPECT_EQ(surface(raw.scene, 11, 7), 1);
+  // After cleanup: the pixels that had depth, also where the vertex went.
+  mesh.had_depth = cv::Mat(4, 6, CV_8U, cv::Scalar(1));
+  mesh.had_depth.at<std::uint8_t>(1, 1) = 0;
+  const solo::NightScene cleaned = solo::buildNightScene(mesh, albedo, {}, {}, solo::LightRecord{}, options);
+  EXPECT_EQ(countMetric(cleaned.report, "surface_pixels"), 96 - 4);
+  EXPECT_EQ(surface(cleaned.scene, 2, 3), 0);
+  for (int y = 4; y < 6; ++y)
+    for (int x = 8; x < 10; ++x) EXPECT_EQ(surface(cleaned.scene, x, y), 1) << x << "," << y;
+}
+
 TEST(NightScene, AFluxLightKeepsItsFluxOnTheSeenFacesAndHiddenFacesUnderItDoNotEmit) {
   // A street light over the right half of the plane (columns 3-5), 6000 lm. Vertices of
   // column 5 are marked as the back of a closed solid: the faces touching them share the

@@ -683,6 +683,54 @@ TEST(PathTracer, FramePixelsSeeTheSurfaceThatEndsAtTheirCentres) {
   EXPECT_FLOAT_EQ(whole.emitter_coverage.at<float>(1, 2), 1.f);
 }
 
+TEST(PathTracer, CameraSamplesThroughAMeshCrackDoNotDarkenTheSurfacePixels) {
+  // An 8x4 camera (focal 400, principal point 3.5): a near emitting quad A at z = 2 ends at the
+  // centre of column 2, a far one B at z = 4 spans the centres of columns 4 to 6; column 7 is sky.
+  // Between them a crack: the right half of column 2, all of column 3, the left half of column 4;
+  // the right half of column 6 sees nothing either.
+  solo::RenderScene s;
+  s.camera = {400, 400, 3.5, 1.5, 8, 4};
+  s.emitters.push_back({Eigen::Vector3f(1.f, 2.f, 3.f), false, 1});
+  s.emitters.push_back({Eigen::Vector3f(4.f, 5.f, 6.f), false, 2});
+  const auto ray_x = [](float column) { return (column - 3.5f) / 400.f; };
+  addQuad(s, {-1, -1, 2}, {0, 2, 0}, {ray_x(2) * 2 + 1.f, 0, 0}, 0.f, 0);
+  addQuad(s, {ray_x(4) * 4, -1, 4}, {0, 2, 0}, {(ray_x(6) - ray_x(4)) * 4, 0, 0}, 0.f, 1);
+  s.surface_pixels.assign(32, 1);
+  for (int y = 0; y < 4; ++y) s.surface_pixels[static_cast<std::size_t>(y) * 8 + 7] = 0;
+  solo::PathTracerOptions o;
+  o.min_samples = o.max_samples = 16;
+  o.progress = false;
+  const auto out = solo::renderPathTraced(s, o);
+  const Eigen::Vector3f a(1.f, 2.f, 3.f), b(4.f, 5.f, 6.f);
+  const auto expect_value = [&](int x, int y, const Eigen::Vector3f& v, float depth) {
+    const cv::Vec3f r = out.radiance.at<cv::Vec3f>(y, x);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(r[k], v[k], 1e-4f) << "column " << x << " row " << y;
+    EXPECT_NEAR(out.depth_m.at<float>(y, x), depth, 1e-3f) << "column " << x << " row " << y;
+  };
+  for (int y = 0; y < 4; ++y) {
+    for (int x = 0; x <= 2; ++x) expect_value(x, y, a, 2.f);  // column 2: its covered half only
+    expect_value(3, y, b, 4.f);  // no sample hits: the farther neighbour, B
+    for (int x = 4; x <= 6; ++x) expect_value(x, y, b, 4.f);  // column 6: beside the sky, whole
+    expect_value(7, y, Eigen::Vector3f::Zero(), 0.f);  // sky stays black
+  }
+  const solo::MetricValue* filled = out.report.find("crack_pixels_filled");
+  ASSERT_NE(filled, nullptr);
+  EXPECT_EQ(std::get<std::int64_t>(*filled), 4);
+  EXPECT_EQ(std::get<std::int64_t>(*out.report.find("crack_pixels_left")), 0);
+  // Of 32 x 16 samples, those of column 3 and about half of columns 2, 4 and 6 went through a crack.
+  EXPECT_NEAR(std::get<double>(*out.report.find("camera_samples_through_cracks")), 10.0 / 32.0, 0.02);
+
+  // Off, every sample counts: columns 2 and 4 are half dark, column 3 black.
+  o.cover_mesh_cracks = false;
+  const auto plain = solo::renderPathTraced(s, o);
+  for (int y = 0; y < 4; ++y) {
+    EXPECT_NEAR(plain.radiance.at<cv::Vec3f>(y, 2)[1], 1.f, 0.15f);
+    EXPECT_FLOAT_EQ(plain.radiance.at<cv::Vec3f>(y, 3)[1], 0.f);
+    EXPECT_NEAR(plain.radiance.at<cv::Vec3f>(y, 4)[1], 2.5f, 0.4f);
+  }
+  EXPECT_EQ(plain.report.find("crack_pixels_filled"), nullptr);
+}
+
 TEST(PathTracer, SamplersAgreeAndPmfsMatchPicks) {
   // Many lights of different power: all three samplers estimate the same image.
   solo::RenderScene s;
@@ -936,6 +984,24 @@ TEST(PathTracer, MirrorLikeGgxReflectsAnEmitterAtTheSpecularDirection) {
   EXPECT_NE(std::find(diffuse.report.notes.begin(), diffuse.report.notes.end(), "no roughness map: diffuse only"),
             diffuse.report.notes.end());
   EXPECT_EQ(solo::renderPathTraced(mirrorScene(0.f), o).radiance.at<cv::Vec3f>(0, 0)[1], 0.f);
+}
+
+TEST(PathTracer, AnEmittingFaceReflectsNothingWithTheSpecularLobeOn) {
+  // The mirror scene's smooth ground (roughness 0.05) shows the emitter at Fresnel x 100 (above);
+  // made an emitter of radiance 0.5 itself, it shows exactly its own emission.
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.min_samples = o.max_samples = 64;
+  o.max_bounces = 2;
+  o.progress = false;
+  solo::RenderScene s = mirrorScene(0.f);
+  s.face_roughness.assign(s.faces.size(), 0.05f);
+  s.emitters.push_back({Eigen::Vector3f::Constant(0.5f), false, 4});
+  s.face_emitter[0] = s.face_emitter[1] = 1;
+  const auto out = solo::renderPathTraced(s, o);
+  const cv::Vec3f v = out.radiance.at<cv::Vec3f>(0, 0);
+  for (int k = 0; k < 3; ++k) EXPECT_FLOAT_EQ(v[k], 0.5f);
+  EXPECT_EQ(out.light_id.at<int>(0, 0), 4);
 }
 
 TEST(PathTracer, NoiseMatchedTargetStopsAtThePredictedSampleCount) {

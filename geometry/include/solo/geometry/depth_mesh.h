@@ -33,6 +33,9 @@ struct DepthMesh {
   /// of every vertex of a face removed as spurious, that face's SpuriousCriterion bits (ORed);
   /// 0 elsewhere. For pictures of what was cut (the contact sheet).
   cv::Mat removed_spurious;
+  /// Set by cleanDepthMesh (empty before): CV_8U of the depth map's size, 1 at every pixel that
+  /// made a vertex before cleanup (depth, not sky), also where cleanup removed that vertex.
+  cv::Mat had_depth;
 
   int vertexAt(int u, int v) const {
     return (u < 0 || v < 0 || u >= width || v >= height) ? -1 : vertex_of_pixel[static_cast<std::size_t>(v) * width + u];

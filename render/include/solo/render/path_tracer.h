@@ -63,6 +63,13 @@ struct PathTracerOptions {
   /// Camera samples stay within the outermost pixel centres (1/64 px inside): a depth mesh ends
   /// there, and the outer half of each frame pixel would otherwise see nothing behind it.
   bool film_within_pixel_centres = true;
+  /// Mesh cracks: in a pixel that RenderScene::surface_pixels marks as a surface, a camera
+  /// sample that hits nothing went through the gap between a near sheet's silhouette and the
+  /// sheet behind it; it is not counted, so the pixel's value is the mean over the part of it
+  /// that shows a surface (instead of darkened toward the black sky). A marked pixel none of
+  /// whose samples hit takes the value and AOVs of its farthest neighbour that has a hit (up to
+  /// kCrackFillPasses rings). Off: every sample counts, as in a plain mesh render.
+  bool cover_mesh_cracks = true;
   int max_samples = 256;  ///< per pixel
   AdaptiveRule adaptive_rule = AdaptiveRule::ImageError;
   /// ImageError: the target for the image's relative RMSE of Y (root of the summed squared errors

@@ -64,6 +64,12 @@ struct RenderScene {
   Eigen::Vector3f sky_up{0.f, -1.f, 0.f};           ///< unit, camera frame (OpenCV: y down)
   SunLight sun;                                     ///< daytime mode; zero illuminance = none
   PinholeCamera camera;                             ///< for the image resolution
+  /// Row-major at camera.width x camera.height, or empty (= unknown): 1 where the input saw a
+  /// surface (a pixel with depth, not sky). A depth mesh without its spurious faces has a gap of
+  /// about a pixel between a near sheet's silhouette and the far sheet behind it; a camera ray in
+  /// such a pixel that hits nothing went through that gap, and the renderer does not count it
+  /// (path_tracer.h, "Mesh cracks"). Used only when rendering at the camera's own size.
+  std::vector<std::uint8_t> surface_pixels;
 };
 
 /// Linear sRGB (D65) reflectance to XYZ relative to E: the sRGB matrix, then the white of
