@@ -791,6 +791,32 @@ TEST(PathTracer, SamplersAgreeAndPmfsMatchPicks) {
   }
 }
 
+TEST(PathTracer, TheHierarchyPicksWithinACompactEmitterByPowerAndAlongALargeOneByDistance) {
+  // Emitter 0: 8 quads of different sizes within 13 cm (one leaf: picked among themselves by
+  // power). Emitter 1: 8 equal quads along a 4 m strip (split by distance and orientation). The
+  // root splits the 32 triangles by x at the median: between the two emitters.
+  solo::RenderScene s;
+  s.emitters.push_back({Eigen::Vector3f::Constant(50.f), false, 1});
+  s.emitters.push_back({Eigen::Vector3f::Constant(50.f), false, 2});
+  for (int i = 0; i < 8; ++i) {
+    const float edge = 0.005f * static_cast<float>(i + 1);
+    addQuad(s, {0.012f * static_cast<float>(i), 0, 3}, {edge, 0, 0}, {0, edge, 0}, 0.f, 0);
+  }
+  for (int i = 0; i < 8; ++i) addQuad(s, {2.f + 0.5f * static_cast<float>(i), 0, 3}, {0.2f, 0, 0}, {0, 0.2f, 0}, 0.f, 1);
+  const auto triangles = solo::collectEmissiveTriangles(s);
+  ASSERT_EQ(triangles.size(), 32u);
+  const auto hierarchy = solo::makeLightSampler(solo::LightSamplerKind::Hierarchy, triangles);
+  const Eigen::Vector3f p(2.f, 0.f, 2.f), n(0, 0, 1);  // 1 m before the strip's first quad
+  for (int t = 1; t < 16; ++t)
+    EXPECT_NEAR(hierarchy->pmf(p, n, t) / hierarchy->pmf(p, n, 0), triangles[static_cast<std::size_t>(t)].power / triangles[0].power,
+                1e-4 * triangles[static_cast<std::size_t>(t)].power / triangles[0].power);
+  // The strip's quad nearest the point against its farthest, same power: the distance decides.
+  EXPECT_GT(hierarchy->pmf(p, n, 16) / hierarchy->pmf(p, n, 30), 4.f);
+  double total = 0;
+  for (int t = 0; t < 32; ++t) total += hierarchy->pmf(p, n, t);
+  EXPECT_NEAR(total, 1.0, 1e-4);
+}
+
 TEST(PathTracer, MeanOfLowSampleRendersEqualsAHighSampleRender) {
   const solo::RenderScene s = furnace(0.6f);
   solo::PathTracerOptions o;
