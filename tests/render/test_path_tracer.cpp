@@ -981,14 +981,20 @@ solo::RenderScene mirrorScene(float ground_reflectance) {
   return s;
 }
 
+// Lambert + GGX paths of at most two scatterings, `samples` per pixel, for the mirror scene.
+solo::PathTracerOptions mirrorOptions(int samples) {
+  solo::PathTracerOptions o;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.min_samples = o.max_samples = samples;
+  o.max_bounces = 2;
+  o.progress = false;
+  return o;
+}
+
 }  // namespace
 
 TEST(PathTracer, MirrorLikeGgxReflectsAnEmitterAtTheSpecularDirection) {
-  solo::PathTracerOptions o;
-  o.diffuse = solo::DiffuseModel::Lambert;
-  o.min_samples = o.max_samples = 4000;
-  o.max_bounces = 2;
-  o.progress = false;
+  const solo::PathTracerOptions o = mirrorOptions(4000);
   // Specular only (reflectance 0): a smooth surface shows the emitter times Fresnel at the
   // view angle (the lobe is far narrower than the emitter), a rough one much less.
   solo::RenderScene s = mirrorScene(0.f);
@@ -1015,11 +1021,7 @@ TEST(PathTracer, MirrorLikeGgxReflectsAnEmitterAtTheSpecularDirection) {
 TEST(PathTracer, AnEmittingFaceReflectsNothingWithTheSpecularLobeOn) {
   // The mirror scene's smooth ground (roughness 0.05) shows the emitter at Fresnel x 100 (above);
   // made an emitter of radiance 0.5 itself, it shows exactly its own emission.
-  solo::PathTracerOptions o;
-  o.diffuse = solo::DiffuseModel::Lambert;
-  o.min_samples = o.max_samples = 64;
-  o.max_bounces = 2;
-  o.progress = false;
+  const solo::PathTracerOptions o = mirrorOptions(64);
   solo::RenderScene s = mirrorScene(0.f);
   s.face_roughness.assign(s.faces.size(), 0.05f);
   s.emitters.push_back({Eigen::Vector3f::Constant(0.5f), false, 4});
