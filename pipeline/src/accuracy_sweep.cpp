@@ -295,22 +295,10 @@ struct AccuracySweep::Impl {
     return *night;
   }
 
-  RenderOutput reference(const RenderScene& render_scene, double& seconds_out) {
-    PathTracerOptions t;
-    t.min_samples = t.max_samples = o.reference_spp;
-    t.light_sampler = LightSamplerKind::Power;
-    t.seed = o.seed + kReferenceSeedOffset;
-    t.progress = false;
-    Stopwatch clock;
-    RenderOutput out = renderPathTraced(render_scene, t);
-    seconds_out = clock.seconds();
-    return out;
-  }
-
-  /// Samples per pixel of the render sweep's reference: reference_spp rounded to an even count.
+  /// Samples per pixel of a reference rendered in halves: reference_spp rounded to an even count.
   int splitReferenceSpp() const { return 2 * std::max(1, o.reference_spp / 2); }
 
-  /// The render sweep's reference: reference_spp samples in two independent halves (seeds seed +
+  /// A sweep's reference: reference_spp samples in two independent halves (seeds seed +
   /// kReferenceSeedOffset and seed + 2 kReferenceSeedOffset), so that its own noise is measured
   /// on the clipped image the errors are taken on (SplitReference).
   SplitReference splitReference(const RenderScene& render_scene, double& seconds_out) {
@@ -610,8 +598,8 @@ struct AccuracySweep::Impl {
 
   /// The converged render the end-to-end settings are measured against.
   struct EndToEndReference {
-    RenderOutput image;
-    RadianceError self;  ///< of the image against itself: its clipping white and own noise
+    SplitReference split;  ///< the image, and its clipped variance from its two halves
+    RadianceError self;    ///< of the image against itself: its clipping white and own noise
     double seconds = 0;
   };
 
@@ -629,9 +617,9 @@ struct AccuracySweep::Impl {
         buildNightScene(truth_depth_mesh, p.maps.albedo, p.maps.roughness, scene.image, truth_lights.record, {},
                         truth.normals);
     EndToEndReference ref;
-    ref.image = reference(truth_night.scene, ref.seconds);
-    ref.self = radianceError(ref.image, ref.image);
-    say("[end_to_end] reference: " + seconds(ref.seconds) + " s (" + integer(o.reference_spp) + " spp)");
+    ref.split = splitReference(truth_night.scene, ref.seconds);
+    ref.self = radianceError(ref.split.image, ref.split.image, ref.split.clipped_variance);
+    say("[end_to_end] reference: " + seconds(ref.seconds) + " s (" + integer(splitReferenceSpp()) + " spp in two halves)");
     return ref;
   }
 
@@ -684,7 +672,7 @@ struct AccuracySweep::Impl {
     const NightConversionResult r = runNightConversion(scene, s.night, quiet);
     const StageSeconds time_s = stageSeconds(r, clock.seconds());
     const double total_s = o.input_seconds + time_s.pipeline;
-    const RadianceError e = radianceError(r.rendered, ref.image);
+    const RadianceError e = radianceError(r.rendered, ref.split.image, ref.split.clipped_variance);
     DepthEvaluationInput d;
     d.prediction_m = r.refined.depth_m;
     d.ground_truth_m = truth.depth_m;
@@ -704,7 +692,7 @@ struct AccuracySweep::Impl {
                 seconds(time_s.mesh), seconds(time_s.lights), seconds(time_s.scene), seconds(time_s.render),
                 seconds(time_s.post), num(metricDouble(r.rendered.report, "samples_per_pixel_mean")),
                 num(dm.abs_rel), num(e.relative_rmse), num(e.noise_corrected), num(e.relative_rmse_unclipped),
-                num(e.luminance_ratio), num(e.white), integer(o.reference_spp), num(ref.self.reference_noise),
+                num(e.luminance_ratio), num(e.white), integer(splitReferenceSpp()), num(ref.self.reference_noise),
                 num(loadAverage1Min())});
     say("[end_to_end] " + s.name + ": " + seconds(total_s) + " s (refine " + seconds(time_s.refine) + ", mesh " +
         seconds(time_s.mesh) + ", render " + seconds(time_s.render) + "), relative RMSE " + num(e.relative_rmse));
@@ -730,9 +718,10 @@ struct AccuracySweep::Impl {
         "(the scene read once, its time added as input_seconds); the error is the relative RMSE of the linear render's "
         "luminance over the pixels that show no emitter, against a reference made from the exact depth and instances "
         "(mesh and light geometry) with the same material maps and light draws, rendered at " +
-        integer(o.reference_spp) + " spp (power sampler, seed " +
-        integer(static_cast<std::int64_t>(o.seed + kReferenceSeedOffset)) + ", " + seconds(ref.seconds) +
-        " s, its own relative noise " + num(ref.self.reference_noise) + ")");
+        integer(splitReferenceSpp()) + " spp as two independent halves (power sampler, seeds " +
+        integer(static_cast<std::int64_t>(o.seed + kReferenceSeedOffset)) + " and " +
+        integer(static_cast<std::int64_t>(o.seed + 2 * kReferenceSeedOffset)) + ", " + seconds(ref.seconds) +
+        " s, its own relative noise " + num(ref.self.reference_noise) + " (of the clipped reference, from the halves' difference))");
     return t;
   }
 };
