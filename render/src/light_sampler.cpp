@@ -231,13 +231,12 @@ class HierarchySampler final : public LightSampler {
   }
 
   // Whether order_[begin, end) makes a leaf: one triangle, or one emitter's within kLeafRadiusM.
-  static bool isLeaf(const std::vector<EmissiveTriangle>& tris, const std::vector<int>& order, int begin, int end,
-                     const Eigen::AlignedBox3f& bounds) {
+  bool isLeaf(const std::vector<EmissiveTriangle>& tris, int begin, int end, const Eigen::AlignedBox3f& bounds) const {
     if (end - begin == 1) return true;
     if (0.5f * bounds.diagonal().norm() > kLeafRadiusM) return false;
-    const std::uint32_t emitter = tris[static_cast<std::size_t>(order[static_cast<std::size_t>(begin)])].emitter;
+    const std::uint32_t emitter = tris[static_cast<std::size_t>(order_[static_cast<std::size_t>(begin)])].emitter;
     for (int i = begin + 1; i < end; ++i)
-      if (tris[static_cast<std::size_t>(order[static_cast<std::size_t>(i)])].emitter != emitter) return false;
+      if (tris[static_cast<std::size_t>(order_[static_cast<std::size_t>(i)])].emitter != emitter) return false;
     return true;
   }
 
@@ -271,7 +270,7 @@ class HierarchySampler final : public LightSampler {
       centroids.extend((t.p0 + t.p1 + t.p2) / 3.f);
       node.power += t.power;
     }
-    if (isLeaf(tris, order_, begin, end, node.bounds)) {
+    if (isLeaf(tris, begin, end, node.bounds)) {
       makeLeaf(tris, begin, end, index, node);
       nodes_[static_cast<std::size_t>(index)] = node;
       return index;
