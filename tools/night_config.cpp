@@ -64,6 +64,7 @@ std::string nightConfigText(const NightOptions& options) {
   flag("remove-day-light", o.night_scene.remove_day_light);
   line("headlight-flux", number(o.night_scene.headlight_flux_lm));
   line("light-sampler", quoted("light-sampler", lightSamplerName(o.render.light_sampler)));
+  flag("near-field-lights", o.render.near_field_lights);
   line("sampler", quoted("sampler", samplerKindName(o.render.sampler)));
   line("min-spp", std::to_string(o.render.min_samples));
   line("max-spp", std::to_string(o.render.max_samples));

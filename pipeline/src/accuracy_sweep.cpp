@@ -506,7 +506,7 @@ struct AccuracySweep::Impl {
   SweepTable renderSweep() {
     SweepTable t;
     t.stage = "render";
-    t.columns = {"seed", "width", "height", "mode", "light_sampler", "min_spp", "max_spp", "relative_error_target",
+    t.columns = {"seed", "width", "height", "mode", "light_sampler", "near_field", "min_spp", "max_spp", "relative_error_target",
                  "noise_factor", "shadow_roulette", "mean_spp", "repeats", "seconds", "rays", "relative_rmse",
                  "relative_rmse_noise_corrected", "relative_rmse_unclipped", "luminance_ratio", "white_cd_m2",
                  "reference_spp", "reference_relative_noise", "load_1min"};
@@ -526,9 +526,10 @@ struct AccuracySweep::Impl {
     // roulette < 0: a relative-error target (or none); >= 0: the noise-matched target with
     // that shadow-ray roulette fraction.
     const auto point = [&](const std::string& mode, LightSamplerKind kind, int min_spp, int max_spp, double target,
-                           double roulette = -1) {
+                           double roulette = -1, bool near_field = true) {
       PathTracerOptions options;
       options.light_sampler = kind;
+      options.near_field_lights = near_field;
       options.min_samples = min_spp;
       options.max_samples = max_spp;
       if (target > 0) options.relative_error = target;
@@ -544,7 +545,7 @@ struct AccuracySweep::Impl {
       const auto [s, repeats] = timed([&] { out = renderPathTraced(n.scene, options); }, o.repeats, o.cheap_seconds);
       const RadianceError e = radianceError(out, ref, split.clipped_variance);
       std::vector<std::string> row = head();
-      row.insert(row.end(), {mode, lightSamplerName(kind), integer(min_spp), integer(max_spp),
+      row.insert(row.end(), {mode, lightSamplerName(kind), near_field ? "on" : "off", integer(min_spp), integer(max_spp),
                              target > 0 ? num(target) : "", roulette >= 0 ? num(kNoiseFactor) : "",
                              roulette >= 0 ? num(roulette) : "", num(metricDouble(out.report, "samples_per_pixel_mean")),
                              integer(repeats), seconds(s), num(metricDouble(out.report, "rays")), num(e.relative_rmse),
@@ -552,7 +553,8 @@ struct AccuracySweep::Impl {
                              num(e.relative_rmse_unclipped), num(e.luminance_ratio), num(e.white), integer(reference_spp),
                              num(self.reference_noise), num(loadAverage1Min())});
       t.rows.push_back(row);
-      say("[render] " + mode + " " + lightSamplerName(kind) + " " + integer(min_spp) + "-" + integer(max_spp) +
+      say("[render] " + mode + " " + lightSamplerName(kind) + (near_field ? "" : " without near field") + " " +
+          integer(min_spp) + "-" + integer(max_spp) +
           " spp" + (target > 0 ? " target " + num(target) : "") +
           (roulette >= 0 ? " noise target, shadow roulette " + num(roulette) : "") + ": " + seconds(s) +
           " s, relative RMSE " +
@@ -576,6 +578,12 @@ struct AccuracySweep::Impl {
     const std::vector<double> roulettes = o.quick ? std::vector<double>{0, preset_roulette}
                                                   : std::vector<double>{0, 0.1, preset_roulette, 1};
     for (double roulette : roulettes) point("noise_target", LightSamplerKind::Power, 2, 8, 0, roulette);
+    // Without near-field light selection (PathTracerOptions::near_field_lights), what it buys.
+    for (LightSamplerKind kind : {LightSamplerKind::Power, LightSamplerKind::Hierarchy}) {
+      if (o.quick && kind == LightSamplerKind::Hierarchy) continue;
+      for (int spp : other_spp) point("fixed", kind, spp, spp, 0, -1, false);
+    }
+    if (!o.quick) point("noise_target", LightSamplerKind::Power, 2, 8, 0, preset_roulette, false);
     t.notes.push_back("the night scene of the default refinement, mesh and lights (seed " +
                       integer(static_cast<std::int64_t>(o.seed)) + "); reference: " + integer(reference_spp) +
                       " spp, power sampler, the average of two independent halves (seeds " +

@@ -700,12 +700,12 @@ struct PreparedRenderScene::Impl {
   // (the hierarchy over the 1080p street's 188 000 emitting triangles takes a noticeable
   // fraction of a second to build; a preview and the final render need it twice).
   mutable std::mutex samplers_mutex;
-  mutable std::array<std::unique_ptr<LightSampler>, 3> samplers;
+  mutable std::array<std::unique_ptr<LightSampler>, 6> samplers;  // per kind, without and with near field
 
-  const LightSampler& lightSampler(LightSamplerKind kind) const {
+  const LightSampler& lightSampler(LightSamplerKind kind, bool near_field) const {
     const std::lock_guard<std::mutex> lock(samplers_mutex);
-    std::unique_ptr<LightSampler>& sampler = samplers.at(static_cast<std::size_t>(kind));
-    if (!sampler) sampler = makeLightSampler(kind, emissive);
+    std::unique_ptr<LightSampler>& sampler = samplers.at(2 * static_cast<std::size_t>(kind) + (near_field ? 1 : 0));
+    if (!sampler) sampler = makeLightSampler(kind, emissive, near_field);
     return *sampler;
   }
 };
@@ -1217,6 +1217,7 @@ void reportRender(RenderOutput& out, double seconds, const Context& context, con
   r.add("bvh_primitives", static_cast<std::int64_t>(p.caster->primitiveCount()));
   r.add("emissive_triangles", static_cast<std::int64_t>(context.emissive.size()));
   r.add("light_sampler", std::string(lightSamplerName(options.light_sampler)));
+  r.add("near_field_lights", options.near_field_lights);
   r.add("sampler", std::string(samplerKindName(options.sampler)));
   r.add("nonfinite_samples_dropped", totals.dropped.load());
   reportVarianceReduction(r, context, totals);
@@ -1298,7 +1299,7 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   CV_Assert(width > 0 && height > 0);
   CV_Assert(options.absolute_error.empty() || (options.absolute_error.type() == CV_32F &&
                                                 options.absolute_error.size() == cv::Size(width, height)));
-  const LightSampler& sampler = p.lightSampler(options.light_sampler);
+  const LightSampler& sampler = p.lightSampler(options.light_sampler, options.near_field_lights);
   if (!scene.face_roughness.empty()) ggxAverageAlbedo(0.5f);  // builds the albedo table before the tiles start
   const Context context = makeContext(scene, camera, options, p, sampler);
   RenderOutput out = allocateOutput(width, height);

@@ -732,7 +732,8 @@ TEST(PathTracer, CameraSamplesThroughAMeshCrackDoNotDarkenTheSurfacePixels) {
 }
 
 TEST(PathTracer, SamplersAgreeAndPmfsMatchPicks) {
-  // Many lights of different power: all three samplers estimate the same image.
+  // Many lights of different power, 0.5 m before the lit plane (within near-field reach): all
+  // three samplers, with and without near-field selection, estimate the same image.
   solo::RenderScene s;
   s.camera = camera(8, 6);
   addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.7f);
@@ -746,48 +747,97 @@ TEST(PathTracer, SamplersAgreeAndPmfsMatchPicks) {
   o.min_samples = o.max_samples = 256;
   o.max_bounces = 1;
   o.progress = false;
-  double means[3];
-  int k = 0;
-  for (auto kind : {solo::LightSamplerKind::Uniform, solo::LightSamplerKind::Power, solo::LightSamplerKind::Hierarchy}) {
-    o.light_sampler = kind;
-    means[k++] = meanY(solo::renderPathTraced(s, o).radiance);
-  }
-  EXPECT_NEAR(means[1] / means[0], 1.0, 0.03);
-  EXPECT_NEAR(means[2] / means[0], 1.0, 0.03);
+  o.light_sampler = solo::LightSamplerKind::Uniform;
+  o.near_field_lights = false;
+  const double uniform = meanY(solo::renderPathTraced(s, o).radiance);
+  for (auto kind : {solo::LightSamplerKind::Uniform, solo::LightSamplerKind::Power, solo::LightSamplerKind::Hierarchy})
+    for (bool near_field : {false, true}) {
+      o.light_sampler = kind;
+      o.near_field_lights = near_field;
+      EXPECT_NEAR(meanY(solo::renderPathTraced(s, o).radiance) / uniform, 1.0, 0.03)
+          << solo::lightSamplerName(kind) << (near_field ? " + near field" : "");
+    }
 
+  // Every sampler: pmfs sum to 1, a pick reports its own pmf, and stratified draws land on
+  // each triangle in proportion to it.
   const auto triangles = solo::collectEmissiveTriangles(s);
   ASSERT_EQ(triangles.size(), 80u);
-  const auto hierarchy = solo::makeLightSampler(solo::LightSamplerKind::Hierarchy, triangles);
   const Eigen::Vector3f p(0.3f, -0.2f, 5.f), n(0, 0, -1);
-  double total = 0;
-  for (int t = 0; t < 80; ++t) total += hierarchy->pmf(p, n, t);
-  EXPECT_NEAR(total, 1.0, 1e-4);
-  std::vector<int> counts(80, 0);
   const int draws = 200000;
-  for (int i = 0; i < draws; ++i) {
-    float pmf = 0;
-    const int t = hierarchy->pick(p, n, (i + 0.5f) / draws, &pmf);
-    ASSERT_GE(t, 0);
-    EXPECT_NEAR(pmf, hierarchy->pmf(p, n, t), 1e-5f * std::max(1.f, pmf));
-    ++counts[static_cast<std::size_t>(t)];
-  }
-  for (int t = 0; t < 80; ++t) EXPECT_NEAR(counts[static_cast<std::size_t>(t)] / double(draws), hierarchy->pmf(p, n, t), 2e-3);
-  // The power sampler (an alias table): pmfs are power shares, and stratified draws land on
-  // each triangle in that proportion.
-  const auto power = solo::makeLightSampler(solo::LightSamplerKind::Power, triangles);
+  const auto check = [&](const solo::LightSampler& sampler, const char* name) {
+    double total = 0;
+    for (int t = 0; t < 80; ++t) total += sampler.pmf(p, n, t);
+    EXPECT_NEAR(total, 1.0, 1e-4) << name;
+    std::vector<int> counts(80, 0);
+    for (int i = 0; i < draws; ++i) {
+      float pmf = 0;
+      const int t = sampler.pick(p, n, (i + 0.5f) / draws, &pmf);
+      ASSERT_GE(t, 0) << name;
+      EXPECT_NEAR(pmf, sampler.pmf(p, n, t), 1e-5f * std::max(1.f, pmf)) << name;
+      ++counts[static_cast<std::size_t>(t)];
+    }
+    for (int t = 0; t < 80; ++t)
+      EXPECT_NEAR(counts[static_cast<std::size_t>(t)] / double(draws), sampler.pmf(p, n, t), 2e-3) << name << " " << t;
+  };
+  check(*solo::makeLightSampler(solo::LightSamplerKind::Hierarchy, triangles, false), "hierarchy");
+  check(*solo::makeLightSampler(solo::LightSamplerKind::Hierarchy, triangles, true), "hierarchy + near field");
+  check(*solo::makeLightSampler(solo::LightSamplerKind::Power, triangles, true), "power + near field");
+  // The power sampler alone (an alias table): pmfs are power shares, exactly.
+  const auto power = solo::makeLightSampler(solo::LightSamplerKind::Power, triangles, false);
+  check(*power, "power");
   double total_power = 0;
   for (const auto& t : triangles) total_power += t.power;
-  std::fill(counts.begin(), counts.end(), 0);
-  for (int i = 0; i < draws; ++i) {
+  for (int i = 0; i < 1000; ++i) {
     float pmf = 0;
-    const int t = power->pick(p, n, (i + 0.5f) / draws, &pmf);
-    ASSERT_GE(t, 0);
+    const int t = power->pick(p, n, (i + 0.5f) / 1000, &pmf);
     ASSERT_EQ(pmf, power->pmf(p, n, t));
-    ++counts[static_cast<std::size_t>(t)];
   }
-  for (int t = 0; t < 80; ++t) {
-    EXPECT_NEAR(power->pmf(p, n, t), triangles[static_cast<std::size_t>(t)].power / total_power, 1e-6);
-    EXPECT_NEAR(counts[static_cast<std::size_t>(t)] / double(draws), power->pmf(p, n, t), 2e-4);
+  for (int t = 0; t < 80; ++t) EXPECT_NEAR(power->pmf(p, n, t), triangles[static_cast<std::size_t>(t)].power / total_power, 1e-6);
+}
+
+TEST(PathTracer, NearFieldSelectionPicksTheLampBesideAPointAtLeastHalfTheTime) {
+  // Emitter 0: one 4 cm lamp (two triangles) 20 cm above the point. Emitter 1: a 1 m panel of
+  // 100x the radiance 6 m away. Power sampling gives the lamp 1 / 62 501 of the picks, the
+  // hierarchy (importance ~ power / distance^2) about 1.4 %; yet the lamp gives the point most
+  // of its light. Near-field selection picks among the clusters within 1 m (the lamp alone) half
+  // the time, the base sampler otherwise.
+  solo::RenderScene s;
+  s.emitters.push_back({Eigen::Vector3f::Constant(100.f), false, 1});
+  s.emitters.push_back({Eigen::Vector3f::Constant(10000.f), false, 2});
+  addQuad(s, {-0.02f, -0.02f, 0.2f}, {0.04f, 0, 0}, {0, 0.04f, 0}, 0.f, 0);
+  addQuad(s, {-0.5f, -0.5f, 6.f}, {1.f, 0, 0}, {0, 1.f, 0}, 0.f, 1);
+  const auto triangles = solo::collectEmissiveTriangles(s);
+  ASSERT_EQ(triangles.size(), 4u);
+  const Eigen::Vector3f p(0, 0, 0), n(0, 0, 1);
+  const Eigen::Vector3f far_p(0, 0, 3), far_n(0, 0, 1);  // 2.8 m from the lamp, 3 m from the panel
+  for (auto kind : {solo::LightSamplerKind::Power, solo::LightSamplerKind::Hierarchy}) {
+    const auto base = solo::makeLightSampler(kind, triangles, false);
+    const auto mixed = solo::makeLightSampler(kind, triangles, true);
+    const double base_lamp = base->pmf(p, n, 0) + base->pmf(p, n, 1);
+    EXPECT_LT(base_lamp, 0.02) << solo::lightSamplerName(kind);
+    for (int t = 0; t < 4; ++t) {
+      // The lamp's two equal triangles share its half; the base sampler has the other half.
+      const double near_pmf = t < 2 ? 0.5 : 0.0;
+      EXPECT_NEAR(mixed->pmf(p, n, t), 0.5 * near_pmf + 0.5 * base->pmf(p, n, t), 1e-6) << t;
+      // Beyond 1 m of every cluster the base sampler alone decides.
+      EXPECT_FLOAT_EQ(mixed->pmf(far_p, far_n, t), base->pmf(far_p, far_n, t)) << t;
+    }
+    int lamp = 0;
+    for (int i = 0; i < 1000; ++i) {
+      float pmf = 0;
+      const int t = mixed->pick(p, n, (i + 0.5f) / 1000, &pmf);
+      ASSERT_GE(t, 0);
+      EXPECT_NEAR(pmf, mixed->pmf(p, n, t), 1e-6f);
+      lamp += t < 2;
+    }
+    EXPECT_NEAR(lamp / 1000.0, 0.5 + 0.5 * base_lamp, 2e-3) << solo::lightSamplerName(kind);
+    // A point on the lamp itself, and one beside it at 1 km: finite, normalised pmfs.
+    for (const Eigen::Vector3f& q : {Eigen::Vector3f(0.f, 0.f, 0.2f), Eigen::Vector3f(1000.f, 0.f, 0.2f)}) {
+      double total = 0;
+      for (int t = 0; t < 4; ++t) total += mixed->pmf(q, n, t);
+      EXPECT_TRUE(std::isfinite(total));
+      EXPECT_NEAR(total, 1.0, 1e-5);
+    }
   }
 }
 

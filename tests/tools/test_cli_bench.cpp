@@ -115,21 +115,25 @@ TEST(CliBench, AccuracyQuickWritesEveryStageAndTheRenderErrorFallsWithSamples) {
 
   const Csv render = readCsv(out / "render.csv");
   EXPECT_EQ(render.columns,
-            (std::vector<std::string>{"seed", "width", "height", "mode", "light_sampler", "min_spp", "max_spp",
+            (std::vector<std::string>{"seed", "width", "height", "mode", "light_sampler", "near_field", "min_spp", "max_spp",
                                       "relative_error_target", "noise_factor", "shadow_roulette", "mean_spp", "repeats",
                                       "seconds", "rays", "relative_rmse", "relative_rmse_noise_corrected",
                                       "relative_rmse_unclipped", "luminance_ratio", "white_cd_m2", "reference_spp",
                                       "reference_relative_noise", "load_1min"}));
   // power at 1, 4, 16 spp, uniform 4, hierarchy 4, one adaptive point, the noise target with
-  // shadow-ray roulette off and at 0.3.
-  ASSERT_EQ(render.rows.size(), 8u);
+  // shadow-ray roulette off and at 0.3, all with near-field light selection; power at 4 spp
+  // without it.
+  ASSERT_EQ(render.rows.size(), 9u);
+  for (std::size_t i = 0; i < render.rows.size(); ++i) EXPECT_EQ(render.rows[i].at("near_field"), i < 8 ? "on" : "off");
+  EXPECT_EQ(render.rows[8].at("light_sampler"), "power");
+  EXPECT_EQ(number(render.rows[8], "max_spp"), 4.0);
   expectFiniteNonNegative(render, {"seconds", "mean_spp", "relative_rmse", "relative_rmse_noise_corrected",
                                    "relative_rmse_unclipped", "luminance_ratio", "white_cd_m2",
                                    "reference_relative_noise"},
                           "render");
   std::map<int, double> power_error;
   for (const auto& row : render.rows)
-    if (row.at("mode") == "fixed" && row.at("light_sampler") == "power") {
+    if (row.at("mode") == "fixed" && row.at("light_sampler") == "power" && row.at("near_field") == "on") {
       EXPECT_EQ(number(row, "mean_spp"), std::max(2.0, number(row, "max_spp")));  // the tracer takes >= 2
       power_error[static_cast<int>(number(row, "max_spp"))] = number(row, "relative_rmse");
     }

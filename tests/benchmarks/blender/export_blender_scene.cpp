@@ -37,7 +37,10 @@
 //       whole light only), for SEEDS (8) and ADAPTIVE_SEEDS (2) seeds from SOLO_SEED (7 unless
 //       set) on, their squared errors pooled. Prints the shares of the squared error of Y on the
 //       pixels that see no emitter: direct, indirect, their cross term, and the worst 0.1 % of
-//       each image's pixels (fireflies); the last line, `row: ...`, is the table's row.
+//       each image's pixels (fireflies); the last line, `row: ...`, is the table's row. The first
+//       seed's fixed images are written as error_fixed_direct.exr and error_fixed_indirect.exr,
+//       to locate the pixels that carry the error.
+//   Every command: SOLO_NEAR_FIELD=0 renders without near-field light selection.
 //   export_blender_scene compare OUT_DIR IMAGE.exr
 //       Relative RMSE of IMAGE's Y (second channel) against the reference on the pixels where no
 //       emitter is seen, the ratio of their means there, the share of the squared error in the
@@ -185,6 +188,12 @@ solo::RenderScene litPlane(int width, int height, bool mesh_emitter) {
 
 // CPU seconds of this process, every thread: on a shared machine a fairer cost than wall time
 // (a render that gets half the cores for twice as long costs the same).
+// SOLO_NEAR_FIELD=0 turns near-field light selection off (PathTracerOptions::near_field_lights),
+// for comparing with and without it.
+void applyNearFieldSetting(solo::PathTracerOptions& options) {
+  if (const char* v = std::getenv("SOLO_NEAR_FIELD")) options.near_field_lights = std::atoi(v) != 0;
+}
+
 double processCpuSeconds() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
@@ -289,33 +298,28 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
     reference = solo::readImageRaw(dir / "solo_reference.exr");
     mask = solo::readImageRaw(dir / "emitter_mask.exr");
   } else {
-    o.min_samples = o.max_samples = reference_spp;
-    o.seed = 1000;
+    // Two independent halves (seeds 1000 and 1001): the reference is their mean, and its own
+    // noise is measured from their difference, (h1 - h2) / 2 being the mean's error in
+    // expectation. The tracer's per-pixel standard errors ignore Sobol stratification and miss
+    // fireflies, so they do not bound it.
+    o.min_samples = o.max_samples = std::max(1, reference_spp / 2);
     solo::Stopwatch reference_clock;
     const double cpu_start = processCpuSeconds();
-    const solo::RenderOutput out = solo::renderPathTraced(scene, o);
-    std::printf("reference: %d spp, seed 1000, %.1f s, %.1f cpu s\n", reference_spp, reference_clock.seconds(),
-                processCpuSeconds() - cpu_start);
-    reference = out.radiance;
+    o.seed = 1000;
+    const solo::RenderOutput first = solo::renderPathTraced(scene, o);
+    o.seed = 1001;
+    const solo::RenderOutput second = solo::renderPathTraced(scene, o);
+    std::printf("reference: 2 x %d spp, seeds 1000 and 1001, %.1f s, %.1f cpu s\n", o.max_samples,
+                reference_clock.seconds(), processCpuSeconds() - cpu_start);
+    reference = 0.5 * (first.radiance + second.radiance);
     // Every pixel where some sample of the reference's camera rays hit an emitter, also a
     // far lamp covering a sliver of the pixel: there the pixel's value is the emitter's
     // radiance times its coverage, a sampling of the pixel's area, not of light transport.
-    mask = cv::Mat(out.emitter_coverage.size(), CV_32F);
+    mask = cv::Mat(first.emitter_coverage.size(), CV_32F);
     mask.setTo(0.f);
-    mask.setTo(1.f, out.emitter_coverage > 0.f);
-    // The reference's own relative noise from its per-pixel standard-error estimates, on the
-    // pixels the comparison uses: exact in expectation for independent samples, an upper bound
-    // for sobol (the estimate ignores stratification).
-    double variance = 0, norm = 0;
-    for (int y = 0; y < reference.rows; ++y)
-      for (int x = 0; x < reference.cols; ++x) {
-        if (mask.at<float>(y, x) != 0) continue;
-        const double e = out.std_error.at<float>(y, x), r = reference.ptr<float>(y)[x * reference.channels() + 1];
-        variance += e * e;
-        norm += r * r;
-      }
-    std::printf("reference relative noise (per-pixel standard errors, an upper bound with sobol): %.4f\n",
-                norm > 0 ? std::sqrt(variance / norm) : 0.0);
+    mask.setTo(1.f, first.emitter_coverage > 0.f);
+    mask.setTo(1.f, second.emitter_coverage > 0.f);
+    std::printf("reference relative noise (two halves): %.4f\n", relativeRmse(first.radiance, reference, mask, nullptr));
     std::fflush(stdout);
     solo::writeImage(dir / "solo_reference.exr", reference);
     solo::writeImage(dir / "emitter_mask.exr", mask);
@@ -327,6 +331,7 @@ int exportScene(int argc, char** argv, bool reuse_reference) {
               "mean_ratio");
   const auto run = [&](const std::string& label, solo::PathTracerOptions options) -> double {
     options.seed = std::getenv("SOLO_SEED") ? static_cast<std::uint64_t>(std::atoi(std::getenv("SOLO_SEED"))) : 7;
+    applyNearFieldSetting(options);
     solo::Stopwatch clock;
     const double cpu_start = processCpuSeconds();
     const solo::RenderOutput out = solo::renderPathTraced(scene, options);
@@ -607,6 +612,7 @@ int errorSourcesCommand(int argc, char** argv) {
   solo::PathTracerOptions base;
   base.progress = false;
   base.diffuse = solo::DiffuseModel::Lambert;
+  applyNearFieldSetting(base);
   cv::Mat mask;
   const ComponentImages reference = componentReference(prepared, base, reference_spp, dir, &mask);
 
@@ -618,8 +624,13 @@ int errorSourcesCommand(int argc, char** argv) {
   for (const std::uint64_t seed : runSeeds(seed_count)) {
     fixed.seed = seed;
     double cpu_seconds = 0;
-    e += errorSums(renderComponents(prepared, fixed, &cpu_seconds), reference, mask);
+    const ComponentImages run = renderComponents(prepared, fixed, &cpu_seconds);
+    e += errorSums(run, reference, mask);
     fixed_cpu += cpu_seconds;
+    if (seed == runSeeds(1).front()) {  // the first run, to locate where its error sits
+      solo::writeImage(dir / "error_fixed_direct.exr", run.direct);
+      solo::writeImage(dir / "error_fixed_indirect.exr", run.indirect);
+    }
   }
   std::printf("fixed %d spp, %d seeds (%.1f cpu s): relative_rmse %.4f; squared error: direct %.3f indirect %.3f "
               "cross %.3f; worst 0.1 %% of pixels %.3f (indirect %.3f of theirs, %.3f above the reference); indirect "
@@ -675,6 +686,7 @@ int probe(int argc, char** argv) {
   solo::PathTracerOptions o;
   o.progress = false;
   o.diffuse = solo::DiffuseModel::Lambert;
+  applyNearFieldSetting(o);
   o.sampler = argc > 8 ? solo::parseSamplerKind(argv[8]) : solo::SamplerKind::Independent;
   o.min_samples = o.max_samples = argc > 7 ? std::max(2, std::atoi(argv[7])) : 2;
   std::vector<std::pair<double, int>> values;

@@ -91,9 +91,9 @@ while read -r name spec cycles; do
   elif [ "${SOLO_RUNS_AGAIN:-0}" = 1 ]; then
     "$EXPORT" runs "$scene" "$dir" "$SIZE" - sobol adaptive > "$dir/runs.log"
   fi
-  if [ "$cycles" = 1 ] && [ ! -f "$dir/cycles_compare.log" ]; then
-    blender -b --factory-startup -P "$CYCLES_SCRIPT" -- "$dir/scene.json" "$dir/cycles_{n}.exr" \
-      --samples "$CYCLES_SAMPLES" --threads "$THREADS" > "$dir/cycles.log" 2>&1
+  if [ "$cycles" = 1 ]; then
+    [ -f "$dir/cycles.log" ] || blender -b --factory-startup -P "$CYCLES_SCRIPT" -- "$dir/scene.json" \
+      "$dir/cycles_{n}.exr" --samples "$CYCLES_SAMPLES" --threads "$THREADS" > "$dir/cycles.log" 2>&1
     for n in ${CYCLES_SAMPLES//,/ }; do
       echo "samples $n $("$EXPORT" compare "$dir" "$dir/cycles_$n.exr" | head -1)"
     done > "$dir/cycles_compare.log"
@@ -119,13 +119,23 @@ def solo_runs(d):
                 rows[r["settings"]] = r
     return rows
 
-def cycles_model(d):
+def reference_noise(d):
+    p = os.path.join(d, "export.log")
+    m = re.search(r"reference relative noise \(two halves\): (\S+)", open(p).read()) if os.path.exists(p) else None
+    return float(m.group(1)) if m else 0.0
+
+# An error measured against the reference holds the reference's own noise (independent of the
+# image's): the image's error is what remains.
+def corrected(e, noise):
+    return max(e * e - noise * noise, 0.0) ** 0.5
+
+def cycles_model(d, noise):
     p, q = os.path.join(d, "cycles.log"), os.path.join(d, "cycles_compare.log")
     if not (os.path.exists(p) and os.path.exists(q)):
         return None
     cpu = {int(m.group(1)): float(m.group(2)) for m in
            re.finditer(r"cycles: samples (\d+) threads \d+ render_seconds \S+ cpu_seconds (\S+)", open(p).read())}
-    err = {int(m.group(1)): float(m.group(2)) for m in
+    err = {int(m.group(1)): corrected(float(m.group(2)), noise) for m in
            re.finditer(r"samples (\d+) relative_rmse (\S+)", open(q).read())}
     n = sorted(cpu)
     ratio = {int(m.group(1)): float(m.group(2)) for m in
@@ -140,13 +150,8 @@ def cycles_model(d):
     points = " / ".join("%d: %.3f in %.1f s" % (s, err[s], cpu[s]) for s in n)
     return seconds, k, slope, points
 
-def reference_noise(d):
-    p = os.path.join(d, "export.log")
-    m = re.search(r"upper bound with sobol\): (\S+)", open(p).read()) if os.path.exists(p) else None
-    return float(m.group(1)) if m else float("nan")
-
-print("\nSolo and Cycles: CPU seconds to equal error (relative RMSE of Y against solo's reference)\n")
-print("| scene kind | reference noise (bound) | Cycles k, CPU s per sample | solo fixed 16: error, CPU s, Cycles CPU s, ratio "
+print("\nSolo and Cycles: CPU seconds to equal error (relative RMSE of Y against solo's reference, its noise taken out)\n")
+print("| scene kind | reference noise | Cycles k, CPU s per sample | solo fixed 16: error, CPU s, Cycles CPU s, ratio "
       "| solo fixed 64 | solo default adaptive (mean spp) |")
 print("|---|---|---|---|---|---|")
 adaptive_rows = []
@@ -157,7 +162,8 @@ for name, spec, cycles in kinds:
     runs = solo_runs(d)
     if not runs:
         continue
-    model = cycles_model(d) if cycles == "1" else None
+    noise = reference_noise(d)
+    model = cycles_model(d, noise) if cycles == "1" else None
     note = "not comparable (roughness)" if cycles != "1" else ""
     if model and model[0] is None:
         model, note = None, model[1]
@@ -167,7 +173,7 @@ for name, spec, cycles in kinds:
         if r is None:
             cells.append("-")
             continue
-        e, t = float(r["relative_rmse"]), float(r["cpu_seconds"])
+        e, t = corrected(float(r["relative_rmse"]), noise), float(r["cpu_seconds"])
         cell = "%.3f, %.1f s" % (e, t)
         if label.startswith("default"):
             cell += " (%.0f spp)" % float(r["spp_mean"])
@@ -176,7 +182,7 @@ for name, spec, cycles in kinds:
             cell += ", %.0f s, **1/%.0f**" % (c, c / t)
         cells.append(cell)
     cyc = "k %.2f, %.3f s" % (model[1], model[2]) if model else note
-    print("| %s | %.3f | %s | %s |" % (name, reference_noise(d), cyc, " | ".join(cells)))
+    print("| %s | %.3f | %s | %s |" % (name, noise, cyc, " | ".join(cells)))
     a, f = runs.get("default adaptive sobol"), runs.get("fixed at adaptive mean sobol")
     if a and f:
         adaptive_rows.append((name, a, f))
@@ -187,7 +193,8 @@ print("\nAdaptive against fixed sampling at equal samples (Sobol)\n")
 print("| scene kind | adaptive mean spp | adaptive error, CPU s | fixed at that spp: error, CPU s | error ratio |")
 print("|---|---|---|---|---|")
 for name, a, f in adaptive_rows:
-    ea, ef = float(a["relative_rmse"]), float(f["relative_rmse"])
+    noise = reference_noise(os.path.join(work, "kinds", name))
+    ea, ef = corrected(float(a["relative_rmse"]), noise), corrected(float(f["relative_rmse"]), noise)
     print("| %s | %.1f | %.3f, %.1f s | %.3f, %.1f s | %.2f |" % (name, float(a["spp_mean"]), ea, float(a["cpu_seconds"]),
-                                                           ef, float(f["cpu_seconds"]), ea / ef))
+                                                           ef, float(f["cpu_seconds"]), ea / ef if ef > 0 else float("nan")))
 EOF

@@ -47,6 +47,9 @@ class LightSampler {
   virtual void prefetch(float /*u*/) const {}
 };
 
-std::unique_ptr<LightSampler> makeLightSampler(LightSamplerKind kind, const std::vector<EmissiveTriangle>& triangles);
+/// The sampler of `kind`; with `near_field`, mixed with near-field selection: a shading point
+/// within 1 m of emitting triangles picks among those by importance half of the time.
+std::unique_ptr<LightSampler> makeLightSampler(LightSamplerKind kind, const std::vector<EmissiveTriangle>& triangles,
+                                               bool near_field = true);
 
 }  // namespace solo

@@ -143,6 +143,10 @@ struct PathTracerOptions {
   float split_distance_m = 2.f;
   int russian_roulette_after = 3;  ///< bounces before roulette starts
   LightSamplerKind light_sampler = LightSamplerKind::Hierarchy;
+  /// light_sampler mixed with near-field selection (light_sampler.h): a shading point within
+  /// 1 m of emitting triangles picks among them by distance and orientation half of the time.
+  /// Unbiased; false: light_sampler alone.
+  bool near_field_lights = true;
   /// Where the per-sample random numbers come from (sampler.h): scrambled Sobol points,
   /// stratified per pixel and dimension, or independent PCG32 values.
   SamplerKind sampler = SamplerKind::Sobol;
