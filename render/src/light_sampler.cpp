@@ -428,7 +428,8 @@ class NearFieldSampler final : public LightSampler {
   static std::int64_t cellKey(const Eigen::Vector3f& p) { return cellKey(p, kNearCellM); }
   static std::int64_t cellKey(const Eigen::Vector3f& p, float cell_m) {
     const auto cell = [cell_m](float x) {
-      return static_cast<std::int64_t>(std::clamp(std::floor(x / cell_m), -1048575.f, 1048575.f)) + 1048576;
+      const float c = std::floor(x / cell_m);  // written so that NaN lands on the lowest cell
+      return static_cast<std::int64_t>(c > 1048575.f ? 1048575.f : (c > -1048575.f ? c : -1048575.f)) + 1048576;
     };
     return (cell(p.x()) << 42) | (cell(p.y()) << 21) | cell(p.z());
   }

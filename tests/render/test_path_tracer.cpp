@@ -838,6 +838,12 @@ TEST(PathTracer, NearFieldSelectionPicksTheLampBesideAPointAtLeastHalfTheTime) {
       EXPECT_TRUE(std::isfinite(total));
       EXPECT_NEAR(total, 1.0, 1e-5);
     }
+    // A NaN point (a degenerate hit) lands in no cell: the base sampler's answer, finite.
+    const Eigen::Vector3f nan_p = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+    float nan_pmf = 0;
+    const int t = mixed->pick(nan_p, n, 0.3f, &nan_pmf);
+    EXPECT_EQ(t, base->pick(nan_p, n, 0.3f, &nan_pmf));
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(mixed->pmf(nan_p, n, k), base->pmf(nan_p, n, k));
   }
 }
 
