@@ -142,20 +142,20 @@ std::string meshScript(const SweepTable& t, const std::string& scene_text, bool 
 
 std::string renderScript(const SweepTable& t, const std::string& scene_text) {
   const std::vector<Series> series = {
-      {"power, fixed spp", {{"mode", "fixed"}, {"light_sampler", "power"}, {"near_field", "on"}},
+      {"power, fixed spp", {{"mode", "fixed"}, {"light_sampler", "power"}, {"near_field", "off"}},
        "with linespoints pt 7 lw 2", "max_spp"},
-      {"power without near field", {{"mode", "fixed"}, {"light_sampler", "power"}, {"near_field", "off"}},
+      {"power with near field", {{"mode", "fixed"}, {"light_sampler", "power"}, {"near_field", "on"}},
        "with linespoints pt 6 lw 1 dt 3", ""},
       {"uniform, fixed spp", {{"mode", "fixed"}, {"light_sampler", "uniform"}}, "with linespoints pt 5 lw 1", ""},
-      {"hierarchy, fixed spp", {{"mode", "fixed"}, {"light_sampler", "hierarchy"}, {"near_field", "on"}},
+      {"hierarchy, fixed spp", {{"mode", "fixed"}, {"light_sampler", "hierarchy"}, {"near_field", "off"}},
        "with linespoints pt 9 lw 1", ""},
-      {"hierarchy without near field", {{"mode", "fixed"}, {"light_sampler", "hierarchy"}, {"near_field", "off"}},
+      {"hierarchy with near field", {{"mode", "fixed"}, {"light_sampler", "hierarchy"}, {"near_field", "on"}},
        "with linespoints pt 8 lw 1 dt 3", ""},
       {"power, adaptive (target)", {{"mode", "adaptive"}}, "with linespoints pt 13 ps 1.5 lw 1 dt 2",
        "relative_error_target"},
-      {"power, noise target 2-8 spp (shadow roulette)", {{"mode", "noise_target"}, {"near_field", "on"}},
+      {"power, noise target 2-8 spp (shadow roulette)", {{"mode", "noise_target"}, {"near_field", "off"}},
        "with points pt 11 ps 1.5", ""},
-      {"the same without near field", {{"mode", "noise_target"}, {"near_field", "off"}}, "with points pt 10 ps 1.5", ""}};
+      {"the same with near field", {{"mode", "noise_target"}, {"near_field", "on"}}, "with points pt 10 ps 1.5", ""}};
   std::string g = scriptHeader(t, "Rendering: relative RMSE of non-emitting pixels against time, " + scene_text, 2);
   g += "set logscale xy\nset xlabel \"seconds (render)\"\nset ylabel \"relative RMSE of luminance\"\n";
   g += plotCommand(t, series, "seconds", "relative_rmse");

@@ -305,6 +305,7 @@ struct AccuracySweep::Impl {
     PathTracerOptions t;
     t.min_samples = t.max_samples = splitReferenceSpp() / 2;
     t.light_sampler = LightSamplerKind::Power;
+    t.near_field_lights = false;  // as solo night's presets render
     t.progress = false;
     Stopwatch clock;
     t.seed = o.seed + kReferenceSeedOffset;
@@ -526,7 +527,7 @@ struct AccuracySweep::Impl {
     // roulette < 0: a relative-error target (or none); >= 0: the noise-matched target with
     // that shadow-ray roulette fraction.
     const auto point = [&](const std::string& mode, LightSamplerKind kind, int min_spp, int max_spp, double target,
-                           double roulette = -1, bool near_field = true) {
+                           double roulette = -1, bool near_field = false) {
       PathTracerOptions options;
       options.light_sampler = kind;
       options.near_field_lights = near_field;
@@ -553,7 +554,7 @@ struct AccuracySweep::Impl {
                              num(e.relative_rmse_unclipped), num(e.luminance_ratio), num(e.white), integer(reference_spp),
                              num(self.reference_noise), num(loadAverage1Min())});
       t.rows.push_back(row);
-      say("[render] " + mode + " " + lightSamplerName(kind) + (near_field ? "" : " without near field") + " " +
+      say("[render] " + mode + " " + lightSamplerName(kind) + (near_field ? " with near field" : "") + " " +
           integer(min_spp) + "-" + integer(max_spp) +
           " spp" + (target > 0 ? " target " + num(target) : "") +
           (roulette >= 0 ? " noise target, shadow roulette " + num(roulette) : "") + ": " + seconds(s) +
@@ -578,12 +579,13 @@ struct AccuracySweep::Impl {
     const std::vector<double> roulettes = o.quick ? std::vector<double>{0, preset_roulette}
                                                   : std::vector<double>{0, 0.1, preset_roulette, 1};
     for (double roulette : roulettes) point("noise_target", LightSamplerKind::Power, 2, 8, 0, roulette);
-    // Without near-field light selection (PathTracerOptions::near_field_lights), what it buys.
+    // With near-field light selection (PathTracerOptions::near_field_lights; off in solo night's
+    // presets, whose settings the rows above are), what it buys.
     for (LightSamplerKind kind : {LightSamplerKind::Power, LightSamplerKind::Hierarchy}) {
       if (o.quick && kind == LightSamplerKind::Hierarchy) continue;
-      for (int spp : other_spp) point("fixed", kind, spp, spp, 0, -1, false);
+      for (int spp : other_spp) point("fixed", kind, spp, spp, 0, -1, true);
     }
-    if (!o.quick) point("noise_target", LightSamplerKind::Power, 2, 8, 0, preset_roulette, false);
+    if (!o.quick) point("noise_target", LightSamplerKind::Power, 2, 8, 0, preset_roulette, true);
     t.notes.push_back("the night scene of the default refinement, mesh and lights (seed " +
                       integer(static_cast<std::int64_t>(o.seed)) + "); reference: " + integer(reference_spp) +
                       " spp, power sampler, the average of two independent halves (seeds " +

@@ -29,6 +29,10 @@ NightConversionOptions::NightConversionOptions() {
   render.noise_factor = 1;
   render.shadow_roulette = 0.3;
   render.light_sampler = LightSamplerKind::Power;
+  // Near-field light selection removes rare bright samples beside lamps, which the image clips
+  // at white and the denoiser's firefly clamp bounds anyway: on the default scene it gave the
+  // same clipped error for 1.1-1.2x the render time (docs/rendering.md, "Light selection").
+  render.near_field_lights = false;
   render.seed = 0;
   // The night camera: -2 EV night-mode compensation, sensor noise at 0.6 of the calibration at
   // the chosen ISO, a video knee up to 8x white, glare only from what clips

@@ -319,8 +319,8 @@ class HierarchySampler final : public LightSampler {
 // mixture's, so the estimate stays unbiased. The clusters near a point are the ones listed for
 // its cell of a grid of kNearCellM, built with every cluster whose sphere comes within
 // kNearRadiusM of the cell.
-constexpr float kNearRadiusM = 1.f;
-constexpr float kNearCellM = 1.f;
+constexpr float kNearRadiusM = 0.5f;
+constexpr float kNearCellM = 0.5f;
 constexpr float kNearShare = 0.5f;
 // Clusters: one emitter's triangles whose centroids share a cell of this size.
 constexpr float kNearClusterCellM = 0.35f;
@@ -328,7 +328,14 @@ constexpr float kNearClusterCellM = 0.35f;
 // floor by their own radius already makes them important nearby.
 constexpr float kNearMaxRadiusM = 2.f;
 // At most this many clusters per cell (the most powerful), so that a shading point weighs few.
-constexpr int kMaxNearClusters = 32;
+constexpr int kMaxNearClusters = 16;
+
+// The directions a cluster's faces point in, up to sign: an axis and the cosine and sine of the
+// largest angle between it and a face's normal (cos_spread 0: any direction).
+struct Cone {
+  Eigen::Vector3f axis = Eigen::Vector3f::UnitZ();
+  float cos_spread = 0.f, sin_spread = 1.f;
+};
 
 class NearFieldSampler final : public LightSampler {
  public:
@@ -336,39 +343,44 @@ class NearFieldSampler final : public LightSampler {
       : base_(std::move(base)) {
     buildClusters(triangles);
     buildGrid();
-  }
-
-  void prefetch(float u) const override {
-    if (u >= kNearShare) base_->prefetch(baseU(u));
+    Eigen::AlignedBox3f all;
+    double power = 0;
+    for (const EmissiveTriangle& t : triangles) {
+      all.extend(t.p0);
+      all.extend(t.p1);
+      all.extend(t.p2);
+      power += t.power;
+    }
+    const double radius2 = std::max(0.25 * all.diagonal().squaredNorm(), 1e-4);
+    if (!triangles.empty()) scale_ = static_cast<float>(power / radius2);
   }
 
   int pick(const Eigen::Vector3f& p, const Eigen::Vector3f& n, float u, float* pmf) const override {
     const Near near = nearClusters(p, n);
-    if (!(near.total > 0.f)) return base_->pick(p, n, u, pmf);
+    if (!(near.chance > 0.f)) return base_->pick(p, n, u, pmf);
     int triangle = -1;
     float base_pmf = 0.f;
-    if (u < kNearShare) {
-      u = std::min(u / kNearShare, kOneMinus);
+    if (u < near.chance) {
+      u = std::min(u / near.chance, kOneMinus);
       const int cluster = near.pick(&u);
       triangle = pickInCluster(cluster, u);
       base_pmf = base_->pmf(p, n, triangle);
     } else {
-      triangle = base_->pick(p, n, baseU(u), &base_pmf);
+      triangle = base_->pick(p, n, std::min((u - near.chance) / (1.f - near.chance), kOneMinus), &base_pmf);
       if (triangle < 0) return -1;
     }
-    *pmf = kNearShare * nearPmf(near, triangle) + (1.f - kNearShare) * base_pmf;
+    *pmf = near.chance * nearPmf(near, triangle) + (1.f - near.chance) * base_pmf;
     return triangle;
   }
 
   float pmf(const Eigen::Vector3f& p, const Eigen::Vector3f& n, int triangle) const override {
     const Near near = nearClusters(p, n);
-    if (!(near.total > 0.f)) return base_->pmf(p, n, triangle);
-    return kNearShare * nearPmf(near, triangle) + (1.f - kNearShare) * base_->pmf(p, n, triangle);
+    if (!(near.chance > 0.f)) return base_->pmf(p, n, triangle);
+    return near.chance * nearPmf(near, triangle) + (1.f - near.chance) * base_->pmf(p, n, triangle);
   }
 
  private:
   static constexpr float kOneMinus = 0.99999994f;
-  static float baseU(float u) { return std::min((u - kNearShare) / (1.f - kNearShare), kOneMinus); }
 
   // The clusters listed for a shading point's cell, with their importance there.
   struct Near {
@@ -376,6 +388,7 @@ class NearFieldSampler final : public LightSampler {
     int count = 0;
     float importance[kMaxNearClusters];
     float total = 0.f;
+    float chance = 0.f;  // the probability of picking among them: kNearShare x total / (total + scale_)
 
     // The listed cluster u selects in proportion to importance; u is rescaled for reuse.
     int pick(float* u) const {
@@ -400,16 +413,38 @@ class NearFieldSampler final : public LightSampler {
 
   Near nearClusters(const Eigen::Vector3f& p, const Eigen::Vector3f& n) const {
     Near near;
-    if (cells_.empty()) return near;
+    if (cells_.empty() || !occupancy_.mayHold(p)) return near;
     const auto found = cells_.find(cellKey(p));
     if (found == cells_.end()) return near;
     near.clusters = cell_clusters_.data() + found->second.first;
     near.count = found->second.second;
     for (int k = 0; k < near.count; ++k) {
-      near.importance[k] = importance(spheres_[static_cast<std::size_t>(near.clusters[k])], p, n);
+      const auto c = static_cast<std::size_t>(near.clusters[k]);
+      near.importance[k] = importance(spheres_[c], p, n) * emitterCosineBound(cones_[c], spheres_[c], p);
       near.total += near.importance[k];
     }
+    if (near.total > 0.f && std::isfinite(near.total)) near.chance = kNearShare * near.total / (near.total + scale_);
     return near;
+  }
+
+  // A bound on |cos| between a cluster's faces and the direction to p (two-sided emitters):
+  // cos(max(0, theta - spread - theta_box)), theta the angle between the cluster's mean normal
+  // and the direction from its centre, folded to [0, pi/2]. A window seen edge-on from its own
+  // wall gets about radius / distance.
+  static float emitterCosineBound(const Cone& cone, const Sphere& sphere, const Eigen::Vector3f& p) {
+    const Eigen::Vector3f to_p = p - sphere.centre;
+    const float distance2 = to_p.squaredNorm();
+    if (!(distance2 > sphere.radius2)) return 1.f;
+    const float inv_distance = 1.f / std::sqrt(distance2);
+    const float cos_theta = std::min(1.f, std::abs(cone.axis.dot(to_p)) * inv_distance);
+    const float sin_box = std::min(1.f, sphere.radius * inv_distance);
+    const float cos_box = std::sqrt(std::max(0.f, 1.f - sin_box * sin_box));
+    // cos and sin of spread + theta_box
+    const float cos_open = cone.cos_spread * cos_box - cone.sin_spread * sin_box;
+    const float sin_open = cone.sin_spread * cos_box + cone.cos_spread * sin_box;
+    if (cos_theta >= cos_open || sin_open >= 1.f) return 1.f;
+    const float sin_theta = std::sqrt(std::max(0.f, 1.f - cos_theta * cos_theta));
+    return std::clamp(cos_theta * cos_open + sin_theta * sin_open, 0.f, 1.f);
   }
 
   // The probability that the near-field strategy picks `triangle`.
@@ -463,6 +498,7 @@ class NearFieldSampler final : public LightSampler {
       const int cluster = static_cast<int>(spheres_.size());
       const float radius = 0.5f * box.diagonal().norm();
       spheres_.push_back({box.center(), radius, radius * radius, power});
+      cones_.push_back(coneOf(tris, members));
       ranges_.emplace_back(static_cast<int>(order_.size()), static_cast<int>(members.size()));
       float running = 0.f;
       for (const int i : members) {
@@ -474,6 +510,25 @@ class NearFieldSampler final : public LightSampler {
       }
       cumulative_.back() = 1.f;  // rounding: the last one takes the rest
     }
+  }
+
+  // The members' area-weighted mean normal, each normal's sign taken to agree with the first,
+  // and the largest angle between a member's normal and that axis.
+  static Cone coneOf(const std::vector<EmissiveTriangle>& tris, const std::vector<int>& members) {
+    const Eigen::Vector3f first = tris[static_cast<std::size_t>(members.front())].normal;
+    Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+    for (const int i : members) {
+      const EmissiveTriangle& t = tris[static_cast<std::size_t>(i)];
+      sum += (t.normal.dot(first) < 0.f ? -t.area : t.area) * t.normal;
+    }
+    Cone cone;
+    if (!(sum.norm() > 0.f)) return cone;  // no axis: every direction allowed
+    cone.axis = sum.normalized();
+    float cos_spread = 1.f;
+    for (const int i : members) cos_spread = std::min(cos_spread, std::abs(cone.axis.dot(tris[static_cast<std::size_t>(i)].normal)));
+    cone.cos_spread = cos_spread;
+    cone.sin_spread = std::sqrt(std::max(0.f, 1.f - cos_spread * cos_spread));
+    return cone;
   }
 
   // Lists each cluster for the cells its sphere comes within kNearRadiusM of; a cell keeps its
@@ -491,9 +546,14 @@ class NearFieldSampler final : public LightSampler {
           for (float z = first.z(); z <= s.centre.z() + reach; z += kNearCellM) {
             const Eigen::Vector3f cell_centre = Eigen::Vector3f(x, y, z) + half_cell;
             const float gap = ((s.centre - cell_centre).cwiseAbs() - half_cell).cwiseMax(0.f).norm();
-            if (gap <= reach) cells[cellKey(cell_centre)].push_back(static_cast<int>(c));
+            if (gap <= reach) {
+              std::vector<int>& list = cells[cellKey(cell_centre)];
+              if (list.empty()) occupancy_.centres.push_back(cell_centre);
+              list.push_back(static_cast<int>(c));
+            }
           }
     }
+    occupancy_.build(cells);
     cells_.reserve(cells.size());
     for (auto& [key, list] : cells) {
       if (static_cast<int>(list.size()) > kMaxNearClusters) {
@@ -507,8 +567,55 @@ class NearFieldSampler final : public LightSampler {
     }
   }
 
+  // Which cells list clusters, as bits over the box of those cells at a coarser cell
+  // (kNearCellM x 2^level, at most 2^24 bits): most shading points are far from every emitter
+  // and leave after one bit test instead of a hash lookup that misses the cache.
+  struct Occupancy {
+    std::vector<Eigen::Vector3f> centres;  // the listed cells' centres, while building
+    Eigen::Vector3f origin = Eigen::Vector3f::Zero();
+    Eigen::Vector3i dims = Eigen::Vector3i::Zero();
+    float cell_m = kNearCellM;
+    std::vector<std::uint64_t> bits;
+
+    template <class Cells>
+    void build(const Cells&) {
+      if (centres.empty()) return;
+      Eigen::AlignedBox3f box;
+      for (const Eigen::Vector3f& c : centres) box.extend(c);
+      origin = box.min() - Eigen::Vector3f::Constant(0.5f * kNearCellM);
+      const Eigen::Vector3f extent = box.max() - box.min() + Eigen::Vector3f::Constant(kNearCellM);
+      for (cell_m = kNearCellM;; cell_m *= 2.f) {
+        dims = (extent / cell_m).array().ceil().cast<int>().max(1).matrix();
+        if (static_cast<double>(dims.x()) * dims.y() * dims.z() <= double(1 << 24)) break;
+      }
+      bits.assign((static_cast<std::size_t>(dims.x()) * dims.y() * dims.z() + 63) / 64, 0);
+      for (const Eigen::Vector3f& c : centres) {
+        const std::size_t i = index(c);
+        bits[i / 64] |= std::uint64_t{1} << (i % 64);
+      }
+      centres.clear();
+      centres.shrink_to_fit();
+    }
+    std::size_t index(const Eigen::Vector3f& p) const {
+      const Eigen::Vector3i c = ((p - origin) / cell_m).array().floor().cast<int>().matrix();
+      return (static_cast<std::size_t>(c.z()) * dims.y() + c.y()) * dims.x() + c.x();
+    }
+    bool mayHold(const Eigen::Vector3f& p) const {
+      const Eigen::Vector3f q = (p - origin) / cell_m;  // NaN fails every comparison below
+      if (!(q.x() >= 0.f && q.y() >= 0.f && q.z() >= 0.f && q.x() < dims.x() && q.y() < dims.y() && q.z() < dims.z()))
+        return false;
+      const std::size_t i = index(p);
+      return (bits[i / 64] >> (i % 64)) & 1u;
+    }
+  };
+
   std::unique_ptr<LightSampler> base_;
+  Occupancy occupancy_;
+  // The scale a near cluster's importance is weighed against: the importance of all the
+  // scene's emitters from a point inside their bounding sphere, total power / radius^2.
+  float scale_ = 0.f;
   std::vector<Sphere> spheres_;                // per cluster
+  std::vector<Cone> cones_;                    // per cluster
   std::vector<std::pair<int, int>> ranges_;    // per cluster: its range of order_
   std::vector<int> order_;                     // triangle indices, each cluster's contiguous
   std::vector<float> cumulative_;              // per position in order_: running share in its cluster

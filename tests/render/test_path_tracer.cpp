@@ -795,56 +795,64 @@ TEST(PathTracer, SamplersAgreeAndPmfsMatchPicks) {
   for (int t = 0; t < 80; ++t) EXPECT_NEAR(power->pmf(p, n, t), triangles[static_cast<std::size_t>(t)].power / total_power, 1e-6);
 }
 
-TEST(PathTracer, NearFieldSelectionPicksTheLampBesideAPointAtLeastHalfTheTime) {
-  // Emitter 0: one 4 cm lamp (two triangles) 20 cm above the point. Emitter 1: a 1 m panel of
-  // 100x the radiance 6 m away. Power sampling gives the lamp 1 / 62 501 of the picks, the
-  // hierarchy (importance ~ power / distance^2) about 1.4 %; yet the lamp gives the point most
-  // of its light. Near-field selection picks among the clusters within 1 m (the lamp alone) half
-  // the time, the base sampler otherwise.
+TEST(PathTracer, NearFieldSelectionFavoursALampBesideThePointAndNotOneSeenEdgeOn) {
+  // Emitter 0: a 4 cm lamp (two triangles, in the plane z = 0.2, facing +-z). Emitter 1: a 1 m
+  // panel of the same radiance 20 m away, 625x the lamp's power. From the point 20 cm below the
+  // lamp, the lamp gives 16x the panel's irradiance (radiance x solid angle: 10^4 x 0.04 against
+  // 10^4 / 400); the power sampler gives it 1 pick in 626.
   solo::RenderScene s;
-  s.emitters.push_back({Eigen::Vector3f::Constant(100.f), false, 1});
-  s.emitters.push_back({Eigen::Vector3f::Constant(10000.f), false, 2});
+  s.emitters.push_back({Eigen::Vector3f::Constant(1e4f), false, 1});
+  s.emitters.push_back({Eigen::Vector3f::Constant(1e4f), false, 2});
   addQuad(s, {-0.02f, -0.02f, 0.2f}, {0.04f, 0, 0}, {0, 0.04f, 0}, 0.f, 0);
-  addQuad(s, {-0.5f, -0.5f, 6.f}, {1.f, 0, 0}, {0, 1.f, 0}, 0.f, 1);
+  addQuad(s, {-0.5f, -0.5f, 20.f}, {1.f, 0, 0}, {0, 1.f, 0}, 0.f, 1);
   const auto triangles = solo::collectEmissiveTriangles(s);
   ASSERT_EQ(triangles.size(), 4u);
   const Eigen::Vector3f p(0, 0, 0), n(0, 0, 1);
-  const Eigen::Vector3f far_p(0, 0, 3), far_n(0, 0, 1);  // 2.8 m from the lamp, 3 m from the panel
-  for (auto kind : {solo::LightSamplerKind::Power, solo::LightSamplerKind::Hierarchy}) {
-    const auto base = solo::makeLightSampler(kind, triangles, false);
-    const auto mixed = solo::makeLightSampler(kind, triangles, true);
-    const double base_lamp = base->pmf(p, n, 0) + base->pmf(p, n, 1);
-    EXPECT_LT(base_lamp, 0.02) << solo::lightSamplerName(kind);
-    for (int t = 0; t < 4; ++t) {
-      // The lamp's two equal triangles share its half; the base sampler has the other half.
-      const double near_pmf = t < 2 ? 0.5 : 0.0;
-      EXPECT_NEAR(mixed->pmf(p, n, t), 0.5 * near_pmf + 0.5 * base->pmf(p, n, t), 1e-6) << t;
-      // Beyond 1 m of every cluster the base sampler alone decides.
-      EXPECT_FLOAT_EQ(mixed->pmf(far_p, far_n, t), base->pmf(far_p, far_n, t)) << t;
-    }
-    int lamp = 0;
-    for (int i = 0; i < 1000; ++i) {
-      float pmf = 0;
-      const int t = mixed->pick(p, n, (i + 0.5f) / 1000, &pmf);
-      ASSERT_GE(t, 0);
-      EXPECT_NEAR(pmf, mixed->pmf(p, n, t), 1e-6f);
-      lamp += t < 2;
-    }
-    EXPECT_NEAR(lamp / 1000.0, 0.5 + 0.5 * base_lamp, 2e-3) << solo::lightSamplerName(kind);
-    // A point on the lamp itself, and one beside it at 1 km: finite, normalised pmfs.
-    for (const Eigen::Vector3f& q : {Eigen::Vector3f(0.f, 0.f, 0.2f), Eigen::Vector3f(1000.f, 0.f, 0.2f)}) {
-      double total = 0;
-      for (int t = 0; t < 4; ++t) total += mixed->pmf(q, n, t);
-      EXPECT_TRUE(std::isfinite(total));
-      EXPECT_NEAR(total, 1.0, 1e-5);
-    }
-    // A NaN point (a degenerate hit) lands in no cell: the base sampler's answer, finite.
-    const Eigen::Vector3f nan_p = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
-    float nan_pmf = 0;
-    const int t = mixed->pick(nan_p, n, 0.3f, &nan_pmf);
-    EXPECT_EQ(t, base->pick(nan_p, n, 0.3f, &nan_pmf));
-    for (int k = 0; k < 4; ++k) EXPECT_EQ(mixed->pmf(nan_p, n, k), base->pmf(nan_p, n, k));
+  const auto base = solo::makeLightSampler(solo::LightSamplerKind::Power, triangles, false);
+  const auto mixed = solo::makeLightSampler(solo::LightSamplerKind::Power, triangles, true);
+  const auto lampPmf = [&](const solo::LightSampler& sampler, const Eigen::Vector3f& q, const Eigen::Vector3f& m) {
+    return sampler.pmf(q, m, 0) + sampler.pmf(q, m, 1);
+  };
+  EXPECT_NEAR(lampPmf(*base, p, n), 1.0 / 626, 1e-5);
+  EXPECT_GT(lampPmf(*mixed, p, n), 100 * lampPmf(*base, p, n));
+  EXPECT_LE(lampPmf(*mixed, p, n), 0.5 + 0.5 * lampPmf(*base, p, n));  // the near field's share is at most 1/2
+  // A pick reports its own pmf, the pmfs sum to 1 and the picks land in proportion.
+  int lamp = 0;
+  const int draws = 100000;
+  for (int i = 0; i < draws; ++i) {
+    float pmf = 0;
+    const int t = mixed->pick(p, n, (i + 0.5f) / draws, &pmf);
+    ASSERT_GE(t, 0);
+    EXPECT_NEAR(pmf, mixed->pmf(p, n, t), 1e-6f);
+    lamp += t < 2;
   }
+  EXPECT_NEAR(lamp / double(draws), lampPmf(*mixed, p, n), 1e-3);
+  double total = 0;
+  for (int t = 0; t < 4; ++t) total += mixed->pmf(p, n, t);
+  EXPECT_NEAR(total, 1.0, 1e-6);
+
+  // The same 0.4 m from the lamp: straight below it, the lamp keeps a large share; beside it in
+  // its own plane (a wall beside a window), the lamp is seen edge-on and gets next to none.
+  const Eigen::Vector3f below(0, 0, -0.2f), beside(0.4f, 0, 0.2f), wall_n(0, 0, 1);
+  EXPECT_GT(lampPmf(*mixed, below, n), 0.1);
+  EXPECT_LT(lampPmf(*mixed, beside, wall_n), 0.01);
+  EXPECT_GE(lampPmf(*mixed, beside, wall_n), lampPmf(*base, beside, wall_n) * 0.99);
+
+  // Beyond 0.5 m of every cluster the base sampler alone decides.
+  const Eigen::Vector3f far_p(0, 0, 3);
+  for (int t = 0; t < 4; ++t) EXPECT_FLOAT_EQ(mixed->pmf(far_p, n, t), base->pmf(far_p, n, t)) << t;
+  // On the lamp itself and beside it at 1 km: finite, normalised pmfs. A NaN point (a
+  // degenerate hit) lands in no cell: the base sampler's answer.
+  for (const Eigen::Vector3f& q : {Eigen::Vector3f(0.f, 0.f, 0.2f), Eigen::Vector3f(1000.f, 0.f, 0.2f)}) {
+    double sum = 0;
+    for (int t = 0; t < 4; ++t) sum += mixed->pmf(q, n, t);
+    EXPECT_TRUE(std::isfinite(sum));
+    EXPECT_NEAR(sum, 1.0, 1e-5);
+  }
+  const Eigen::Vector3f nan_p = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  float nan_pmf = 0, base_nan_pmf = 0;
+  EXPECT_EQ(mixed->pick(nan_p, n, 0.3f, &nan_pmf), base->pick(nan_p, n, 0.3f, &base_nan_pmf));
+  EXPECT_EQ(nan_pmf, base_nan_pmf);
 }
 
 TEST(PathTracer, TheHierarchyPicksWithinACompactEmitterByPowerAndAlongALargeOneByDistance) {
