@@ -14,14 +14,14 @@
 # equal-sample runs against the references already in WORK_DIR, e.g. after a change to the
 # sampler; Cycles' renders are kept). A kind whose reference or Cycles log exists in WORK_DIR is
 # not rendered again. SOLO_RELATIVE_ERROR and SOLO_ADAPTIVE_RULE=threshold reach the exporter's
-# default adaptive run. About an hour of CPU time on 2 cores.
+# default adaptive run. About 20 minutes on 2 cores.
 #
 #   ERROR_SOURCES=1 tests/benchmarks/blender/run_scene_kinds.sh [WORK_DIR]
 #
 # instead splits solo's error on each kind by its source (export_blender_scene error-sources:
 # direct light, light scattered twice or more, the worst 0.1 % of the pixels) and prints that
 # table; no Cycles, no Blender. Environment: ERROR_REFERENCE_SPP (512 per component),
-# ERROR_SPP (16), ERROR_SEEDS (8), ADAPTIVE_SEEDS (2). About 20 minutes on 2 cores.
+# ERROR_SPP (16), ERROR_SEEDS (8), ADAPTIVE_SEEDS (2). About 15 minutes on 2 cores.
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "$0")/../../.." && pwd)
