@@ -152,7 +152,7 @@ void addNightRenderFlags(CLI::App* night_cmd, NightOptions& night) {
       ->transform(CLI::CheckedTransformer(kLightSamplers))
       ->default_str(lightSamplerName(night.conversion.render.light_sampler));
   night_cmd->add_flag("--near-field-lights,!--no-near-field-lights", night.conversion.render.near_field_lights,
-                      "Mix the light sampler with near-field selection among emitters within 1 m (default on; docs/rendering.md)");
+                      "Mix the light sampler with near-field selection among emitters within 0.5 m (presets: off; docs/rendering.md)");
   night_cmd->add_option("--sampler", night.conversion.render.sampler,
                         "Per-sample numbers: sobol (scrambled Sobol points) or independent (PCG32)")
       ->transform(CLI::CheckedTransformer(kSamplers))

@@ -307,21 +307,21 @@ class HierarchySampler final : public LightSampler {
   std::vector<int> leaf_of_triangle_;
 };
 
-
 // Near-field selection, over any sampler. A light sampler's estimate of what a cluster gives a
 // shading point floors the squared distance by the cluster's squared radius (the hierarchy) or
 // ignores distance (power): right for power spread through a wide node, wrong for a point a few
 // centimetres from one small lamp. There the hierarchy gave a car light 0.36 m from a bounce
-// vertex a probability of 1e-5 (street-s2-wide-sky), and the rare bounce that found the light
+// vertex a probability of 8e-6 (street-s2-wide-sky), and the rare bounce that found the light
 // carried 9 000 times its pixel's value. So a shading point with emitter clusters within
-// kNearRadiusM picks, with probability kNearShare, among those clusters by importance(), then a
-// triangle in the cluster by power; otherwise it asks the base sampler. Its pmf is the
-// mixture's, so the estimate stays unbiased. The clusters near a point are the ones listed for
-// its cell of a grid of kNearCellM, built with every cluster whose sphere comes within
-// kNearRadiusM of the cell.
+// kNearRadiusM weighs each by importance() times a bound on the emitter's cosine toward it,
+// picks among them with probability kNearShare x T / (T + K) (T their summed weight, K the
+// scene's total power over its squared radius), then a triangle in the cluster by power;
+// otherwise it asks the base sampler. Its pmf is the mixture's, so the estimate stays unbiased.
+// The clusters near a point are the ones listed for its cell of a grid of kNearCellM, built
+// with every cluster whose sphere comes within kNearRadiusM of the cell.
 constexpr float kNearRadiusM = 0.5f;
 constexpr float kNearCellM = 0.5f;
-constexpr float kNearShare = 0.5f;
+constexpr float kNearShare = 0.5f;  // the largest probability of the near-field strategy
 // Clusters: one emitter's triangles whose centroids share a cell of this size.
 constexpr float kNearClusterCellM = 0.35f;
 // Triangles wider than this are left to the base sampler: they would fill many cells, and a

@@ -48,7 +48,8 @@ class LightSampler {
 };
 
 /// The sampler of `kind`; with `near_field`, mixed with near-field selection: a shading point
-/// within 1 m of emitting triangles picks among those by importance half of the time.
+/// within 0.5 m of emitting triangles picks among their clusters by distance and orientation
+/// with a probability of up to 1/2 that grows with their importance (docs/rendering.md).
 std::unique_ptr<LightSampler> makeLightSampler(LightSamplerKind kind, const std::vector<EmissiveTriangle>& triangles,
                                                bool near_field = true);
 

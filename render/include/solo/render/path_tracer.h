@@ -144,8 +144,8 @@ struct PathTracerOptions {
   int russian_roulette_after = 3;  ///< bounces before roulette starts
   LightSamplerKind light_sampler = LightSamplerKind::Hierarchy;
   /// light_sampler mixed with near-field selection (light_sampler.h): a shading point within
-  /// 1 m of emitting triangles picks among them by distance and orientation half of the time.
-  /// Unbiased; false: light_sampler alone.
+  /// 0.5 m of emitting triangles picks among them by distance and orientation with a
+  /// probability of up to 1/2. Unbiased; false: light_sampler alone (solo night's presets).
   bool near_field_lights = true;
   /// Where the per-sample random numbers come from (sampler.h): scrambled Sobol points,
   /// stratified per pixel and dimension, or independent PCG32 values.
