@@ -131,6 +131,15 @@ float importance(const Sphere& node, const Eigen::Vector3f& p, const Eigen::Vect
   return node.power * cosine_bound / std::max(distance2, std::max(node.radius2, 1e-8f));
 }
 
+// The entry of order[first, first + count) whose running share (cumulative, same positions,
+// the last 1) first exceeds u in [0, 1): a pick in proportion to the shares.
+int pickByRunningShare(const std::vector<float>& cumulative, const std::vector<int>& order, int first, int count,
+                       float u) {
+  const auto begin = cumulative.begin() + first, end = begin + count;
+  const auto at = std::min(std::upper_bound(begin, end, u), end - 1);
+  return order[static_cast<std::size_t>(at - cumulative.begin())];
+}
+
 // Leaves of the hierarchy: the triangles of one emitter within a bounding sphere of at most this
 // radius, picked among themselves in proportion to power. Seen from farther than a few radii, a
 // cluster's triangles differ little in distance and orientation; a tree down to single
@@ -232,9 +241,7 @@ class HierarchySampler final : public LightSampler {
 
   // The leaf's triangle whose cumulative share first exceeds u (u in [0, 1)).
   int pickInLeaf(const Leaf& leaf, float u) const {
-    const auto begin = cumulative_.begin() + leaf.first, end = begin + leaf.count;
-    const auto at = std::min(std::upper_bound(begin, end, u), end - 1);
-    return order_[static_cast<std::size_t>(at - cumulative_.begin())];
+    return pickByRunningShare(cumulative_, order_, leaf.first, leaf.count, u);
   }
 
   // Whether order_[begin, end) makes a leaf: one triangle, or one emitter's within kLeafRadiusM.
@@ -455,9 +462,7 @@ class NearFieldSampler final : public LightSampler {
 
   int pickInCluster(int cluster, float u) const {
     const auto [first, count] = ranges_[static_cast<std::size_t>(cluster)];
-    const auto begin = cumulative_.begin() + first, end = begin + count;
-    const auto at = std::min(std::upper_bound(begin, end, u), end - 1);
-    return order_[static_cast<std::size_t>(at - cumulative_.begin())];
+    return pickByRunningShare(cumulative_, order_, first, count, u);
   }
 
   static std::int64_t cellKey(const Eigen::Vector3f& p) { return cellKey(p, kNearCellM); }
@@ -553,7 +558,7 @@ class NearFieldSampler final : public LightSampler {
             }
           }
     }
-    occupancy_.build(cells);
+    occupancy_.build();
     cells_.reserve(cells.size());
     for (auto& [key, list] : cells) {
       if (static_cast<int>(list.size()) > kMaxNearClusters) {
@@ -577,8 +582,8 @@ class NearFieldSampler final : public LightSampler {
     float cell_m = kNearCellM;
     std::vector<std::uint64_t> bits;
 
-    template <class Cells>
-    void build(const Cells&) {
+    // Sets the bits of the cells whose centres were gathered in `centres`, then drops them.
+    void build() {
       if (centres.empty()) return;
       Eigen::AlignedBox3f box;
       for (const Eigen::Vector3f& c : centres) box.extend(c);
