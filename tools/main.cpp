@@ -175,11 +175,13 @@ void addNightRenderFlags(CLI::App* night_cmd, NightOptions& night) {
                         "Clamp a sample's indirect luminance to this, cd/m2 (biased, removes fireflies); 0 = off")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
   night_cmd->add_option("--mesh-downsample", night.conversion.mesh_downsample,
-                        "Make the mesh from the depth downsampled by this factor (preset)")
-      ->capture_default_str()->check(CLI::Range(1, 8));
+                        "Make the mesh from the depth downsampled by this factor; 0 = auto: 2 above 1 megapixel "
+                        "(preset)")
+      ->capture_default_str()->check(CLI::Range(0, 8));
   night_cmd->add_option("--render-downsample", night.conversion.render_downsample,
-                        "Render at the image size divided by this factor, then upsample (preset)")
-      ->capture_default_str()->check(CLI::Range(1, 8));
+                        "Render at the image size divided by this factor, then upsample with the image's texture; "
+                        "0 = auto: 2 above 1 megapixel (preset)")
+      ->capture_default_str()->check(CLI::Range(0, 8));
   night_cmd->add_flag("--denoise,!--no-denoise", night.conversion.denoise.enabled,
                       "Edge-aware filter of the render's Monte Carlo noise, guided by its AOVs (preset)");
   night_cmd->add_option("--firefly-sigma", night.conversion.denoise.firefly_sigma,

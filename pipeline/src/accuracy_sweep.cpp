@@ -633,12 +633,22 @@ struct AccuracySweep::Impl {
     return ref;
   }
 
-  /// The presets of `solo night` (draft, default, final), then default with one stage off.
+  /// The presets of `solo night` (draft, default, final), then default at the image's full size
+  /// where it reduces it, and default with one stage off.
   std::vector<PipelineSetting> endToEndSettings() const {
     std::vector<PipelineSetting> settings;
     for (const std::string& preset : nightPresetNames())
       if (!o.quick || preset != "final") settings.push_back(presetSetting(preset));
     const PipelineSetting standard = presetSetting("default");
+    // Above a megapixel the default meshes and renders at a reduced size: the full size's row
+    // is what that costs.
+    if (resolveDownsample(standard.night.render_downsample, scene.width(), scene.height()) > 1 ||
+        resolveDownsample(standard.night.mesh_downsample, scene.width(), scene.height()) > 1) {
+      PipelineSetting full_size = standard;
+      full_size.name = "default_full_size";
+      full_size.night.mesh_downsample = full_size.night.render_downsample = 1;
+      settings.push_back(full_size);
+    }
     if (!o.quick) {
       PipelineSetting no_refine = standard;
       no_refine.name = "default_no_refine";
@@ -697,8 +707,8 @@ struct AccuracySweep::Impl {
                 integer(n.mesh.hole_filling.max_fair_vertices), boolean(n.mesh.close_solids),
                 lightSamplerName(n.render.light_sampler), integer(n.render.min_samples),
                 integer(n.render.max_samples), num(n.render.relative_error), boolean(n.noise_target),
-                num(n.render.noise_factor), integer(n.mesh_downsample),
-                integer(n.render_downsample), seconds(total_s), seconds(o.input_seconds), seconds(time_s.refine),
+                num(n.render.noise_factor), integer(resolveDownsample(n.mesh_downsample, scene.width(), scene.height())),
+                integer(resolveDownsample(n.render_downsample, scene.width(), scene.height())), seconds(total_s), seconds(o.input_seconds), seconds(time_s.refine),
                 seconds(time_s.mesh), seconds(time_s.lights), seconds(time_s.scene), seconds(time_s.render),
                 seconds(time_s.post), num(metricDouble(r.rendered.report, "samples_per_pixel_mean")),
                 num(dm.abs_rel), num(e.relative_rmse), num(e.noise_corrected), num(e.relative_rmse_unclipped),

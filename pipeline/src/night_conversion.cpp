@@ -46,26 +46,6 @@ NightConversionOptions::NightConversionOptions() {
 
 namespace {
 
-// A render made at a fraction of the image size, upsampled to it: radiance, albedo and normal
-// bilinear, first-hit depth and light ids nearest (they are not averageable across edges).
-RenderOutput upsampleRender(RenderOutput r, cv::Size size) {
-  const auto resize = [&](cv::Mat& m, int interpolation) {
-    if (m.empty() || m.size() == size) return;
-    cv::Mat out;
-    cv::resize(m, out, size, 0, 0, interpolation);
-    m = out;
-  };
-  resize(r.radiance, cv::INTER_LINEAR);
-  resize(r.albedo, cv::INTER_LINEAR);
-  resize(r.normal, cv::INTER_LINEAR);
-  resize(r.depth_m, cv::INTER_NEAREST);
-  resize(r.light_id, cv::INTER_NEAREST);
-  resize(r.emitter_coverage, cv::INTER_NEAREST);
-  resize(r.samples, cv::INTER_NEAREST);
-  resize(r.std_error, cv::INTER_NEAREST);
-  return r;
-}
-
 /// What the night camera chose; `preview` is the metering preview's size (empty: white given).
 std::string exposureNote(const NightCameraExposure& e, cv::Size preview) {
   char note[400];
@@ -157,18 +137,24 @@ void buildInPlace(DepthMesh& mesh, const Make& make) {
   }
 }
 
+// A downsample option as the user gave it: the factor, or "0 (auto, at most 1 MP)".
+std::string downsampleSetting(int requested) {
+  return requested == kAutoDownsample ? "0 (auto: the image is above 1 megapixel)" : std::to_string(requested);
+}
+
 void runMeshStage(const Scene& scene, const NightConversionOptions& o, NightConversionResult& r) {
   const DepthRefinementResult& refined = r.refined;
   StageReport mesh_report;
-  const cv::Mat mesh_depth_m =
-      o.mesh_downsample > 1 ? downsampleDepth(refined.depth_m, o.mesh_downsample) : refined.depth_m;
+  const int factor = resolveDownsample(o.mesh_downsample, refined.depth_m.cols, refined.depth_m.rows);
+  const cv::Mat mesh_depth_m = factor > 1 ? downsampleDepth(refined.depth_m, factor) : refined.depth_m;
   buildInPlace(r.mesh, [&] {
     return meshFromScene(mesh_depth_m, scene.camera, refined.maps.instances, refined.uncertain, o.mesh, mesh_report);
   });
-  if (o.mesh_downsample > 1) {
-    char note[160];
-    std::snprintf(note, sizeof note, "mesh made from the refined depth downsampled %dx (%dx%d): --mesh-downsample",
-                  o.mesh_downsample, mesh_depth_m.cols, mesh_depth_m.rows);
+  mesh_report.add("mesh_downsample", factor);
+  if (factor > 1) {
+    char note[200];
+    std::snprintf(note, sizeof note, "mesh made from the refined depth downsampled %dx (%dx%d): --mesh-downsample %s",
+                  factor, mesh_depth_m.cols, mesh_depth_m.rows, downsampleSetting(o.mesh_downsample).c_str());
     mesh_report.notes.push_back(note);
   }
   if (!o.mesh.evaluate)
@@ -251,18 +237,34 @@ MeteredCamera runRenderStage(const NightScene& night, const PinholeCamera& rende
 
 // denoise: the render's Monte Carlo noise, edge-aware, at the render's own size (before any
 // upsampling: cheaper, and the upsampled pixels would not be independent) (render_denoise.h);
-// then the upsampling to the image size.
-void runDenoiseStage(const PinholeCamera& image_camera, const PinholeCamera& render_camera,
-                     const NightConversionOptions& o, NightConversionResult& r) {
+// then the upsampling to the image size with the image's texture (render_upsample.h).
+void runDenoiseStage(const NightScene& night, const PinholeCamera& render_camera, const NightConversionOptions& o,
+                     NightConversionResult& r) {
   StageReport& render_report = r.stages.back();
   StageReport denoise_report = denoiseRender(r.rendered, render_camera, o.denoise);
   if (!o.denoise.enabled) denoise_report.skip_reason = "render denoising switched off (--no-denoise)";
-  if (o.render_downsample > 1) {
-    r.rendered = upsampleRender(std::move(r.rendered), cv::Size(image_camera.width, image_camera.height));
-    char note[160];
-    std::snprintf(note, sizeof note, "rendered at %dx%d and upsampled to %dx%d (bilinear): --render-downsample %d",
+  const PinholeCamera& image_camera = night.scene.camera;
+  const cv::Size image_size(image_camera.width, image_camera.height);
+  if (r.rendered.radiance.size() != image_size) {
+    const Stopwatch clock;
+    UpsampleGuides guides;
+    if (r.refined.depth_m.size() == image_size && night.reflectance.size() == image_size) {
+      guides.reflectance = night.reflectance;
+      guides.depth_m = r.refined.depth_m;
+      const std::vector<std::uint8_t>& surface_pixels = night.scene.surface_pixels;
+      if (surface_pixels.size() == static_cast<std::size_t>(image_size.area()))
+        guides.surface = cv::Mat(image_size, CV_8U, const_cast<std::uint8_t*>(surface_pixels.data()));
+      if (night.light_id.size() == image_size) guides.light_id = night.light_id;
+    }
+    const bool texture = !guides.reflectance.empty();
+    r.rendered = upsampleRender(r.rendered, image_size, guides, o.upsample, &render_report);
+    render_report.add("upsample_seconds", clock.seconds(), "s");
+    render_report.seconds += clock.seconds();
+    char note[240];
+    std::snprintf(note, sizeof note, "rendered at %dx%d and upsampled to %dx%d (%s): --render-downsample %s",
                   render_camera.width, render_camera.height, image_camera.width, image_camera.height,
-                  o.render_downsample);
+                  texture ? "the image's texture times the render's irradiance" : "bilinear",
+                  downsampleSetting(o.render_downsample).c_str());
     render_report.notes.push_back(note);
   }
   r.stages.push_back(std::move(denoise_report));
@@ -306,10 +308,18 @@ void requireInRange(double value, double low, double high, const char* setting) 
 
 }  // namespace
 
+int resolveDownsample(int requested, int width, int height) {
+  if (requested != kAutoDownsample) return requested;
+  int factor = 1;
+  while (factor < 8 && static_cast<double>(width / factor) * static_cast<double>(height / factor) > kAutoDownsampleMaxPixels)
+    ++factor;
+  return factor;
+}
+
 void validateNightConversionOptions(const NightConversionOptions& o) {
   requireInRange(o.min_depth_share, 0, 1, "min_depth_share");
-  requireInRange(o.mesh_downsample, 1, 8, "--mesh-downsample");
-  requireInRange(o.render_downsample, 1, 8, "--render-downsample");
+  requireInRange(o.mesh_downsample, kAutoDownsample, 8, "--mesh-downsample");
+  requireInRange(o.render_downsample, kAutoDownsample, 8, "--render-downsample");
   requireInRange(o.render.min_samples, 1, 1 << 20, "--min-spp");
   requireInRange(o.render.max_samples, 1, 1 << 20, "--max-spp");
   if (o.render.min_samples > o.render.max_samples)
@@ -396,10 +406,11 @@ NightConversionResult runNightConversion(const Scene& scene, const NightConversi
   PostProcessOptions post = o.post;
   post.noise_options.seed = o.seed;
   const PinholeCamera image_camera = night.scene.camera;
-  const PinholeCamera render_camera = renderCamera(image_camera, o.render_downsample);
+  const PinholeCamera render_camera =
+      renderCamera(image_camera, resolveDownsample(o.render_downsample, image_camera.width, image_camera.height));
   const MeteredCamera metered = runRenderStage(night, render_camera, o, callbacks, post, r);
   announce(callbacks, "denoise");
-  runDenoiseStage(image_camera, render_camera, o, r);
+  runDenoiseStage(night, render_camera, o, r);
   announce(callbacks, "post");
   runPostStage(metered, o, post, r);
   return r;

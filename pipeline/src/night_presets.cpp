@@ -33,7 +33,7 @@ struct PresetValues {
 //                                spp     rel.err sampler  opt   iter  tol   eval   glare noise  n.target factor
 //                                roulette bounces mesh/ render/ denoise
 constexpr PresetValues kDraft = {1, 2, 0.3, LightSamplerKind::Power, true, 3, 1e-6, false, true, true, false, 1, 0.3, 12, 2, 2, true};
-constexpr PresetValues kDefault = {2, 4, 0.1, LightSamplerKind::Power, true, 10, 1e-9, false, true, true, true, 1, 0.3, 12, 1, 1, true};
+constexpr PresetValues kDefault = {2, 4, 0.1, LightSamplerKind::Power, true, 10, 1e-9, false, true, true, true, 1, 0.3, 12, kAutoDownsample, kAutoDownsample, true};
 constexpr PresetValues kFinal = {8, 64, 0.03, LightSamplerKind::Hierarchy, true, 10, 1e-9, true, true, true, true, 0.5, 0.3, 12, 1, 1, true};
 
 struct Knob {

@@ -44,7 +44,7 @@ struct NightSceneBuilder {
   NightSceneBuilder(const DepthMesh& depth_mesh_, const cv::Mat& roughness_, const cv::Mat& normals_,
                     const LightRecord& record_, const NightSceneOptions& options_, NightScene& out)
       : depth_mesh(depth_mesh_), roughness(roughness_), normals(normals_), record(record_), options(options_),
-        scene(out.scene), report(out.report) {}
+        scene(out.scene), report(out.report), reflectance_xyz(out.reflectance), light_pixels(out.light_id) {}
 
   const DepthMesh& depth_mesh;
   const cv::Mat& roughness;
@@ -53,6 +53,8 @@ struct NightSceneBuilder {
   const NightSceneOptions& options;
   RenderScene& scene;
   StageReport& report;
+  cv::Mat& reflectance_xyz;  // NightScene::reflectance
+  cv::Mat& light_pixels;     // NightScene::light_id
 
   int width = 0, height = 0;  // the maps' and the render's resolution
   cv::Mat reflectance_map;
@@ -92,6 +94,7 @@ struct NightSceneBuilder {
   double addProxy(std::size_t i);
   void addEmitters();
   void assignFaceEmitters();
+  void markLightPixels();
   void addHeadlightsAndSky();
   void writeReport();
 };
@@ -158,6 +161,18 @@ void NightSceneBuilder::prepareReflectance(const cv::Mat& albedo, const cv::Mat&
   }
   CV_Assert(reflectance_map.empty() || reflectance_map.size() == cv::Size(width, height));
   CV_Assert(roughness.empty() || roughness.size() == cv::Size(width, height));
+  if (reflectance_map.empty()) return;
+  // Per pixel, what a face made from that pixel reflects (addMeshFaces).
+  reflectance_xyz.create(height, width, CV_32FC3);
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y)
+      for (int x = 0; x < width; ++x) {
+        const cv::Vec3f a = reflectance_map.at<cv::Vec3f>(y, x);
+        const Eigen::Vector3f xyz =
+            reflectanceFromLinearSrgb(Eigen::Vector3f(a[0], a[1], a[2]).cwiseMax(0.f).cwiseMin(1.f));
+        reflectance_xyz.at<cv::Vec3f>(y, x) = {xyz.x(), xyz.y(), xyz.z()};
+      }
+  });
 }
 
 // The light index per pixel, and which lights are on with a usable strength. A flux becomes a
@@ -538,6 +553,18 @@ void NightSceneBuilder::assignFaceEmitters() {
   }
 }
 
+// Per pixel, the light-map id of the emitting light it shows (NightScene::light_id).
+void NightSceneBuilder::markLightPixels() {
+  light_pixels = cv::Mat::zeros(height, width, CV_32S);
+  if (!lights_match) return;
+  for (std::size_t i = 0; i < record.tree.lights.size(); ++i) {
+    if (emitter_of_light[i] < 0) continue;
+    const int id = scene.emitters[static_cast<std::size_t>(emitter_of_light[i])].light_id;
+    for (const PixelRun& run : record.tree.lights[i].runs)
+      for (int c = run.first_col; c <= run.last_col; ++c) light_pixels.at<int>(run.row, c) = id;
+  }
+}
+
 // The ego car's headlights and the night sky, as the options ask.
 void NightSceneBuilder::addHeadlightsAndSky() {
   if (options.headlights) {
@@ -612,6 +639,7 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   builder.keepFacesAtLightDepth();
   builder.addEmitters();
   builder.assignFaceEmitters();
+  builder.markLightPixels();
   builder.addHeadlightsAndSky();
   builder.writeReport();
   out.report.seconds = clock.seconds();

@@ -250,6 +250,7 @@ struct Path {
   int bounce = 0;
   bool alive = true;
   bool sees_emitter = false;  // the camera ray hit an emitting face
+  Eigen::Vector3f camera_albedo = Eigen::Vector3f::Zero();  // reflectance at the camera ray's hit
   bool camera_missed = false;  // the camera ray hit nothing
   SlotHit hit;
 };
@@ -441,6 +442,7 @@ class WaveTracer {
   // The camera ray's hit: whether it sees an emitter, and the AOVs when the path fills them.
   void recordCameraHit(Path& path, const SurfaceBsdf& bsdf, int emitter_index) const {
     path.sees_emitter = emitter_index >= 0;
+    path.camera_albedo = bsdf.albedo();
     if (!path.first) return;
     path.first->albedo = bsdf.albedo();
     path.first->normal = path.normal;
@@ -776,6 +778,7 @@ RenderOutput allocateOutput(int width, int height) {
   RenderOutput out;
   out.radiance.create(height, width, CV_32FC3);
   out.albedo.create(height, width, CV_32FC3);
+  out.mean_albedo.create(height, width, CV_32FC3);
   out.normal.create(height, width, CV_32FC3);
   out.depth_m.create(height, width, CV_32F);
   out.light_id.create(height, width, CV_32S);
@@ -831,6 +834,7 @@ struct PixelState {
   Sampler rng;
   FirstHit first;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Vector3d albedo_sum = Eigen::Vector3d::Zero();  // of the counted samples' camera hits
   double mean_y = 0, m2_y = 0;  // running mean and squared deviations of Y (Welford)
   std::array<double, kMaxReplicates> replicate_sum{};
   std::array<int, kMaxReplicates> replicate_count{};
@@ -924,6 +928,9 @@ class TileRenderer {
       const int x = p.x, y = p.y;
       out.radiance.at<cv::Vec3f>(y, x) = {static_cast<float>(mean.x()), static_cast<float>(mean.y()), static_cast<float>(mean.z())};
       out.albedo.at<cv::Vec3f>(y, x) = {p.first.albedo.x(), p.first.albedo.y(), p.first.albedo.z()};
+      const Eigen::Vector3d mean_albedo = p.n > 0 ? Eigen::Vector3d(p.albedo_sum / p.n) : Eigen::Vector3d::Zero();
+      out.mean_albedo.at<cv::Vec3f>(y, x) = {static_cast<float>(mean_albedo.x()), static_cast<float>(mean_albedo.y()),
+                                             static_cast<float>(mean_albedo.z())};
       out.normal.at<cv::Vec3f>(y, x) = {p.first.normal.x(), p.first.normal.y(), p.first.normal.z()};
       out.depth_m.at<float>(y, x) = p.first.depth;
       out.light_id.at<int>(y, x) = p.first.light_id;
@@ -971,6 +978,7 @@ class TileRenderer {
       }
       ++p.n;
       p.sum += value.cast<double>();
+      p.albedo_sum += paths_[k].camera_albedo.cast<double>();
       const double delta = luminance(value) - p.mean_y;
       p.mean_y += delta / p.n;
       p.m2_y += delta * (luminance(value) - p.mean_y);
@@ -1172,6 +1180,7 @@ std::int64_t fillCrackPixels(RenderOutput& out, cv::Mat& unseen) {
     for (const auto& [to, from] : copies) {
       out.radiance.at<cv::Vec3f>(to) = out.radiance.at<cv::Vec3f>(from);
       out.albedo.at<cv::Vec3f>(to) = out.albedo.at<cv::Vec3f>(from);
+      out.mean_albedo.at<cv::Vec3f>(to) = out.mean_albedo.at<cv::Vec3f>(from);
       out.normal.at<cv::Vec3f>(to) = out.normal.at<cv::Vec3f>(from);
       out.depth_m.at<float>(to) = out.depth_m.at<float>(from);
       out.light_id.at<int>(to) = out.light_id.at<int>(from);

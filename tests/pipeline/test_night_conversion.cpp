@@ -62,7 +62,7 @@ TEST(NightConversionOptions, ASettingOutOfRangeIsNamedBeforeAnyWork) {
   };
   EXPECT_EQ(problem(NightConversionOptions{}), "");
   NightConversionOptions o;
-  o.mesh_downsample = 0;
+  o.mesh_downsample = 9;
   EXPECT_NE(problem(o).find("--mesh-downsample"), std::string::npos) << problem(o);
   o = {};
   o.render.noise_factor = std::numeric_limits<double>::quiet_NaN();
@@ -70,6 +70,46 @@ TEST(NightConversionOptions, ASettingOutOfRangeIsNamedBeforeAnyWork) {
   o = {};
   o.camera.max_iso = 6400;
   EXPECT_NE(problem(o).find("--camera-max-iso"), std::string::npos) << problem(o);
+}
+
+TEST(NightConversionOptions, AutoDownsampleHalvesImagesAboveOneMegapixel) {
+  EXPECT_EQ(solo::resolveDownsample(solo::kAutoDownsample, 960, 540), 1);
+  EXPECT_EQ(solo::resolveDownsample(solo::kAutoDownsample, 1280, 720), 1);  // 0.92 MP
+  EXPECT_EQ(solo::resolveDownsample(solo::kAutoDownsample, 1920, 1080), 2);
+  EXPECT_EQ(solo::resolveDownsample(solo::kAutoDownsample, 2048, 1024), 2);  // Cityscapes
+  EXPECT_EQ(solo::resolveDownsample(solo::kAutoDownsample, 3840, 2160), 3);
+  EXPECT_EQ(solo::resolveDownsample(solo::kAutoDownsample, 100000, 100000), 8);  // the largest factor
+  EXPECT_EQ(solo::resolveDownsample(3, 960, 540), 3);
+  EXPECT_EQ(solo::resolveDownsample(1, 1920, 1080), 1);
+}
+
+// A street of 1.02 megapixels at the default settings: the mesh and the render are made at half
+// the size, the night image and the render's radiance come out at the image's size, and almost
+// every surface pixel gets the image's texture back.
+TEST(NightConversion, AnImageAboveOneMegapixelIsMeshedAndRenderedAtHalfSize) {
+  TempDir dir;
+  ASSERT_EQ(solo::test::runSolo("synth --size 1280x800 --seed 2 -o \"" + (dir / "s").string() + "\"").exit_code, 0);
+  const solo::Scene scene = solo::loadScene(dir / "s" / "scene.json");
+  NightConversionOptions o;
+  o.render.min_samples = o.render.max_samples = 1;
+  solo::NightConversionCallbacks quiet;
+  quiet.render_progress = false;
+  const solo::NightConversionResult r = solo::runNightConversion(scene, o, quiet);
+  ASSERT_EQ(r.rendered.radiance.size(), cv::Size(1280, 800));
+  ASSERT_EQ(r.developed.encoded.size(), cv::Size(1280, 800));
+  EXPECT_TRUE(cv::checkRange(r.rendered.radiance));
+  const auto metric = [&](const std::string& stage, const std::string& name) {
+    for (const solo::StageReport& s : r.stages)
+      if (s.name == stage && s.find(name)) return std::get<std::int64_t>(*s.find(name));
+    return std::int64_t{-1};
+  };
+  EXPECT_EQ(metric("mesh", "mesh_downsample"), 2);
+  EXPECT_EQ(metric("render", "render_width"), 640);
+  EXPECT_EQ(metric("render", "render_height"), 400);
+  const std::int64_t textured = metric("render", "upsampled_textured_pixels");
+  const std::int64_t sky = metric("complete", "sky_pixels");
+  EXPECT_GT(textured, (1280 * 800 - sky) * 9 / 10) << "sky " << sky;
+  EXPECT_GT(metric("render", "upsampled_lamp_pixels"), 0);
 }
 
 TEST(NightConversion, TheEmbeddedSceneBecomesANightImageInsideTheRealNightRange) {

@@ -16,6 +16,7 @@
 #include <solo/render/night_scene.h>
 #include <solo/render/path_tracer.h>
 #include <solo/render/render_denoise.h>
+#include <solo/render/render_upsample.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -25,6 +26,12 @@
 #include <vector>
 
 namespace solo {
+
+/// A mesh_downsample or render_downsample that resolveDownsample chooses from the image size.
+inline constexpr int kAutoDownsample = 0;
+/// The image size above which kAutoDownsample downsamples: 1 megapixel (1280x720 stays whole,
+/// 1920x1080 and Cityscapes' 2048x1024 are halved, 3840x2160 divided by 3).
+inline constexpr double kAutoDownsampleMaxPixels = 1.0e6;
 
 /// Every setting of the night conversion, composed of the stage option structs. A
 /// default-constructed value is the `default` preset (night_presets.h); where the conversion
@@ -48,8 +55,8 @@ struct NightConversionOptions {
   DepthRefinementOptions refinement;
 
   /// The mesh is made from the refined depth downsampled by this factor (1: every pixel a
-  /// vertex; downsample_depth.h). 1 to 8.
-  int mesh_downsample = 1;
+  /// vertex; downsample_depth.h). 1 to 8, or kAutoDownsample (resolveDownsample).
+  int mesh_downsample = kAutoDownsample;
   DepthMeshCleanupOptions mesh;
 
   /// An (edited) light record to use instead of a new draw; none: draw from the light map.
@@ -71,10 +78,12 @@ struct NightConversionOptions {
   /// render.noise_factor x the sensor noise's sigma there (render.relative_error is then
   /// ignored); only with post.noise on. docs/rendering.md.
   bool noise_target = true;
-  /// The path tracer renders at the image size divided by this factor; the render is
-  /// upsampled (bilinear; light ids and depth nearest) after denoising. 1 to 8.
-  int render_downsample = 1;
+  /// The path tracer renders at the image size divided by this factor; after denoising the
+  /// render is upsampled with the image's texture (render_upsample.h). 1 to 8, or
+  /// kAutoDownsample (resolveDownsample).
+  int render_downsample = kAutoDownsample;
   RenderDenoiseOptions denoise;
+  RenderUpsampleOptions upsample;
 
   /// Luminance exposed to sensor white, cd/m^2; <= 0: the night camera meters the scene.
   double sensor_white_cd_m2 = 0;
@@ -82,6 +91,11 @@ struct NightConversionOptions {
   /// Glare, sensor noise (its ISO comes from the camera), adaptation and colour encoding.
   PostProcessOptions post;
 };
+
+/// The factor `requested` stands for at an image of width x height pixels: itself when >= 1;
+/// for kAutoDownsample the smallest factor f with (width / f) x (height / f) <= 
+/// kAutoDownsampleMaxPixels (at most 8).
+int resolveDownsample(int requested, int width, int height);
 
 /// What a caller hears while the conversion runs; every member may be empty.
 struct NightConversionCallbacks {

@@ -38,7 +38,14 @@ struct NightSceneOptions {
 
 struct NightScene {
   RenderScene scene;
-  StageReport report;  ///< "scene": faces, emitting faces per category, lights on without faces
+  StageReport report;
+  /// CV_32FC3 XYZ reflectance relative to E per pixel of the maps' resolution: what a face made
+  /// from that pixel reflects (before emitting faces are made black); empty without an albedo
+  /// map and a day image. Texture for a render made below the image size (render_upsample.h).
+  cv::Mat reflectance;
+  /// CV_32S per pixel of the maps' resolution: the light-map id of the emitting light the pixel
+  /// shows (as the render's light-id AOV), 0 for none.
+  cv::Mat light_id;  ///< "scene": faces, emitting faces per category, lights on without faces
 };
 
 /// albedo: CV_32FC3 linear RGB reflectance at the image resolution, or empty (then the

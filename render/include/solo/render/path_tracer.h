@@ -161,6 +161,10 @@ struct PathTracerOptions {
 struct RenderOutput {
   cv::Mat radiance;  ///< CV_32FC3, XYZ relative to E, render units
   cv::Mat albedo;    ///< CV_32FC3 first-hit reflectance; 0 for sky
+  /// CV_32FC3 first-hit reflectance averaged over the pixel's counted samples (0 for those that
+  /// see sky): radiance / mean_albedo is the pixel's irradiance also where it covers several
+  /// surfaces, which `albedo` (one sample's) is not.
+  cv::Mat mean_albedo;
   cv::Mat normal;    ///< CV_32FC3 first-hit normal facing the camera; 0 for sky
   cv::Mat depth_m;   ///< CV_32F first-hit z-depth; 0 for sky
   cv::Mat light_id;  ///< CV_32S light id of an emitter seen directly; 0 otherwise
