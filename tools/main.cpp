@@ -182,6 +182,8 @@ void addNightRenderFlags(CLI::App* night_cmd, NightOptions& night) {
                         "Render at the image size divided by this factor, then upsample with the image's texture; "
                         "0 = auto: 2 above 1 megapixel (preset)")
       ->capture_default_str()->check(CLI::Range(0, 8));
+  night_cmd->add_flag("--upsample-texture,!--no-upsample-texture", night.conversion.upsample.texture,
+                      "A render below the image size gets the image's texture back when upsampled; off: bilinear");
   night_cmd->add_flag("--denoise,!--no-denoise", night.conversion.denoise.enabled,
                       "Edge-aware filter of the render's Monte Carlo noise, guided by its AOVs (preset)");
   night_cmd->add_option("--firefly-sigma", night.conversion.denoise.firefly_sigma,

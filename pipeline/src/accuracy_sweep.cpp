@@ -633,8 +633,8 @@ struct AccuracySweep::Impl {
     return ref;
   }
 
-  /// The presets of `solo night` (draft, default, final), then default at the image's full size
-  /// where it reduces it, and default with one stage off.
+  /// The presets of `solo night` (draft, default, final); where the default reduces the image's
+  /// size, default at the full size and with bilinear upsampling; default with one stage off.
   std::vector<PipelineSetting> endToEndSettings() const {
     std::vector<PipelineSetting> settings;
     for (const std::string& preset : nightPresetNames())
@@ -648,6 +648,10 @@ struct AccuracySweep::Impl {
       full_size.name = "default_full_size";
       full_size.night.mesh_downsample = full_size.night.render_downsample = 1;
       settings.push_back(full_size);
+      PipelineSetting bilinear = standard;
+      bilinear.name = "default_bilinear_upsampling";
+      bilinear.night.upsample.texture = false;
+      settings.push_back(bilinear);
     }
     if (!o.quick) {
       PipelineSetting no_refine = standard;

@@ -256,7 +256,7 @@ void runDenoiseStage(const NightScene& night, const PinholeCamera& render_camera
         guides.surface = cv::Mat(image_size, CV_8U, const_cast<std::uint8_t*>(surface_pixels.data()));
       if (night.light_id.size() == image_size) guides.light_id = night.light_id;
     }
-    const bool texture = !guides.reflectance.empty();
+    const bool texture = o.upsample.texture && !guides.reflectance.empty();
     r.rendered = upsampleRender(r.rendered, image_size, guides, o.upsample, &render_report);
     render_report.add("upsample_seconds", clock.seconds(), "s");
     render_report.seconds += clock.seconds();

@@ -194,7 +194,7 @@ RenderOutput upsampleRender(const RenderOutput& low, cv::Size size, const Upsamp
   out.report = low.report;
 
   std::atomic<long long> textured{0}, lamp{0};
-  const bool guided = !guides.reflectance.empty() && !guides.depth_m.empty() &&
+  const bool guided = options.texture && !guides.reflectance.empty() && !guides.depth_m.empty() &&
                       !(low.albedo.empty() && low.mean_albedo.empty()) && !low.depth_m.empty() && size != low_size;
   if (guided) {
     const GuidedUpsampler upsampler(low, guides, options, size);

@@ -656,6 +656,30 @@ TEST(PathTracer, EmitterCoverageIsTheShareOfAPixelThatSeesAnEmitter) {
   }
 }
 
+TEST(PathTracer, MeanAlbedoIsTheAlbedoOverThePixelsSamples) {
+  // As above, a quad of reflectance 0.2 at z = 2 covers all of column 0 and a quarter of column
+  // 1; a plane of 0.8 behind it fills the rest. The mean albedo of column 1 is 0.25 x 0.2 +
+  // 0.75 x 0.8 = 0.65; the albedo AOV is one sample's, 0.2 or 0.8.
+  solo::RenderScene s;
+  s.camera = camera(4, 400);
+  const float edge_x = -0.75f / 400.f * 2.f;
+  addQuad(s, {-1, -1, 2}, {0, 2, 0}, {edge_x + 1.f, 0, 0}, 0.2f);
+  addQuad(s, {-10, -10, 3}, {0, 20, 0}, {20, 0, 0}, 0.8f);
+  solo::PathTracerOptions o;
+  o.min_samples = o.max_samples = 64;
+  o.progress = false;
+  const auto out = solo::renderPathTraced(s, o);
+  ASSERT_EQ(out.mean_albedo.size(), out.albedo.size());
+  ASSERT_EQ(out.mean_albedo.type(), CV_32FC3);
+  for (int y = 0; y < 4; ++y) {
+    EXPECT_NEAR(out.mean_albedo.at<cv::Vec3f>(y, 0)[1], 0.2f, 1e-5f);
+    EXPECT_NEAR(out.mean_albedo.at<cv::Vec3f>(y, 1)[1], 0.65f, 0.04f) << "row " << y;
+    EXPECT_NEAR(out.mean_albedo.at<cv::Vec3f>(y, 2)[1], 0.8f, 1e-5f);
+    const float one_sample = out.albedo.at<cv::Vec3f>(y, 1)[1];
+    EXPECT_TRUE(std::abs(one_sample - 0.2f) < 1e-5f || std::abs(one_sample - 0.8f) < 1e-5f) << one_sample;
+  }
+}
+
 TEST(PathTracer, FramePixelsSeeTheSurfaceThatEndsAtTheirCentres) {
   // A depth mesh ends at the outermost pixel centres. An emitting quad at z = 2 spanning exactly
   // the rays through the centres of pixels 0 and 3 (4x4 camera, principal point 1.5): every

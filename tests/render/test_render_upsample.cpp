@@ -211,13 +211,16 @@ TEST(RenderUpsample, AWindowKeepsItsOutlineWithTheImagesLightIds) {
   EXPECT_GT(y(plain.radiance, 8, 11), 100.f);
 }
 
-TEST(RenderUpsample, WithoutAReflectanceIsBilinearAndRefusesMapsOfAnotherSize) {
+TEST(RenderUpsample, WithoutAReflectanceOrSwitchedOffIsBilinearAndRefusesMapsOfAnotherSize) {
   const FullTruth t = fullTruth([](int, int) { return 10.f; }, [](int x, int) { return x % 2 ? 0.9f : 0.1f; },
                                 [](int, int) { return 2.f; });
   const solo::RenderOutput low = halfRender(t);
   const solo::RenderOutput up = solo::upsampleRender(low, kSize, {cv::Mat(), t.depth_m, cv::Mat(), cv::Mat()});
   const cv::Mat plain = bilinear(low.radiance);
   EXPECT_EQ(cv::norm(up.radiance, plain, cv::NORM_INF), 0.0);
+  solo::RenderUpsampleOptions no_texture;
+  no_texture.texture = false;
+  EXPECT_EQ(cv::norm(solo::upsampleRender(low, kSize, guides(t), no_texture).radiance, plain, cv::NORM_INF), 0.0);
   EXPECT_THROW(solo::upsampleRender(low, kSize, {t.reflectance, cv::Mat(kLowSize, CV_32F, cv::Scalar(1)), {}, {}}),
                std::invalid_argument);
   EXPECT_THROW(solo::upsampleRender(low, kSize, {cv::Mat(kSize, CV_32F, cv::Scalar(1)), t.depth_m, {}, {}}),

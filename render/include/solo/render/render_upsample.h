@@ -16,6 +16,8 @@
 namespace solo {
 
 struct RenderUpsampleOptions {
+  /// false: the radiance is bilinear everywhere (the guides are not used).
+  bool texture = true;
   /// A render pixel's irradiance is used where its first-hit albedo's every XYZ channel is at
   /// least this (darker: the division would amplify its noise). > 0.
   float min_albedo = 0.02f;
