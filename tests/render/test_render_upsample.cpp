@@ -130,17 +130,20 @@ TEST(RenderUpsample, SmoothLightIsInterpolatedAndTheTextureKept) {
 // light. Bilinear would mix them.
 TEST(RenderUpsample, KeepsEachSideOfADepthEdgeOnItsOwnLight) {
   const auto near = [](int x) { return x < 12; };
-  const FullTruth t = fullTruth([&](int x, int) { return near(x) ? 5.f : 20.f; }, [](int, int) { return 0.5f; },
-                                [&](int x, int) { return near(x) ? 4.f : 0.5f; });
-  const solo::RenderOutput low = halfRender(t);
-  const solo::RenderOutput up = solo::upsampleRender(low, kSize, guides(t));
-  const cv::Mat mixed = bilinear(low.radiance);
-  for (int x = 9; x <= 14; ++x) {
-    const float truth = 0.5f * (near(x) ? 4.f : 0.5f);
-    EXPECT_NEAR(y(up.radiance, x, 10), truth, 1e-5f) << x;
+  // The same edge at 0.5 / 2 m, 5 / 20 m and 1 / 4 km: the depth weight is relative.
+  for (const float scale : {0.1f, 1.f, 200.f}) {
+    const FullTruth t = fullTruth([&](int x, int) { return scale * (near(x) ? 5.f : 20.f); },
+                                  [](int, int) { return 0.5f; }, [&](int x, int) { return near(x) ? 4.f : 0.5f; });
+    const solo::RenderOutput low = halfRender(t);
+    const solo::RenderOutput up = solo::upsampleRender(low, kSize, guides(t));
+    const cv::Mat mixed = bilinear(low.radiance);
+    for (int x = 9; x <= 14; ++x) {
+      const float truth = 0.5f * (near(x) ? 4.f : 0.5f);
+      EXPECT_NEAR(y(up.radiance, x, 10), truth, 1e-5f) << x << " at scale " << scale;
+    }
+    EXPECT_GT(std::abs(y(mixed, 11, 10) - 2.f), 0.2f);  // bilinear's mix at the edge
+    EXPECT_GT(std::abs(y(mixed, 12, 10) - 0.25f), 0.2f);
   }
-  EXPECT_GT(std::abs(y(mixed, 11, 10) - 2.f), 0.2f);  // bilinear's mix at the edge
-  EXPECT_GT(std::abs(y(mixed, 12, 10) - 0.25f), 0.2f);
 }
 
 // Pixels beside a render pixel that sees a lamp keep the bilinear radiance (the lamp keeps its
