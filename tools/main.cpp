@@ -212,6 +212,9 @@ void addNightCameraFlags(CLI::App* night_cmd, NightOptions& night) {
       ->capture_default_str()->check(CLI::Range(-6.0, 6.0));
   night_cmd->add_option("--noise-scale", night.conversion.post.noise_options.std_scale, "Sensor noise standard deviation multiplier")
       ->capture_default_str()->check(CLI::Range(0.0, 10.0));
+  night_cmd->add_option("--chroma-denoise", night.conversion.post.noise_options.chroma_denoise_sigma_px,
+                        "Sensor noise's chroma noise reduction: Gaussian sigma in px on its colour differences; 0 = off")
+      ->capture_default_str()->check(CLI::Range(0.0, 64.0));
   night_cmd->add_option("--white-clip", night.conversion.post.encoding_options.white_clip,
                         "Video knee: linear level encoded as full white, in sensor whites (1 = clip at white)")
       ->capture_default_str()->check(CLI::Range(1.0, 64.0));

@@ -87,6 +87,7 @@ std::string nightConfigText(const NightOptions& options) {
   line("camera-max-iso", number(o.camera.max_iso));
   line("camera-compensation", number(o.camera.compensation_ev));
   line("noise-scale", number(o.post.noise_options.std_scale));
+  line("chroma-denoise", number(o.post.noise_options.chroma_denoise_sigma_px));
   line("glare-scatter", number(o.post.glare_options.scatter_fraction));
   line("white-clip", number(o.post.encoding_options.white_clip));
   line("knee-point", number(o.post.encoding_options.knee_point));
