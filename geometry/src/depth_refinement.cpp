@@ -1,9 +1,14 @@
 #include "solo/geometry/depth_refinement.h"
 
 #include "solo/geometry/depth_completion.h"
+#include "solo/geometry/downsample_depth.h"
 #include "solo/geometry/normals_from_depth.h"
 
+#include <opencv2/imgproc.hpp>
+
 #include <cmath>
+#include <cstdio>
+#include <stdexcept>
 
 namespace solo {
 namespace {
@@ -16,9 +21,61 @@ StageReport skippedStep(const std::string& name, const std::string& reason) {
   return r;
 }
 
+NormalGuidedOptimizationResult optimizeAtSize(const cv::Mat& filtered_depth_m, const cv::Mat& normals,
+                                              const cv::Mat& uncertain, const cv::Mat& instances,
+                                              const PinholeCamera& camera, const DepthRefinementOptions& options) {
+  return options.optimizer == DepthOptimizer::Ceres
+             ? optimizeDepthWithNormals(filtered_depth_m, normals, uncertain, instances, camera, options.optimization)
+             : optimizeDepthWithAdam(filtered_depth_m, normals, uncertain, instances, camera, options.adam);
+}
+
+cv::Mat resizedNearest(const cv::Mat& m, cv::Size size) {
+  if (m.empty()) return m;
+  cv::Mat out;
+  cv::resize(m, out, size, 0, 0, cv::INTER_NEAREST);
+  return out;
+}
+
+// The optimisation at the filtered depth's size divided by options.optimization_downsample
+// (DepthRefinementOptions): its multiplicative change, upsampled, on the full-size depth.
+NormalGuidedOptimizationResult optimizeDownsampled(const DepthRefinementResult& out, const PinholeCamera& camera,
+                                                   const DepthRefinementOptions& options) {
+  const int factor = options.optimization_downsample;
+  const cv::Mat low_depth_m = downsampleDepth(out.filtered_depth_m, factor);
+  const cv::Size low_size = low_depth_m.size();
+  cv::Mat low_uncertain;  // uncertain where any pixel of the block is
+  cv::resize(out.uncertain, low_uncertain, low_size, 0, 0, cv::INTER_AREA);
+  low_uncertain = low_uncertain > 0;
+  NormalGuidedOptimizationResult low =
+      optimizeAtSize(low_depth_m, resizedNearest(out.normals, low_size), low_uncertain,
+                     resizedNearest(out.maps.instances, low_size), camera.scaledTo(low_size.width, low_size.height),
+                     options);
+  cv::Mat ratio(low_size, CV_32F, cv::Scalar(1));
+  for (int y = 0; y < low_size.height; ++y)
+    for (int x = 0; x < low_size.width; ++x) {
+      const float before = low_depth_m.at<float>(y, x), after = low.depth_m.at<float>(y, x);
+      if (before > 0.f && after > 0.f && std::isfinite(before) && std::isfinite(after))
+        ratio.at<float>(y, x) = after / before;
+    }
+  cv::Mat full_ratio;
+  cv::resize(ratio, full_ratio, out.filtered_depth_m.size(), 0, 0, cv::INTER_LINEAR);
+  NormalGuidedOptimizationResult result;
+  result.depth_m = out.filtered_depth_m.mul(full_ratio);
+  result.report = std::move(low.report);
+  char note[200];
+  std::snprintf(note, sizeof note,
+                "optimised at %dx%d (the depth downsampled %dx), its change upsampled onto the %dx%d filtered depth",
+                low_size.width, low_size.height, factor, out.filtered_depth_m.cols, out.filtered_depth_m.rows);
+  result.report.notes.push_back(note);
+  result.report.add("optimization_downsample", factor);
+  return result;
+}
+
 }  // namespace
 
 DepthRefinementResult refineDepth(const Scene& scene, const DepthRefinementOptions& options) {
+  if (options.optimization_downsample < 1 || options.optimization_downsample > 8)
+    throw std::invalid_argument("refineDepth: optimization_downsample must be 1 to 8");
   Stopwatch clock;
   DepthRefinementResult out;
   StageReport& stage = out.report;
@@ -85,11 +142,10 @@ DepthRefinementResult refineDepth(const Scene& scene, const DepthRefinementOptio
     out.steps.push_back(skippedStep("optimize", "no normals: no normal-guided optimisation"));
   } else {
     NormalGuidedOptimizationResult optimized =
-        options.optimizer == DepthOptimizer::Ceres
-            ? optimizeDepthWithNormals(out.filtered_depth_m, out.normals, out.uncertain, out.maps.instances,
-                                       scene.camera, options.optimization)
-            : optimizeDepthWithAdam(out.filtered_depth_m, out.normals, out.uncertain, out.maps.instances, scene.camera,
-                                    options.adam);
+        options.optimization_downsample > 1
+            ? optimizeDownsampled(out, scene.camera, options)
+            : optimizeAtSize(out.filtered_depth_m, out.normals, out.uncertain, out.maps.instances, scene.camera,
+                             options);
     out.depth_m = optimized.depth_m;
     out.steps.push_back(optimized.report);
   }

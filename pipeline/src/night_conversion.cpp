@@ -109,6 +109,8 @@ void runRefineStage(const Scene& scene, const NightConversionOptions& o, NightCo
   refine_options.filter = o.refine && refine_options.filter;
   refine_options.uncertain_regions = o.refine && refine_options.uncertain_regions;
   refine_options.optimize = o.refine && refine_options.optimize;
+  // The mesh is made at a reduced size: the optimisation that feeds it runs at that size too.
+  refine_options.optimization_downsample = resolveDownsample(o.mesh_downsample, scene.width(), scene.height());
   std::int64_t street_light_pixels = 0;
   r.refined = refineDepth(sceneForRefinement(scene, &street_light_pixels), refine_options);
   if (!r.refined.steps.empty()) {

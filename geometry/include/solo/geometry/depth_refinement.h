@@ -41,6 +41,12 @@ struct DepthRefinementOptions {
   /// Without normals in the scene: the optimisation uses the normals of the filtered depth.
   bool normals_from_depth = true;
   DepthOptimizer optimizer = DepthOptimizer::Ceres;
+  /// The optimisation runs on the filtered depth downsampled by this factor (downsample_depth.h;
+  /// normals, instances nearest, the uncertain mask where any of a block's pixels is), and its
+  /// change, as a ratio to the downsampled filtered depth, is upsampled bilinearly onto the
+  /// full-size filtered depth. 1: at the full size. 1 to 8. `solo night` sets the mesh's factor:
+  /// the mesh is made at that size.
+  int optimization_downsample = 1;
   NormalGuidedOptimizationOptions optimization;  ///< Ceres
   AdamOptions adam = paperAdamOptions();         ///< the paper's optimiser and objective
 };
