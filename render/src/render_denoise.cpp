@@ -2,6 +2,8 @@
 
 #include "solo/render/render_denoise.h"
 
+#include "map_checks.h"
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -39,26 +41,19 @@ struct PixelCounts {
   std::int64_t filtered = 0, emitter = 0, no_surface = 0;
 };
 
-void checkAov(const cv::Mat& m, cv::Size size, int type, const char* name) {
-  if (m.empty() || (m.size() == size && m.type() == type)) return;
-  throw std::invalid_argument(std::string("denoiseRender: the render's ") + name + " AOV is " + std::to_string(m.cols) +
-                              "x" + std::to_string(m.rows) + " of type " + std::to_string(m.type()) +
-                              ", the radiance " + std::to_string(size.width) + "x" + std::to_string(size.height) +
-                              " (expected type " + std::to_string(type) + ")");
-}
-
 void validate(const RenderOutput& r, const PinholeCamera& camera, const RenderDenoiseOptions& o) {
   if (r.radiance.empty() || r.radiance.type() != CV_32FC3)
     throw std::invalid_argument("denoiseRender: the render's radiance must be a non-empty CV_32FC3 image");
   if (r.depth_m.empty() || r.normal.empty())
     throw std::invalid_argument("denoiseRender: the render needs its depth_m and normal AOVs");
   const cv::Size size = r.radiance.size();
-  checkAov(r.albedo, size, CV_32FC3, "albedo");
-  checkAov(r.normal, size, CV_32FC3, "normal");
-  checkAov(r.depth_m, size, CV_32F, "depth_m");
-  checkAov(r.std_error, size, CV_32F, "std_error");
-  checkAov(r.light_id, size, CV_32S, "light_id");
-  checkAov(r.emitter_coverage, size, CV_32F, "emitter_coverage");
+  requireEmptyOrSized({{&r.albedo, CV_32FC3, "the render's albedo AOV"},
+                       {&r.normal, CV_32FC3, "the render's normal AOV"},
+                       {&r.depth_m, CV_32F, "the render's depth_m AOV"},
+                       {&r.std_error, CV_32F, "the render's std_error AOV"},
+                       {&r.light_id, CV_32S, "the render's light_id AOV"},
+                       {&r.emitter_coverage, CV_32F, "the render's emitter_coverage AOV"}},
+                      size, "denoiseRender");
   if (camera.width != size.width || camera.height != size.height)
     throw std::invalid_argument("denoiseRender: the camera is " + std::to_string(camera.width) + "x" +
                                 std::to_string(camera.height) + ", the render " + std::to_string(size.width) + "x" +

@@ -2,25 +2,21 @@
 
 #include "solo/render/render_upsample.h"
 
-#include <opencv2/imgproc.hpp>
+#include "map_checks.h"
+
 #include <tbb/parallel_for.h>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <atomic>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
 namespace solo {
 
 namespace {
-
-void requireMap(const cv::Mat& m, cv::Size size, int type, const char* name) {
-  if (m.empty()) return;
-  if (m.size() != size || m.type() != type)
-    throw std::invalid_argument(std::string("upsampleRender: ") + name + " has another size or type than expected");
-}
 
 cv::Mat resized(const cv::Mat& m, cv::Size size, int interpolation) {
   if (m.empty() || m.size() == size) return m.clone();
@@ -56,7 +52,9 @@ class GuidedUpsampler {
  public:
   GuidedUpsampler(const RenderOutput& low, const UpsampleGuides& guides, const RenderUpsampleOptions& options,
                   cv::Size size)
-      : low_(low), guides_(guides), options_(options),
+      : low_(low),
+        guides_(guides),
+        options_(options),
         albedo_(low.mean_albedo.empty() ? low.albedo : low.mean_albedo),
         scale_x_(static_cast<double>(size.width) / low.radiance.cols),
         scale_y_(static_cast<double>(size.height) / low.radiance.rows) {}
@@ -170,16 +168,18 @@ RenderOutput upsampleRender(const RenderOutput& low, cv::Size size, const Upsamp
   if (!(options.min_albedo > 0.f) || !(options.depth_tolerance > 0.f))
     throw std::invalid_argument("upsampleRender: min_albedo and depth_tolerance must be > 0");
   const cv::Size low_size = low.radiance.size();
-  requireMap(low.radiance, low_size, CV_32FC3, "the render's radiance");
-  requireMap(low.albedo, low_size, CV_32FC3, "the render's albedo");
-  requireMap(low.mean_albedo, low_size, CV_32FC3, "the render's mean albedo");
-  requireMap(low.depth_m, low_size, CV_32F, "the render's depth");
-  requireMap(low.light_id, low_size, CV_32S, "the render's light ids");
-  requireMap(low.emitter_coverage, low_size, CV_32F, "the render's emitter coverage");
-  requireMap(guides.reflectance, size, CV_32FC3, "the reflectance guide");
-  requireMap(guides.depth_m, size, CV_32F, "the depth guide");
-  requireMap(guides.surface, size, CV_8U, "the surface guide");
-  requireMap(guides.light_id, size, CV_32S, "the light-id guide");
+  requireEmptyOrSized({{&low.radiance, CV_32FC3, "the render's radiance"},
+                       {&low.albedo, CV_32FC3, "the render's albedo"},
+                       {&low.mean_albedo, CV_32FC3, "the render's mean albedo"},
+                       {&low.depth_m, CV_32F, "the render's depth"},
+                       {&low.light_id, CV_32S, "the render's light ids"},
+                       {&low.emitter_coverage, CV_32F, "the render's emitter coverage"}},
+                      low_size, "upsampleRender");
+  requireEmptyOrSized({{&guides.reflectance, CV_32FC3, "the reflectance guide"},
+                       {&guides.depth_m, CV_32F, "the depth guide"},
+                       {&guides.surface, CV_8U, "the surface guide"},
+                       {&guides.light_id, CV_32S, "the light-id guide"}},
+                      size, "upsampleRender");
 
   RenderOutput out;
   out.radiance = resized(low.radiance, size, cv::INTER_LINEAR);

@@ -1,5 +1,5 @@
 #pragma once
-// The render scene `solo night --seed 3` builds from a scene manifest with its default preset,
+// The render scene `solo night --seed 3 --mesh-downsample 1` builds from a scene manifest with its default preset,
 // by solo night's own stages (pipeline/night_conversion.h, runNightSceneStages): refined depth, the
 // cleaned mesh at the image resolution with closed solids, the light record's draw (real
 // strengths and chromaticities), the two headlights. Shared by bench_render's efficiency line

@@ -13,7 +13,7 @@ namespace {
 
 constexpr int kLowWidth = 16, kLowHeight = 12, kFactor = 2;
 const cv::Size kLowSize(kLowWidth, kLowHeight);
-const cv::Size kSize(kLowWidth * kFactor, kLowHeight * kFactor);
+const cv::Size kSize(kLowWidth* kFactor, kLowHeight* kFactor);
 
 // A full-size scene: per pixel its depth (0 = sky), reflectance (grey) and the irradiance that
 // falls on it (grey).
@@ -79,7 +79,8 @@ std::int64_t count(const solo::StageReport& report, const char* name) {
   return value ? std::get<std::int64_t>(*value) : -1;
 }
 
-solo::UpsampleGuides guides(const FullTruth& t, const cv::Mat& surface = cv::Mat(), const cv::Mat& light_id = cv::Mat()) {
+solo::UpsampleGuides guides(const FullTruth& t, const cv::Mat& surface = cv::Mat(),
+                            const cv::Mat& light_id = cv::Mat()) {
   return {t.reflectance, t.depth_m, surface, light_id};
 }
 
