@@ -139,7 +139,7 @@ void buildInPlace(DepthMesh& mesh, const Make& make) {
   }
 }
 
-// A downsample option as the user gave it: the factor, or "0 (auto, at most 1 MP)".
+// A downsample option as the user gave it: the factor, or 0 (auto) and why it downsamples.
 std::string downsampleSetting(int requested) {
   return requested == kAutoDownsample ? "0 (auto: the image is above 1 megapixel)" : std::to_string(requested);
 }

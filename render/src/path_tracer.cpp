@@ -140,53 +140,6 @@ EmitterSample sampleEmitter(const EmissiveTriangle& t, const Eigen::Vector3f& or
   return s;
 }
 
-// A direction from `origin` toward rectangle light `light` (of area `area`): where it subtends at
-// least kMinSphericalSolidAngle (and by_solid_angle), one of its two triangles in proportion to
-// their solid angles, then a direction in it as sampleEmitter's (solid angle, warped toward the
-// receiver's cosine); else a uniform point on its area. Beside a headlight the area sample's
-// weight grows as distance^-2; this one's stays within the light's radiance times its solid angle.
-EmitterSample sampleRectangleLight(const RectangleLight& light, float area, const Eigen::Vector3f& origin,
-                                   const Eigen::Vector3f& normal, float u1, float u2, bool by_solid_angle) {
-  EmitterSample s;
-  const Eigen::Vector3d o = origin.cast<double>(), n = normal.cast<double>();
-  const Eigen::Vector3d eu = light.edge_u.cast<double>(), ev = light.edge_v.cast<double>();
-  const Eigen::Vector3d c0 = light.centre.cast<double>() - 0.5 * (eu + ev);
-  const std::array<Eigen::Vector3d, 4> corner = {c0, c0 + eu, c0 + eu + ev, c0 + ev};
-  const double omega_a = by_solid_angle ? triangleSolidAngle(o, corner[0], corner[1], corner[2]) : 0.0;
-  const double omega_b = by_solid_angle ? triangleSolidAngle(o, corner[0], corner[2], corner[3]) : 0.0;
-  const double omega = omega_a + omega_b;
-  if (omega >= kMinSphericalSolidAngle && omega_a > 0 && omega_b > 0) {
-    const bool first = u1 * omega < omega_a;
-    const double share = (first ? omega_a : omega_b) / omega;
-    const double u = first ? u1 * omega / omega_a : (u1 * omega - omega_a) / omega_b;
-    Eigen::Vector3d w;
-    double pdf = 0;
-    if (!sampleSphericalTriangleCosine(o, n, corner[0], corner[first ? 1 : 2], corner[first ? 2 : 3],
-                                       std::clamp(u, 0.0, std::nextafter(1.0, 0.0)), u2, &w, &pdf))
-      return s;
-    const Eigen::Vector3d light_normal = light.normal.cast<double>();
-    const double cos_w = w.dot(light_normal);
-    const double distance = (corner[0] - o).dot(light_normal) / cos_w;
-    if (!(distance > 0) || !std::isfinite(distance)) return s;
-    s.wi = w.cast<float>();
-    s.distance = static_cast<float>(distance);
-    s.cos_light = static_cast<float>(-cos_w);  // > 0 where the light faces the point
-    s.pdf = static_cast<float>(share * pdf);
-  } else {
-    const Eigen::Vector3f q = light.centre + light.edge_u * (u1 - 0.5f) + light.edge_v * (u2 - 0.5f);
-    const Eigen::Vector3f wi = q - origin;
-    const float distance2 = wi.squaredNorm();
-    s.distance = std::sqrt(distance2);
-    if (!(s.distance > 0.f) || !(area > 0.f)) return s;
-    s.wi = wi / s.distance;
-    s.cos_light = light.normal.dot(-s.wi);
-    if (!(s.cos_light > 1e-6f)) return s;
-    s.pdf = distance2 / (s.cos_light * area);
-  }
-  s.ok = s.pdf > 0.f && std::isfinite(s.pdf) && s.cos_light > 0.f;
-  return s;
-}
-
 // The per-steradian pdf with which sampleEmitter() from `origin` with receiver normal `normal`
 // would have found direction `wi`, which meets the triangle `distance` away at |cosine|
 // `cos_light`.
@@ -539,14 +492,19 @@ class WaveTracer {
     }
     for (std::size_t l = 0; l < c.scene.rectangle_lights.size(); ++l) {
       const RectangleLight& light = c.scene.rectangle_lights[l];
+      const float area = c.rectangle_area[l];
       const auto [lu, lv] = rng.get2D();
-      const EmitterSample sample = sampleRectangleLight(light, c.rectangle_area[l], shadow_origin, n, lu, lv,
-                                                        c.options.solid_angle_emitter_sampling);
-      if (!sample.ok) continue;
-      const float cos_surface = n.dot(sample.wi);
-      if (cos_surface <= 0.f || sample.cos_light <= c.rectangle_cos_half_spread[l]) continue;
-      offer(throughput.cwiseProduct(bsdf.eval(sample.wi)).cwiseProduct(light.radiance) * (cos_surface / sample.pdf),
-            sample.wi, sample.distance);
+      const Eigen::Vector3f q = light.centre + light.edge_u * (lu - 0.5f) + light.edge_v * (lv - 0.5f);
+      Eigen::Vector3f wi = q - shadow_origin;
+      const float distance2 = wi.squaredNorm();
+      const float distance = std::sqrt(distance2);
+      if (!(distance > 0.f) || !(area > 0.f)) continue;
+      wi /= distance;
+      const float cos_surface = n.dot(wi);
+      const float cos_light = light.normal.dot(-wi);
+      if (cos_surface <= 0.f || cos_light <= c.rectangle_cos_half_spread[l]) continue;
+      const float pdf = distance2 / (cos_light * area);
+      offer(throughput.cwiseProduct(bsdf.eval(wi)).cwiseProduct(light.radiance) * (cos_surface / pdf), wi, distance);
     }
     if (!choice.empty()) queueChosenLight(choice, shadow_origin, index);
   }
