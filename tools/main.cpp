@@ -406,6 +406,9 @@ void addSynthCommand(CLI::App& app, std::vector<Command>& commands) {
   synth_cmd->add_flag("--force", synth.force, "Replace the output folder if it exists");
   synth_cmd->add_option("--day-render", synth.day_render, "Day image: raster (fast) or path (path-traced sun and sky)")
       ->capture_default_str();
+  synth_cmd->add_option("--day-samples", synth.day_samples,
+                        "Samples per pixel of the path-traced day image; 0 = adaptive 4 to 16")
+      ->capture_default_str();
   synth_cmd->add_option("--depth-source", synth.depth_source,
                         "est/depth.exr from a simulated sensor: exact, mono, stereo or lidar (default: the half-resolution prediction)");
   commands.push_back({synth_cmd, [synth_holder, synth_size_holder] {

@@ -124,6 +124,8 @@ std::pair<StreetSceneOptions, fs::path> checkedOptions(const fs::path& folder, c
     throw InputError("--size", "image size must be between 16 and 8192 pixels per side");
   if (o.day_render != "raster" && o.day_render != "path")
     throw InputError("--day-render", "expected raster or path, got \"" + o.day_render + "\"");
+  if (o.day_samples < 0 || o.day_samples > 4096)
+    throw InputError("--day-samples", "expected 0 (adaptive) to 4096, got " + std::to_string(o.day_samples));
   if (!o.depth_source.empty()) {
     try {
       depthSourceFromName(o.depth_source);
@@ -173,6 +175,7 @@ cv::Mat dayImage(const SyntheticStreet& street, const SyntheticSceneOptions& o, 
     DayRenderOptions day_options;
     day_options.seed = o.seed;
     day_options.progress = o.progress;
+    if (o.day_samples > 0) day_options.min_samples = day_options.max_samples = o.day_samples;
     DaylightRender traced = renderDaylightPathTraced(street.scene, day_options);
     traced.report.seconds = clock.seconds();
     traced.report.notes.push_back("day image path traced: sun and sky gradient, NEE + MIS (--day-render path)");
@@ -386,6 +389,7 @@ void writeSynthRecord(const fs::path& staging, const SyntheticStreet& street, co
       {"seed", o.seed},
       {"variant", o.variant},
       {"day_render", o.day_render},
+      {"day_samples", o.day_samples},
       {"width", o.width},
       {"height", o.height},
       {"camera", cameraJson(scene.camera)},

@@ -279,3 +279,31 @@ TEST(SynthCli, PathTracedDayImageIsDeterministicAndItsOptionChecked) {
   EXPECT_NE(bad.output.find("--day-render"), std::string::npos) << bad.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "d"));
 }
+
+// --day-samples fixes the path-traced day image's samples per pixel. Against a 256-sample image,
+// nested sample sets differ by sigma sqrt(1/n - 1/256): 4 samples 0.50 sigma, 64 samples 0.11
+// sigma, a ratio of 0.22 (8-bit rounding adds a floor). The adaptive default (4 to 16) lies
+// between. The count is recorded and a count out of range refused.
+TEST(SynthCli, DaySamplesSetTheDayImagesNoise) {
+  TempDir dir;
+  const auto run = [&](const std::string& name, const std::string& samples) {
+    const auto r = solo::test::runSolo("synth --size 64x36 --day-render path " + samples + " -o \"" +
+                                       (dir / name).string() + "\"");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return solo::readColorImage(dir / name / "day.png");
+  };
+  const cv::Mat few = run("few", "--day-samples 4"), adaptive = run("adaptive", ""),
+                mid = run("mid", "--day-samples 64"), reference = run("reference", "--day-samples 256");
+  ASSERT_FALSE(reference.empty());
+  const double few_rms = cv::norm(few, reference, cv::NORM_L2), adaptive_rms = cv::norm(adaptive, reference, cv::NORM_L2),
+               mid_rms = cv::norm(mid, reference, cv::NORM_L2);
+  EXPECT_LT(mid_rms, 0.35 * few_rms) << "64 spp: " << mid_rms << ", 4 spp: " << few_rms;
+  EXPECT_LT(mid_rms, adaptive_rms);
+  EXPECT_LT(adaptive_rms, few_rms);
+  const std::string record = solo::test::readText(dir / "mid/synth.json");
+  EXPECT_NE(record.find("\"day_samples\": 64"), std::string::npos) << record;
+  const auto bad = solo::test::runSolo("synth --day-render path --day-samples 5000 -o \"" + (dir / "d").string() + "\"");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.output.find("--day-samples"), std::string::npos) << bad.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "d"));
+}

@@ -20,6 +20,9 @@ struct SyntheticSceneOptions {
   int width = 960, height = 540;      ///< pixels, 16 to 8192 per side
   std::string variant = "default";    ///< streetVariantName; recorded as given
   std::string day_render = "raster";  ///< "raster" (1 ray + 1 shadow ray per pixel) or "path" (path traced sun and sky)
+  /// The path-traced day image's samples per pixel, 1 to 4096; 0 = adaptive, 4 to 16 (a noisy
+  /// image; a real day photo's noise is that of about 256).
+  int day_samples = 0;
   /// est/depth.exr: "" for the half-resolution prediction (geometry/prediction_noise.h), or a
   /// depthSourceName ("exact", "mono", "stereo", "lidar") for that sensor's depth at full
   /// resolution, 0 = invalid (depth_sensor.h); recorded in synth.json with its agreement
