@@ -601,6 +601,24 @@ void keepDayImage(const cv::Mat& day, const SurfaceMap& map, const DayLightRemov
   out.white_balance = whiteBalance(out.albedo, map, o.median_reflectance, out.report);
 }
 
+// The sun given in the options (DayLightRemovalOptions::sun_direction): no search; its shadows
+// through the mesh and the ambient scales fitted to it as for a found sun. Fills out as
+// findSun does; sun_gain is the share of the ambient-only cost the given sun removes.
+void useGivenSun(const SurfaceMap& map, const cv::Mat& smooth, const std::vector<Eigen::Vector3f>& ambient,
+                 const RayCaster& caster, const DayLightRemovalOptions& o, DayLightRemoval& out) {
+  const PairSet pairs = samplePairs(map, smooth, ambient, o.refine_pairs, o.seed + 1);
+  out.report.add("pairs", static_cast<std::int64_t>(pairs.pairs.size()));
+  out.method = DayLightMethod::SunAndSky;
+  out.sun_direction = o.sun_direction.normalized();
+  const std::vector<float> direct = directShading(pairs, caster, out.sun_direction);
+  out.ambient_scale = channelAmbientScales(pairs, direct);
+  const std::vector<float> no_sun(pairs.points.size(), 0.f);
+  const double ambient_only_cost = classCost(pairs, no_sun, 1.f, 3);
+  const double sun_cost = classCost(pairs, direct, out.ambient_scale.mean(), 3);
+  out.sun_gain = ambient_only_cost > 0 ? 1.0 - sun_cost / ambient_only_cost : 0.0;
+  out.report.notes.push_back("sun direction given: its shadows traced through the mesh, no search");
+}
+
 // Finds the sun (coarse grid, then pattern search from the best three) and whether it explains
 // enough: fills out.sun_direction, sun_gain, ambient_scale and method. `smooth`: the day image
 // box-filtered against its noise.
@@ -1215,11 +1233,15 @@ DayLightRemoval removeDayLight(const cv::Mat& day_linear, const DayLightGeometry
   const AmbientSources sources{smooth, sky, geometry.camera, surface_median, surfacePercentile(day, map, 25), up};
   const std::vector<Eigen::Vector3f> ambient = ambientIrradiance(map, caster, sources, o.ambient_rays);
   out.report.add("ambient_seconds", clock.seconds(), "s");
-  if (o.shadows_from_image) {
+  const bool given_sun = o.sun_direction.allFinite() && o.sun_direction.norm() > 0.f;
+  if (o.shadows_from_image && !given_sun) {
     removeImageShadows(day, map, smooth, ambient, kAmbientFloor * surface_median, HemisphereFrame(up), caster, out);
     out.report.add("sun_search_seconds", clock.seconds(), "s");
   } else {
-    findSun(map, smooth, ambient, caster, HemisphereFrame(up), o, out);
+    if (given_sun)
+      useGivenSun(map, smooth, ambient, caster, o, out);
+    else
+      findSun(map, smooth, ambient, caster, HemisphereFrame(up), o, out);
     out.report.add("sun_search_seconds", clock.seconds(), "s");
     out.albedo = divideShading(day, map, ambient, kAmbientFloor * surface_median, caster, out.sun_direction,
                                out.method == DayLightMethod::SunAndSky, out.ambient_scale);

@@ -11,6 +11,8 @@
 // --exact-geometry: synth's exact mesh, normals and instances instead of solo night's.
 // --exact-depth-mesh: the depth mesh of synth's exact depth (what the camera sees of the exact
 // geometry, cleaned as solo night cleans it) with the exact normals and instances.
+// --known-sun: the shadow-ray removal is given synth's sun (DayLightRemovalOptions::sun_direction)
+// instead of searching it; the image-shadow removal searches as before.
 // Errors: "fit" scales each channel of both estimates by its least-squares gain to the exact
 // albedo (the shading left, not the exposure); "rule" is each estimate with the removal's own
 // white balance and scale (the day image given the same rule). --pictures DIR writes each
@@ -209,7 +211,7 @@ void writePictures(const fs::path& pictures, const std::string& name, const cv::
   writeImage(pictures / (name + "_side_by_side.png"), srgbEncode8(half));
 }
 
-void runScene(const fs::path& dir, const fs::path& pictures, Geometry mode) {
+void runScene(const fs::path& dir, const fs::path& pictures, Geometry mode, bool known_sun) {
   const Scene scene = loadScene(dir / "scene.json");
   const cv::Mat day = linearised(scene.image);
   const PinholeCamera camera = scene.camera.scaledTo(day.cols, day.rows);
@@ -223,7 +225,9 @@ void runScene(const fs::path& dir, const fs::path& pictures, Geometry mode) {
   for (int y = 0; y < mask.rows; ++y)
     for (int x = 0; x < mask.cols; ++x) mask.at<std::uint8_t>(y, x) = labels.at<int>(y, x) != kSkyLabel ? 1 : 0;
   const Eigen::Vector3f sun = synthSun(dir);
-  const Scored rays = score(removeDayLight(day, geometry), truth, mask, sun);
+  DayLightRemovalOptions ray_options;
+  if (known_sun) ray_options.sun_direction = sun;
+  const Scored rays = score(removeDayLight(day, geometry, ray_options), truth, mask, sun);
   const Scored image = score(removeDayLight(day, geometry, image_options), truth, mask, sun);
   const cv::Mat day_rule = balanced(day, labels, mask);
   const AlbedoError day_fit = albedoError(day, truth, mask, true), day_rule_err = albedoError(day_rule, truth, mask, false);
@@ -244,6 +248,7 @@ void runScene(const fs::path& dir, const fs::path& pictures, Geometry mode) {
 int main(int argc, char** argv) {
   fs::path pictures;
   Geometry mode = Geometry::SoloNight;
+  bool known_sun = false;
   std::vector<fs::path> scenes;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -253,17 +258,20 @@ int main(int argc, char** argv) {
       mode = Geometry::ExactMesh;
     else if (arg == "--exact-depth-mesh")
       mode = Geometry::ExactDepthMesh;
+    else if (arg == "--known-sun")
+      known_sun = true;
     else
       scenes.emplace_back(arg);
   }
   if (scenes.empty()) {
-    std::fprintf(stderr, "usage: bench_day_light [--pictures DIR] [--exact-geometry | --exact-depth-mesh] SCENE_DIR...\n");
+    std::fprintf(stderr, "usage: bench_day_light [--pictures DIR] [--exact-geometry | --exact-depth-mesh] [--known-sun] "
+                         "SCENE_DIR...\n");
     return 2;
   }
   std::printf("%-6s %12s | %-11s %25s | %-11s %25s | %20s\n", "", "day", "shadow rays", "", "image shadows", "",
               "rule MAE");
   std::printf("%-6s %6s %5s | %-11s %6s %5s %6s %7s | %-11s %6s %5s %6s %7s | %6s %6s %6s\n", "scene", "fit", "rel",
               "method", "fit", "rel", "sun", "time", "method", "fit", "rel", "sun", "time", "day", "rays", "image");
-  for (const fs::path& dir : scenes) runScene(dir, pictures, mode);
+  for (const fs::path& dir : scenes) runScene(dir, pictures, mode, known_sun);
   return 0;
 }

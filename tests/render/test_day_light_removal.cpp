@@ -182,6 +182,47 @@ TEST(DayLightRemoval, FindsTheSunAndFlattensTheShadowOfABox) {
   EXPECT_GT(out.report.seconds, 0.0);
 }
 
+// A known sun (DayLightRemovalOptions::sun_direction) is used as given, with or without
+// shadows_from_image: the box's shadow flattens as with the found sun, and a wrong sun (turned
+// 90 degrees about the vertical) leaves it, so the given direction is what decides.
+TEST(DayLightRemoval, AGivenSunIsUsedWithoutASearch) {
+  const PlaneAndBox scene = planeAndBox();
+  const cv::Mat day = renderDay(scene.geometry, sunDirection(), kSunIrradiance);
+  const cv::Mat lit = sunlit(scene.geometry);
+  const Spread before = albedoSpread(day, lit);
+  for (const bool from_image : {false, true}) {
+    SCOPED_TRACE(from_image ? "shadows_from_image" : "shadow rays");
+    solo::DayLightRemovalOptions options;
+    options.shadows_from_image = from_image;
+    options.sun_direction = 3.f * sunDirection();  // any length
+    const solo::DayLightRemoval out = solo::removeDayLight(day, scene.geometry, options);
+    ASSERT_EQ(out.method, solo::DayLightMethod::SunAndSky);
+    EXPECT_LT(angleDeg(out.sun_direction, sunDirection()), 1e-3);
+    EXPECT_NEAR(out.sun_direction.norm(), 1.f, 1e-5f);
+    EXPECT_NE(std::find(out.report.notes.begin(), out.report.notes.end(),
+                        "sun direction given: its shadows traced through the mesh, no search"),
+              out.report.notes.end());
+    const Spread after = albedoSpread(out.albedo, lit);
+    EXPECT_NEAR(after.lit_over_shadow, 1.0, 0.35);
+    EXPECT_LT(after.relative_std, 0.5 * before.relative_std);
+    EXPECT_GT(out.sun_gain, 0.15);
+  }
+  // Turned 90 degrees about the vertical (-y): the shadow is looked for where there is none.
+  const Eigen::Vector3f s = sunDirection();
+  solo::DayLightRemovalOptions wrong;
+  wrong.sun_direction = Eigen::Vector3f(-s.z(), s.y(), s.x());
+  const solo::DayLightRemoval out = solo::removeDayLight(day, scene.geometry, wrong);
+  const double wrong_ratio = albedoSpread(out.albedo, lit).lit_over_shadow;
+  std::printf("lit / shadow with the sun turned 90 degrees: %.3f\n", wrong_ratio);
+  EXPECT_GT(wrong_ratio, 1.5);
+  // Not finite: searched.
+  solo::DayLightRemovalOptions nan_sun;
+  nan_sun.sun_direction = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  const solo::DayLightRemoval searched = solo::removeDayLight(day, scene.geometry, nan_sun);
+  ASSERT_EQ(searched.method, solo::DayLightMethod::SunAndSky);
+  EXPECT_LT(angleDeg(searched.sun_direction, sunDirection()), 3.0);
+}
+
 TEST(DayLightRemoval, WithoutSunOnlyTheAmbientLightIsDividedOut) {
   const PlaneAndBox scene = planeAndBox();
   const cv::Mat day = renderDay(scene.geometry, sunDirection(), 0.f);  // overcast

@@ -49,6 +49,10 @@ struct DayLightRemovalOptions {
   /// modes) instead of searched with shadow rays through the mesh; search_pairs,
   /// refine_pairs, the steps and min_sun_gain then do not apply.
   bool shadows_from_image = false;
+  /// The direction toward the sun in the camera frame when it is known (from the capture's time
+  /// and place and the camera's pose): no search, its shadows traced through the mesh (also with
+  /// shadows_from_image). Zero (the default) or not finite: searched.
+  Eigen::Vector3f sun_direction = Eigen::Vector3f::Zero();
 };
 
 /// The scene as the removal sees it: a triangle mesh in the camera frame (metres) with the
