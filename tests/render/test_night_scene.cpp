@@ -650,7 +650,9 @@ TEST(NightScene, AProxyLiesInFrontOfItsLampsFacesAndThoseReflectNothing) {
     for (const std::uint32_t v : night.scene.faces[f]) left &= night.scene.vertices[v].x() / 4.0f * 10 + 2.5f < 2.5f;
     const bool black = night.scene.face_reflectance[f].isZero();
     dark += black;
-    if (left) EXPECT_FALSE(black) << "mesh face " << f;
+    if (left) {
+      EXPECT_FALSE(black) << "mesh face " << f;
+    }
   }
   EXPECT_GE(dark, 12) << "the lamp's faces under columns 3-5 (two per quad, two quads per row)";
 }
