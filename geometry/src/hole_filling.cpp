@@ -758,35 +758,90 @@ bool patchFacesIntersect(const std::vector<Eigen::Vector3d>& points_in, const st
   return facesIntersect(points, la, lb);
 }
 
+namespace {
+
+using FaceBox = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::size_t>;
+
+// The boxes of the non-degenerate faces, with their indices.
+std::vector<FaceBox> faceBoxes(const std::vector<Point>& points, const std::vector<std::array<int, 3>>& faces) {
+  std::vector<FaceBox> boxes;
+  boxes.reserve(faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    if (faceIsDegenerate(points, faces[i])) continue;
+    const auto& f = faces[i];
+    boxes.emplace_back(points[f[0]].bbox() + points[f[1]].bbox() + points[f[2]].bbox(), i);
+  }
+  return boxes;
+}
+
+// The candidate boxes split by group (-1 last, as `ungrouped`), and each group's own box.
+struct GroupedBoxes {
+  std::vector<std::vector<FaceBox>> groups;
+  std::vector<FaceBox> ungrouped, bounds;  // bounds: one per group, info = its index in groups
+};
+
+GroupedBoxes groupBoxes(const std::vector<FaceBox>& boxes, const std::vector<int>& group) {
+  GroupedBoxes out;
+  std::vector<int> ids;
+  for (const FaceBox& box : boxes)
+    if (group[box.info()] >= 0) ids.push_back(group[box.info()]);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  out.groups.resize(ids.size());
+  for (const FaceBox& box : boxes) {
+    const int id = group[box.info()];
+    if (id < 0) {
+      out.ungrouped.push_back(box);
+      continue;
+    }
+    out.groups[static_cast<std::size_t>(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin())].push_back(box);
+  }
+  for (std::size_t g = 0; g < out.groups.size(); ++g) {
+    CGAL::Bbox_3 bound = out.groups[g].front().bbox();
+    for (const FaceBox& box : out.groups[g]) bound += box.bbox();
+    out.bounds.emplace_back(bound, g);
+  }
+  return out;
+}
+
+}  // namespace
+
 std::vector<std::uint8_t> findIntersectingFaces(const std::vector<Eigen::Vector3d>& points_in,
                                                 const std::vector<std::array<int, 3>>& candidates,
                                                 const std::vector<std::array<int, 3>>& others,
-                                                bool candidates_among_themselves) {
+                                                bool candidates_among_themselves,
+                                                const std::vector<int>& candidate_group) {
+  CGAL_precondition(candidate_group.empty() || candidate_group.size() == candidates.size());
   std::vector<Point> points;
   points.reserve(points_in.size());
   for (const auto& p : points_in) points.push_back(toPoint(p));
-  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::size_t>;
-  const auto boxesOf = [&](const std::vector<std::array<int, 3>>& faces) {
-    std::vector<Box> boxes;
-    boxes.reserve(faces.size());
-    for (std::size_t i = 0; i < faces.size(); ++i) {
-      if (faceIsDegenerate(points, faces[i])) continue;
-      const auto& f = faces[i];
-      boxes.emplace_back(points[f[0]].bbox() + points[f[1]].bbox() + points[f[2]].bbox(), i);
-    }
-    return boxes;
-  };
-  std::vector<Box> candidate_boxes = boxesOf(candidates), other_boxes = boxesOf(others);
+  std::vector<FaceBox> candidate_boxes = faceBoxes(points, candidates), other_boxes = faceBoxes(points, others);
   std::vector<std::uint8_t> hit(candidates.size(), 0);
-  if (candidates_among_themselves)
-    CGAL::box_self_intersection_d(candidate_boxes.begin(), candidate_boxes.end(), [&](const Box& a, const Box& b) {
-      if ((hit[a.info()] && hit[b.info()]) || !facesIntersect(points, candidates[a.info()], candidates[b.info()]))
-        return;
-      hit[a.info()] = hit[b.info()] = 1;
-    });
+  const auto among_candidates = [&](const FaceBox& a, const FaceBox& b) {
+    if ((hit[a.info()] && hit[b.info()]) || !facesIntersect(points, candidates[a.info()], candidates[b.info()])) return;
+    hit[a.info()] = hit[b.info()] = 1;
+  };
+  if (candidates_among_themselves && candidate_group.empty()) {
+    CGAL::box_self_intersection_d(candidate_boxes.begin(), candidate_boxes.end(), among_candidates);
+  } else if (candidates_among_themselves) {
+    // Ungrouped faces against each other and every group; groups against the groups whose
+    // bounds they meet, never within themselves.
+    GroupedBoxes grouped = groupBoxes(candidate_boxes, candidate_group);
+    CGAL::box_self_intersection_d(grouped.ungrouped.begin(), grouped.ungrouped.end(), among_candidates);
+    for (std::vector<FaceBox>& group : grouped.groups)
+      if (!grouped.ungrouped.empty())
+        CGAL::box_intersection_d(grouped.ungrouped.begin(), grouped.ungrouped.end(), group.begin(), group.end(),
+                                 among_candidates);
+    std::vector<std::pair<std::size_t, std::size_t>> meeting;
+    CGAL::box_self_intersection_d(grouped.bounds.begin(), grouped.bounds.end(),
+                                  [&](const FaceBox& a, const FaceBox& b) { meeting.emplace_back(a.info(), b.info()); });
+    for (const auto& [g, h] : meeting)
+      CGAL::box_intersection_d(grouped.groups[g].begin(), grouped.groups[g].end(), grouped.groups[h].begin(),
+                               grouped.groups[h].end(), among_candidates);
+  }
   if (!other_boxes.empty() && !candidate_boxes.empty())
     CGAL::box_intersection_d(candidate_boxes.begin(), candidate_boxes.end(), other_boxes.begin(), other_boxes.end(),
-                             [&](const Box& a, const Box& b) {
+                             [&](const FaceBox& a, const FaceBox& b) {
                                if (!hit[a.info()] && facesIntersect(points, candidates[a.info()], others[b.info()]))
                                  hit[a.info()] = 1;
                              });

@@ -629,24 +629,21 @@ std::vector<std::uint8_t> HoleCloser::rejectedAttempts(const std::vector<Attempt
     });
     for (std::size_t i = 0; i < pieces.size(); ++i) rejected[pieces[i][0]] |= piece_meets[i];
   }
+  // An image-space patch cannot meet itself: its faces lie over disjoint triangles of the
+  // image, lifted along their rays. Its faces form one group, tested only against the others.
   std::vector<Face> candidates;
   std::vector<std::size_t> owner;
+  std::vector<int> group;
   for (std::size_t a = 0; a < attempts.size(); ++a) {
     if (rejected[a]) continue;
+    const int id = attempts[a].method == HoleFillMethod::ImageSpace ? static_cast<int>(a) : -1;
     for (const auto& f : attempts[a].faces) {
       candidates.push_back(f);
       owner.push_back(a);
+      group.push_back(id);
     }
   }
-  // One image-space patch alone cannot meet itself: its faces lie over disjoint triangles of
-  // the image, lifted along their rays.
-  std::size_t candidate_patches = 0;
-  bool all_image_space = true;
-  for (std::size_t a = 0; a < attempts.size(); ++a)
-    if (!rejected[a])
-      ++candidate_patches, all_image_space = all_image_space && attempts[a].method == HoleFillMethod::ImageSpace;
-  const std::vector<std::uint8_t> hit =
-      findIntersectingFaces(round_points, candidates, others, !(candidate_patches == 1 && all_image_space));
+  const std::vector<std::uint8_t> hit = findIntersectingFaces(round_points, candidates, others, true, group);
   for (std::size_t i = 0; i < hit.size(); ++i)
     if (hit[i]) rejected[owner[i]] = 1;
   return rejected;

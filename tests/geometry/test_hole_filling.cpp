@@ -4,6 +4,7 @@
 // from ../shared/data/meshes.
 
 #include <solo/geometry/boundary_loops.h>
+#include <solo/geometry/hole_filling.h>
 #include <solo/core/error.h>
 #include <solo/geometry/mesh_cleanup.h>
 #include <solo/geometry/mesh_holes.h>
@@ -13,6 +14,7 @@
 #include "test_support.h"
 
 #include <cmath>
+#include <random>
 #include <limits>
 #include <set>
 
@@ -219,6 +221,76 @@ TEST(HoleFilling, FillingThatWouldSelfIntersectIsRejected) {
   ASSERT_EQ(closing.warnings.size(), 1u);
   EXPECT_NE(closing.warnings[0].find("intersects"), std::string::npos);
   EXPECT_EQ(solo::evaluateMesh(solo::toTriangleMesh(mesh)).self_intersecting_pairs, 0);
+}
+
+// Patches as image-space hole filling makes them: a grid of pixel positions lifted along the
+// camera's rays (focal 100 px, centre 0) to a depth tilted across the patch, so that its faces
+// lie over disjoint triangles of the image and never meet one another. Appends to points and
+// faces.
+void addImagePatch(std::vector<Eigen::Vector3d>& points, std::vector<std::array<int, 3>>& faces, int u0, int v0,
+                   int size, double depth_m, double tilt_m_per_px) {
+  const int base = static_cast<int>(points.size());
+  for (int y = 0; y <= size; ++y)
+    for (int x = 0; x <= size; ++x) {
+      const double u = u0 + x, v = v0 + y, z = depth_m + tilt_m_per_px * (x - y);
+      points.emplace_back(u / 100.0 * z, v / 100.0 * z, z);
+    }
+  const auto id = [&](int x, int y) { return base + x + (size + 1) * y; };
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      faces.push_back({id(x, y), id(x + 1, y), id(x + 1, y + 1)});
+      faces.push_back({id(x, y), id(x + 1, y + 1), id(x, y + 1)});
+    }
+}
+
+// Faces grouped by patch are tested only against the other patches, the ungrouped faces and
+// the mesh: on patches that do not meet themselves the answer is the ungrouped test's, face for
+// face, over 20 seeded sets of overlapping patches at crossing depths and loose triangles.
+TEST(HoleFilling, GroupedPatchesFindTheSameIntersectionsAsAllPairs) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> corner(-20, 10), size(4, 12);
+  std::uniform_real_distribution<double> depth(4.0, 6.0), tilt(-0.1, 0.1), jitter(-0.5, 0.5);
+  std::int64_t hits = 0, grouped_faces = 0;
+  for (int set = 0; set < 20; ++set) {
+    std::vector<Eigen::Vector3d> points;
+    std::vector<std::array<int, 3>> candidates, others;
+    std::vector<int> group;
+    for (int patch = 0; patch < 4; ++patch) {
+      addImagePatch(points, candidates, corner(rng), corner(rng), size(rng), depth(rng), tilt(rng));
+      group.resize(candidates.size(), patch);
+    }
+    grouped_faces += static_cast<std::int64_t>(candidates.size());
+    for (int loose = 0; loose < 6; ++loose) {  // ungrouped faces: any triangle
+      for (int k = 0; k < 3; ++k) points.emplace_back(jitter(rng) * 2, jitter(rng) * 2, 5.0 + jitter(rng) * 2);
+      const int n = static_cast<int>(points.size());
+      candidates.push_back({n - 3, n - 2, n - 1});
+      group.push_back(-1);
+    }
+    addImagePatch(points, others, -5, -5, 10, 5.0, 0.05);  // the mesh
+    const auto all_pairs = solo::findIntersectingFaces(points, candidates, others);
+    const auto by_group = solo::findIntersectingFaces(points, candidates, others, true, group);
+    ASSERT_EQ(all_pairs.size(), by_group.size());
+    for (std::size_t i = 0; i < all_pairs.size(); ++i) {
+      EXPECT_EQ(all_pairs[i], by_group[i]) << "set " << set << ", face " << i << " of group " << group[i];
+      hits += all_pairs[i];
+    }
+  }
+  // Not a vacuous comparison: hundreds of faces cross another patch or the mesh.
+  EXPECT_GT(hits, grouped_faces / 50);
+  EXPECT_LT(hits, grouped_faces);
+}
+
+// The grouping is a promise: two crossing faces given one group are not tested against each
+// other; in two groups, or ungrouped, they are found.
+TEST(HoleFilling, FacesOfOneGroupAreNotTestedAgainstEachOther) {
+  const std::vector<Eigen::Vector3d> points = {{0, 0, 0}, {2, 0, 0}, {1, 2, 0}, {1, 1, -1}, {1, 1, 1}, {1, -1, 0.5}};
+  const std::vector<std::array<int, 3>> crossing = {{0, 1, 2}, {3, 4, 5}};
+  const auto ungrouped = solo::findIntersectingFaces(points, crossing, {});
+  EXPECT_EQ(ungrouped, (std::vector<std::uint8_t>{1, 1}));
+  EXPECT_EQ(solo::findIntersectingFaces(points, crossing, {}, true, {0, 1}), ungrouped);
+  EXPECT_EQ(solo::findIntersectingFaces(points, crossing, {}, true, {-1, 0}), ungrouped);
+  EXPECT_EQ(solo::findIntersectingFaces(points, crossing, {}, true, {3, 3}), (std::vector<std::uint8_t>{0, 0}));
+  EXPECT_EQ(solo::findIntersectingFaces(points, crossing, {}, false), (std::vector<std::uint8_t>{0, 0}));
 }
 
 TEST(HoleFilling, NonManifoldAndDuplicatePartsAreRepaired) {

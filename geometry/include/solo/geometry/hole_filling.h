@@ -131,10 +131,16 @@ HolePatch fillHoleInImage(const std::vector<Eigen::Vector3d>& boundary, const Pi
 /// other than in what they share by index (the rules of evaluateMesh: no shared vertex, any
 /// contact; a shared vertex, the opposite edge of one meets the other; a shared edge, coplanar
 /// and folded onto the same side). Faces index into `points`; degenerate faces are skipped.
+/// candidate_group: empty, or one id per candidate. Candidates that share an id >= 0 are known
+/// not to meet one another (the faces of one image-space patch lie over disjoint triangles of
+/// the image) and are not tested against each other, only against the other groups, the
+/// ungrouped candidates (-1) and `others`; the result is that of the ungrouped test whenever
+/// that holds.
 std::vector<std::uint8_t> findIntersectingFaces(const std::vector<Eigen::Vector3d>& points,
                                                 const std::vector<std::array<int, 3>>& candidates,
                                                 const std::vector<std::array<int, 3>>& others,
-                                                bool candidates_among_themselves = true);
+                                                bool candidates_among_themselves = true,
+                                                const std::vector<int>& candidate_group = {});
 
 /// The same rule for one pair of faces (indices into `points`); false when either is degenerate.
 bool patchFacesIntersect(const std::vector<Eigen::Vector3d>& points, const std::array<int, 3>& a,
