@@ -190,6 +190,9 @@ void addNightRenderFlags(CLI::App* night_cmd, NightOptions& night) {
                         "Before denoising, scale down rare bright samples this many standard deviations above their "
                         "neighbours and spread the rest of their light wide (no blotches); 0 = off")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  night_cmd->add_option("--denoise-passes", night.conversion.denoise.iterations,
+                        "A-trous passes of the render filter, taps 1, 2, ..., 2^(N-1) px apart")
+      ->capture_default_str()->check(CLI::Range(1, 10));
 }
 
 // The night camera's and the post-process's flags.
