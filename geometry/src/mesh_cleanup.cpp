@@ -110,6 +110,7 @@ void appendHoleClosing(HoleClosing& into, const HoleClosing& more) {
   into.warnings.insert(into.warnings.end(), more.warnings.begin(), more.warnings.end());
   into.patch_faces.insert(into.patch_faces.end(), more.patch_faces.begin(), more.patch_faces.end());
   into.hole_methods.insert(into.hole_methods.end(), more.hole_methods.begin(), more.hole_methods.end());
+  into.hole_faces.insert(into.hole_faces.end(), more.hole_faces.begin(), more.hole_faces.end());
 }
 
 void addHoleCounts(StageReport& report, const HoleClosing& holes) {
@@ -225,6 +226,77 @@ HoleClosing closeSomeHoles(DepthMesh& m, const DepthMeshCleanupOptions& options,
   return closeHoles(m.mesh, subset.holes, options.hole_filling, mapping);
 }
 
+// The backdrops `which` of `source`, behind the mesh's farthest surfaces.
+HoleClosing closeBackdrops(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
+                           const DepthMeshCleanupOptions& options, const DepthLoops& source,
+                           const std::vector<std::size_t>& which) {
+  cv::Mat farthest, observed;
+  backdropDepthBounds(m, depth_m, had_depth, options, farthest, observed);
+  return closeSomeHoles(m, options, source, which, &farthest, &observed, false);
+}
+
+// Takes the patches of `own` (indices into the first pass's holes) out of the mesh; returns the
+// vertices that went with them.
+std::int64_t removeHolePatches(DepthMesh& m, const HoleClosing& first, const std::vector<std::size_t>& own) {
+  const auto live_vertices = [&m] {
+    std::int64_t n = 0;
+    for (const auto v : m.mesh.vertices()) n += !m.mesh.status(v).deleted();
+    return n;
+  };
+  const std::int64_t before = live_vertices();
+  for (const std::size_t k : own)
+    for (const auto f : first.hole_faces[k])
+      if (!m.mesh.status(f).deleted()) m.mesh.delete_face(f, true);
+  return before - live_vertices();
+}
+
+// Counts a first-pass patch taken out: its hole is closed inside a backdrop instead.
+void uncountPatch(HoleClosing& first, std::size_t k) {
+  const std::string& method = first.hole_methods[k];
+  if (method == "image_space") --first.by_image_space;
+  else if (method == "refine_fair") --first.by_refine_fair;
+  else if (method == "triangulation") --first.by_triangulation;
+  else if (method == "centroid_fan") --first.by_centroid_fan;
+  --first.holes, --first.filled;
+  first.faces_added -= static_cast<std::int64_t>(first.hole_faces[k].size());
+  first.hole_methods[k] = "backdrop";
+  first.hole_faces[k].clear();
+}
+
+// A backdrop whose patch met the mesh, with frame holes closed on their own beside it: those
+// may lie behind the same occluder, their patch where the backdrop has to pass (a pole one
+// pixel wide at the mesh's size). On a copy of the mesh their patches are taken out and every
+// frame hole joins a backdrop run, as a frame hole whose own patch fails does; the copy is kept
+// when it leaves fewer holes open. Updates `first` (the first pass) and `more` (the backdrops).
+void joinOwnFrameHolesToBackdrops(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
+                                  const DepthMeshCleanupOptions& options, const DepthLoops& loops,
+                                  const std::vector<std::size_t>& first_pass, HoleClosing& first,
+                                  HoleClosing& more, StageReport& report) {
+  std::vector<std::size_t> own;
+  for (std::size_t k = 0; k < first_pass.size(); ++k)
+    if (loops.frame_hole[first_pass[k]] && first.hole_methods[k] != "open" && !first.hole_faces[k].empty())
+      own.push_back(k);
+  if (own.empty()) return;
+  DepthMesh trial = m;
+  const std::int64_t vertices_removed = removeHolePatches(trial, first, own);
+  const DepthLoops joined = classifyDepthLoops(trial, had_depth, depth_m, BackdropMode::EveryFrameHole);
+  std::vector<std::size_t> joined_backdrops;
+  for (std::size_t i = 0; i < joined.holes.size(); ++i)
+    if (joined.backdrop[i]) joined_backdrops.push_back(i);
+  if (joined_backdrops.empty()) return;
+  HoleClosing trial_more = closeBackdrops(trial, depth_m, had_depth, options, joined, joined_backdrops);
+  report.add("frame_holes_tried_in_backdrops", static_cast<std::int64_t>(own.size()));
+  if (trial_more.left_open >= more.left_open) return;
+  m = trial;
+  for (const std::size_t k : own) uncountPatch(first, k);
+  first.vertices_added -= vertices_removed;
+  first.patch_faces.erase(std::remove_if(first.patch_faces.begin(), first.patch_faces.end(),
+                                         [&m](OpenMesh::FaceHandle f) { return m.mesh.status(f).deleted(); }),
+                          first.patch_faces.end());
+  more = std::move(trial_more);
+  report.add("frame_holes_joined_to_backdrops", static_cast<std::int64_t>(own.size()));
+}
+
 // Closes the holes of a depth mesh. Backdrops are filled after every other hole: they lie
 // behind everything in their region, the other holes' patches too (seen through the
 // farthest-surface map).
@@ -254,15 +326,14 @@ HoleClosing closeDepthHoles(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat&
   }
   if (!backdrop_holes.empty()) {
     const Stopwatch backdrop_clock;
-    cv::Mat farthest, observed;
-    backdropDepthBounds(m, depth_m, had_depth, options, farthest, observed);
-    const HoleClosing more =
-        closeSomeHoles(m, options, *backdrop_source, backdrop_holes, &farthest, &observed, false);
+    HoleClosing more = closeBackdrops(m, depth_m, had_depth, options, *backdrop_source, backdrop_holes);
     if (backdrop_source == &again && more.left_open == 0) {
       // The frame holes left open are closed now, inside the backdrops (counted there).
       holes.holes -= retried;
       holes.left_open -= retried;
     }
+    if (more.left_open > 0 && backdrop_source == &loops)
+      joinOwnFrameHolesToBackdrops(m, depth_m, had_depth, options, loops, first_pass, holes, more, report);
     appendHoleClosing(holes, more);
     report.add("seconds_backdrops", backdrop_clock.seconds(), "s");  // part of seconds_hole_filling
   }

@@ -298,6 +298,7 @@ HoleCloser::HoleCloser(SurfaceMesh& mesh, const std::vector<VertexLoop>& input_h
   was_split.assign(holes.size(), 0), attached.assign(holes.size(), 0);
   pieces_of_root.assign(holes.size(), 1);
   result.hole_methods.assign(holes.size(), "open");
+  result.hole_faces.assign(holes.size(), {});
   large_stage.assign(holes.size(), 0);
   large_failure.resize(holes.size());
   readPoints();
@@ -709,6 +710,7 @@ void HoleCloser::attachAccepted() {
     result.faces_added += static_cast<std::int64_t>(added.size());
     result.vertices_added += static_cast<std::int64_t>(attempt.patch.new_points.size());
     result.patch_faces.insert(result.patch_faces.end(), added.begin(), added.end());
+    if (attempt.hole < result.hole_faces.size()) result.hole_faces[attempt.hole] = added;
     if (pixels) labelNewVertices(attempt, first_new, handle_of_new);
   }
   if (was_enabled) omerr().enable();

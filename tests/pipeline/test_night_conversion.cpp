@@ -112,6 +112,36 @@ TEST(NightConversion, AnImageAboveOneMegapixelIsMeshedAndRenderedAtHalfSize) {
   EXPECT_GT(metric("render", "upsampled_lamp_pixels"), 0);
 }
 
+// The seed-3 street meshed at half its size (the draft preset): a lamp pole one pixel wide there
+// has frame holes beside it closed on their own whose patches pass behind it, where the
+// backdrop of the other frame holes must pass too. The backdrop meets them, so those frame
+// holes join it (as a frame hole whose own patch fails does): every hole closes, the mesh's
+// only boundary is the image border, with no self-intersection or non-manifold edge.
+TEST(NightConversion, FrameHolesClosedBehindAThinPoleJoinTheBackdropThatMeetsThem) {
+  TempDir dir;
+  ASSERT_EQ(solo::test::runSolo("synth --seed 3 -o \"" + (dir / "s").string() + "\"").exit_code, 0);
+  const solo::Scene scene = solo::loadScene(dir / "s" / "scene.json");
+  NightConversionOptions o = solo::nightPreset("draft");
+  o.mesh.evaluate = true;
+  solo::NightConversionResult r;
+  solo::runNightSceneStages(scene, o, {}, r);
+  const solo::StageReport* mesh = nullptr;
+  for (const solo::StageReport& s : r.stages)
+    if (s.name == "mesh") mesh = &s;
+  ASSERT_NE(mesh, nullptr);
+  const auto metric = [&](const std::string& name) {
+    return mesh->find(name) ? std::get<std::int64_t>(*mesh->find(name)) : std::int64_t{-1};
+  };
+  EXPECT_EQ(metric("mesh_downsample"), 2);
+  EXPECT_GT(metric("frame_holes_joined_to_backdrops"), 0);
+  EXPECT_EQ(metric("holes_left_open"), 0);
+  EXPECT_EQ(metric("hole_patches_rejected_intersecting"), 0) << "the joined backdrop meets nothing";
+  EXPECT_EQ(metric("after_boundary_loops_total"), 1) << "the image border only";
+  EXPECT_EQ(metric("after_self_intersecting_pairs"), 0);
+  EXPECT_EQ(metric("after_non_manifold_edges"), 0);
+  EXPECT_EQ(metric("after_degenerate_faces"), 0);
+}
+
 TEST(NightConversion, TheEmbeddedSceneBecomesANightImageInsideTheRealNightRange) {
   const solo::Scene scene = solo::loadScene(solo::defaultScene());
   NightConversionOptions o = solo::nightPreset("draft");
