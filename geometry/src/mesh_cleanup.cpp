@@ -317,10 +317,15 @@ HoleClosing closeDepthHoles(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat&
   const DepthLoops* backdrop_source = &loops;
   if (retried > 0 && backdrop_mode != BackdropMode::Off) {
     again = classifyDepthLoops(m, had_depth, depth_m, BackdropMode::EveryFrameHole);
-    backdrop_source = &again;
-    backdrop_holes.clear();
+    std::vector<std::size_t> again_backdrops;
     for (std::size_t i = 0; i < again.holes.size(); ++i)
-      if (again.backdrop[i]) backdrop_holes.push_back(i);
+      if (again.backdrop[i]) again_backdrops.push_back(i);
+    // No chain of the new classification closes: the backdrops found first are closed as they
+    // were (the frame holes left open stay open, with their notes).
+    if (!again_backdrops.empty()) {
+      backdrop_source = &again;
+      backdrop_holes = std::move(again_backdrops);
+    }
     report.add("frame_holes_retried_as_backdrop", retried);
     report.add("backdrop_runs_after_retry", again.frame_hole_runs_backdrop);
   }
