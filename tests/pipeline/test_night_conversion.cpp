@@ -112,6 +112,26 @@ TEST(NightConversion, AnImageAboveOneMegapixelIsMeshedAndRenderedAtHalfSize) {
   EXPECT_GT(metric("render", "upsampled_lamp_pixels"), 0);
 }
 
+namespace {
+
+// The mesh stage's report of `scene` under `options`, with the mesh's quality counts.
+solo::StageReport meshStageWithCounts(const solo::Scene& scene, NightConversionOptions options) {
+  options.mesh.evaluate = true;
+  solo::NightConversionResult r;
+  solo::runNightSceneStages(scene, options, {}, r);
+  for (const solo::StageReport& s : r.stages)
+    if (s.name == "mesh") return s;
+  ADD_FAILURE() << "no mesh stage";
+  return {};
+}
+
+// An integer metric of `report`, -1 when it has none of that name.
+std::int64_t integerMetric(const solo::StageReport& report, const std::string& name) {
+  return report.find(name) ? std::get<std::int64_t>(*report.find(name)) : std::int64_t{-1};
+}
+
+}  // namespace
+
 // The seed-3 street meshed at half its size (the draft preset): a lamp pole one pixel wide there
 // has frame holes beside it closed on their own whose patches pass behind it, where the
 // backdrop of the other frame holes must pass too. The backdrop meets them, so those frame
@@ -122,16 +142,8 @@ TEST(NightConversion, FrameHolesClosedBehindAThinPoleJoinTheBackdropThatMeetsThe
   ASSERT_EQ(solo::test::runSolo("synth --seed 3 -o \"" + (dir / "s").string() + "\"").exit_code, 0);
   const solo::Scene scene = solo::loadScene(dir / "s" / "scene.json");
   NightConversionOptions o = solo::nightPreset("draft");
-  o.mesh.evaluate = true;
-  solo::NightConversionResult r;
-  solo::runNightSceneStages(scene, o, {}, r);
-  const solo::StageReport* mesh = nullptr;
-  for (const solo::StageReport& s : r.stages)
-    if (s.name == "mesh") mesh = &s;
-  ASSERT_NE(mesh, nullptr);
-  const auto metric = [&](const std::string& name) {
-    return mesh->find(name) ? std::get<std::int64_t>(*mesh->find(name)) : std::int64_t{-1};
-  };
+  const solo::StageReport mesh = meshStageWithCounts(scene, o);
+  const auto metric = [&](const std::string& name) { return integerMetric(mesh, name); };
   EXPECT_EQ(metric("mesh_downsample"), 2);
   EXPECT_GT(metric("frame_holes_joined_to_backdrops"), 0);
   EXPECT_EQ(metric("holes_left_open"), 0);
@@ -150,16 +162,8 @@ TEST(NightConversion, FrameHolesClosedBehindAThinPoleJoinTheBackdropThatMeetsThe
 TEST(NightConversion, ABackdropIsClosedWhenTheRetriedClassificationFindsNoChain) {
   const solo::Scene scene = solo::loadScene(solo::defaultScene());
   NightConversionOptions o;
-  o.mesh.evaluate = true;
-  solo::NightConversionResult r;
-  solo::runNightSceneStages(scene, o, {}, r);
-  const solo::StageReport* mesh = nullptr;
-  for (const solo::StageReport& s : r.stages)
-    if (s.name == "mesh") mesh = &s;
-  ASSERT_NE(mesh, nullptr);
-  const auto metric = [&](const std::string& name) {
-    return mesh->find(name) ? std::get<std::int64_t>(*mesh->find(name)) : std::int64_t{-1};
-  };
+  const solo::StageReport mesh = meshStageWithCounts(scene, o);
+  const auto metric = [&](const std::string& name) { return integerMetric(mesh, name); };
   ASSERT_GT(metric("frame_holes_retried_as_backdrop"), 0);
   ASSERT_EQ(metric("backdrop_runs_after_retry"), 0) << "the case this test is about";
   EXPECT_GT(metric("found_frame_hole_runs_backdrop"), 0);
@@ -169,7 +173,7 @@ TEST(NightConversion, ABackdropIsClosedWhenTheRetriedClassificationFindsNoChain)
   EXPECT_EQ(metric("after_self_intersecting_pairs"), 0);
   EXPECT_EQ(metric("after_non_manifold_edges"), 0);
   int open_notes = 0;
-  for (const std::string& note : mesh->notes)
+  for (const std::string& note : mesh.notes)
     open_notes += note.find("left open") != std::string::npos || note.find("not filled") != std::string::npos;
   EXPECT_GE(open_notes, 2);
 }
