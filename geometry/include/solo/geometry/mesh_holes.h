@@ -29,12 +29,14 @@ struct HoleClosing {
   std::int64_t largest_hole_vertices = 0;
   std::vector<std::string> warnings;                    ///< one per hole left open, with the reason
   std::vector<OpenMesh::FaceHandle> patch_faces;        ///< faces added
+  /// Per hole (in the order given): the method that closed it ("refine_fair", "triangulation",
+  /// "centroid_fan", "image_space", "membrane", "chord_split"), "backdrop" for a depth mesh's
+  /// frame hole whose own patch was taken out and which a backdrop closes (mesh_cleanup.h), or
+  /// "open".
+  std::vector<std::string> hole_methods;
   /// Per hole (in the order given): the faces its patch added (empty for a hole left open; a
   /// general mesh's hole closed in pieces, or in the refill pass, lists them under patch_faces
   /// only).
-  /// Per hole (in the order given): the method that closed it ("refine_fair", "triangulation",
-  /// "centroid_fan", "image_space", "membrane", "chord_split") or "open".
-  std::vector<std::string> hole_methods;
   std::vector<std::vector<OpenMesh::FaceHandle>> hole_faces;
 };
 
