@@ -1,6 +1,8 @@
 #include "solo/geometry/boundary_loops.h"
 
 #include <algorithm>
+#include <cstdlib>
+#include <utility>
 #include <unordered_map>
 
 namespace solo {
@@ -407,6 +409,9 @@ struct RunChainer {
   }
 };
 
+// How many times a piece of a run may be cut again at its own chord.
+constexpr int kMaxChordCutDepth = 4;
+
 // The frame holes of a depth mesh's border loops: which runs behind an occluder become holes,
 // and how each is closed.
 struct FrameHoleCloser {
@@ -460,8 +465,32 @@ struct FrameHoleCloser {
                                      "its own sheet");
       return;
     }
-    appendHole(out, run, ClosedBy::Chord);
-    ++out.frame_holes;
+    addChordPieces(run, 0);
+  }
+
+  // A run closed by its chord. One that touches or crosses its chord (the foot of a facade along
+  // the chord, with notches behind the poles standing on it) has no simple chord polygon: it is
+  // cut where it meets the chord and each piece turning the hole's way is closed by its own
+  // chord (the notches); the pieces turning the loop's way lie on the sheet and stay border.
+  void addChordPieces(const VertexLoop& run, int depth) {
+    const PixelPath polygon = image.polygonOf(run);
+    const auto pieces = chordPieces(polygon);
+    if (pieces.size() == 1) {
+      appendHole(out, run, ClosedBy::Chord);
+      ++out.frame_holes;
+      if (depth > 0) ++out.frame_holes_chord_pieces;
+      return;
+    }
+    if (depth == 0) ++out.frame_hole_runs_cut_at_chord;
+    for (const auto& [first, last] : pieces) {
+      if (last - first < 2) continue;
+      const VertexLoop piece(run.begin() + static_cast<std::ptrdiff_t>(first),
+                             run.begin() + static_cast<std::ptrdiff_t>(last) + 1);
+      const PixelPath piece_polygon(polygon.begin() + static_cast<std::ptrdiff_t>(first),
+                                    polygon.begin() + static_cast<std::ptrdiff_t>(last) + 1);
+      if (!(twiceSignedArea(piece_polygon) < 0)) continue;
+      if (depth < kMaxChordCutDepth) addChordPieces(piece, depth + 1);
+    }
   }
 
   // Runs of non-border edges of a border loop, starting after a border edge, cut at their
@@ -543,6 +572,37 @@ LoopKind loopKind(const DepthImage& image, const VertexLoop& loop, std::vector<s
 }
 
 }  // namespace
+
+std::vector<std::pair<std::size_t, std::size_t>> chordPieces(const std::vector<OpenMesh::Vec2i>& path) {
+  const std::size_t n = path.size();
+  const std::int64_t ax = path.front()[0], ay = path.front()[1];
+  const std::int64_t bx = path.back()[0], by = path.back()[1];
+  const auto orient = [](std::int64_t px, std::int64_t py, std::int64_t qx, std::int64_t qy, std::int64_t rx,
+                         std::int64_t ry) { return (qx - px) * (ry - py) - (qy - py) * (rx - px); };
+  const auto sign = [](std::int64_t x) { return (x > 0) - (x < 0); };
+  const std::int64_t length2 = (bx - ax) * (bx - ax) + (by - ay) * (by - ay);
+  std::vector<std::int64_t> side(n);
+  for (std::size_t i = 0; i < n; ++i) side[i] = orient(ax, ay, bx, by, path[i][0], path[i][1]);
+  std::vector<std::size_t> cuts{0};
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const std::int64_t along = (path[i][0] - ax) * (bx - ax) + (path[i][1] - ay) * (by - ay);
+    if (side[i] == 0 && along >= 0 && along <= length2) cuts.push_back(i);
+  }
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    if (sign(side[i]) * sign(side[i + 1]) >= 0) continue;
+    const auto& p = path[i];
+    const auto& q = path[i + 1];
+    if (sign(orient(p[0], p[1], q[0], q[1], ax, ay)) * sign(orient(p[0], p[1], q[0], q[1], bx, by)) >= 0) continue;
+    const std::size_t nearer = std::abs(side[i]) <= std::abs(side[i + 1]) ? i : i + 1;
+    if (nearer > 0 && nearer + 1 < n) cuts.push_back(nearer);
+  }
+  cuts.push_back(n - 1);
+  std::sort(cuts.begin(), cuts.end());
+  cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
+  std::vector<std::pair<std::size_t, std::size_t>> pieces;
+  for (std::size_t k = 0; k + 1 < cuts.size(); ++k) pieces.emplace_back(cuts[k], cuts[k + 1]);
+  return pieces;
+}
 
 std::vector<VertexLoop> findBoundaryLoops(const SurfaceMesh& mesh) {
   std::vector<VertexLoop> loops;

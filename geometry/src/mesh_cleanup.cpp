@@ -52,6 +52,8 @@ void addLoopCounts(StageReport& report, const std::string& prefix, const DepthLo
   report.add(prefix + "frame_hole_runs_merged", loops.frame_hole_runs_merged);
   report.add(prefix + "frame_holes_backdrop", loops.frame_holes_backdrop);
   report.add(prefix + "frame_hole_runs_backdrop", loops.frame_hole_runs_backdrop);
+  report.add(prefix + "frame_hole_runs_cut_at_chord", loops.frame_hole_runs_cut_at_chord);
+  report.add(prefix + "frame_holes_chord_pieces", loops.frame_holes_chord_pieces);
 }
 
 // Room (metres) a backdrop leaves behind a foreground solid's back, beyond its thickness.

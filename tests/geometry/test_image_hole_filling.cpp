@@ -775,6 +775,58 @@ TEST(ImageHoleFilling, RunsJoinedAroundAnOccluderWithAFartherSurfaceSeenThroughI
   }
 }
 
+TEST(ChordPieces, APathIsCutWhereItTouchesOrCrossesItsChord) {
+  using Path = std::vector<OpenMesh::Vec2i>;
+  using Pieces = std::vector<std::pair<std::size_t, std::size_t>>;
+  // Below its chord all along: one piece.
+  EXPECT_EQ(solo::chordPieces(Path{{0, 0}, {1, 1}, {2, 1}, {3, 0}}), (Pieces{{0, 3}}));
+  // On the chord's line beyond its end (-1, 0): not a cut.
+  EXPECT_EQ(solo::chordPieces(Path{{0, 0}, {-1, 0}, {-1, 1}, {3, 1}, {2, 0}}), (Pieces{{0, 4}}));
+  // Along the chord with a notch up from (3, 0) to (2, 0): cut at every point on the chord.
+  EXPECT_EQ(solo::chordPieces(Path{{4, 0}, {3, 0}, {3, -1}, {3, -2}, {2, -2}, {2, -1}, {2, 0}, {1, 0}, {0, 0}}),
+            (Pieces{{0, 1}, {1, 6}, {6, 7}, {7, 8}}));
+  // Across the chord from (0, 0) to (10, 2) (side 10 v - 2 u): from +4 at (3, 1) to -8 at (4, 0),
+  // cut at (3, 1); from -4 at (7, 1) to +4 at (8, 2), a tie, cut at the first.
+  EXPECT_EQ(solo::chordPieces(Path{{0, 0}, {1, 1}, {2, 1}, {3, 1}, {4, 0}, {5, 0}, {6, 0}, {7, 1}, {8, 2}, {9, 2}, {10, 2}}),
+            (Pieces{{0, 3}, {3, 7}, {7, 10}}));
+}
+
+TEST(ImageHoleFilling, AFrameHoleAlongItsChordIsCutThereAndItsNotchesClosed) {
+  // A facade over rows 0..14, columns 0..23 (12 m at the left frame to 23.5 m), sky right of
+  // it, a street at 8 m below, a far box at 20 m at the bottom of the left frame, and two poles
+  // at 8 m standing on the street in front of the facade (columns 6..7 and 17..18, rows 4 down).
+  // The facade's run goes from the sky (23, 14) along its foot, up and down around each pole,
+  // to the left frame at (0, 14): no closing path along the frame (the sky), none along the sky
+  // line or to another run (the outline passes the far box), and its chord, along row 14, is
+  // met by the foot itself. Cut where the foot meets the chord, the pieces turning the hole's
+  // way close by their own chords: the notches, so the facade continues behind both poles.
+  cv::Mat depth(kCamera.height, kCamera.width, CV_32F, cv::Scalar(8.0f));
+  for (int v = 0; v < 15; ++v)
+    for (int u = 0; u < kCamera.width; ++u) depth.at<float>(v, u) = u < 24 ? 12.0f + 0.5f * u : 0.0f;
+  depth(cv::Rect(0, 20, 4, kCamera.height - 20)).setTo(20.0f);
+  const cv::Rect left_pole(6, 4, 2, 11), right_pole(17, 4, 2, 11);
+  depth(left_pole).setTo(8.0f);
+  depth(right_pole).setTo(8.0f);
+  solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, {});
+  const solo::StageReport r = solo::cleanDepthMesh(m, depth, {}, {});
+  EXPECT_EQ(metricInt(r, "found_frame_holes_sky_line"), 0);
+  EXPECT_EQ(metricInt(r, "found_frame_holes_merged"), 0);
+  EXPECT_EQ(metricInt(r, "found_frame_holes_backdrop"), 0);
+  EXPECT_EQ(metricInt(r, "found_frame_hole_runs_cut_at_chord"), 1);
+  EXPECT_EQ(metricInt(r, "found_frame_holes_chord_pieces"), 2) << "the two notches";
+  EXPECT_EQ(metricInt(r, "found_frame_holes"), 2);
+  EXPECT_EQ(metricInt(r, "holes_filled_image_space"), 2);
+  EXPECT_EQ(metricInt(r, "holes_left_open"), 0);
+  EXPECT_EQ(metricInt(r, "after_self_intersecting_pairs"), 0);
+  EXPECT_EQ(metricInt(r, "after_non_manifold_edges"), 0);
+  // Behind every pole pixel but the foot's row the farthest surface is the facade's patch.
+  const cv::Mat farthest = solo::farthestSurfaceDepth(m.mesh, kCamera, kCamera.width, kCamera.height);
+  for (const cv::Rect& pole : {left_pole, right_pole})
+    for (int v = pole.y + 1; v < pole.y + pole.height - 1; ++v)
+      for (int u = pole.x; u < pole.x + pole.width; ++u)
+        EXPECT_NEAR(farthest.at<float>(v, u), 12.0f + 0.5f * u, 0.5f) << "pixel (" << u << ", " << v << ")";
+}
+
 TEST(ImageHoleFilling, DefaultSceneClosesEveryFrameHole) {
   // data/default/scene.json as `solo mesh from-depth` meshes it. Measured: 1 906 inner holes
   // and 40 frame runs found; every inner hole and the 29 frame holes with a region of their own

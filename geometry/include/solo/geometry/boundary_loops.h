@@ -21,6 +21,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace solo {
@@ -81,8 +82,20 @@ struct DepthLoops {
   /// inside is what lies behind everything seen there, and its patch is pinned behind every
   /// vertex inside (fillHoleInImage's backdrop mode). And how many runs they hold.
   std::int64_t frame_holes_backdrop = 0, frame_hole_runs_backdrop = 0;
+  /// Runs closed by their chord that touch or cross it (no simple chord polygon), cut where they
+  /// meet it; and the pieces turning the hole's way, each closed by its own chord (counted in
+  /// frame_holes, and in holes). The pieces turning the loop's way lie on the sheet: border.
+  std::int64_t frame_hole_runs_cut_at_chord = 0, frame_holes_chord_pieces = 0;
   std::vector<std::string> unclosable_notes;
 };
+
+/// Where a pixel path (a frame-hole run, at least two points) meets its chord, the segment from
+/// its last point back to its first: index ranges [first, last] of the pieces between the
+/// points where it touches the chord (a point on it) or crosses it (an edge whose ends lie on
+/// opposite sides of the chord's line and that separates the chord's ends; cut at the edge's
+/// end nearer the line). One range, the whole path, when it does not meet its chord: then its
+/// chord polygon is simple.
+std::vector<std::pair<std::size_t, std::size_t>> chordPieces(const std::vector<OpenMesh::Vec2i>& path);
 
 /// How frame holes become backdrops: never (those a backdrop would close are reported
 /// unclosable), those no other closing reaches, or every one (after the other closings failed).
