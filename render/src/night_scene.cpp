@@ -67,6 +67,8 @@ struct NightSceneBuilder {
   cv::Mat nearest_depth_m;  // per light pixel, the depth of the nearest face that shows it
   std::vector<double> seen_area_m2;  // per light, the area of the faces that emit it
   std::vector<int> emitter_of_light;  // per light, index into scene.emitters, -1 = none
+  std::vector<std::uint8_t> proxied;  // per light: it emits from a proxy, its faces reflect nothing
+  std::vector<int> index_of_vertex;   // per mesh vertex, its index in the scene, -1 = none
 
   std::int64_t faces_with_shading_normal = 0;
   std::int64_t hidden_faces_under_lights = 0, faces_seen_edge_on = 0, emitting_faces = 0, faces_without_pixel = 0,
@@ -95,6 +97,7 @@ struct NightSceneBuilder {
   void addEmitters();
   void assignFaceEmitters();
   void markLightPixels();
+  void addPixelTexture();
   void addHeadlightsAndSky();
   void writeReport();
 };
@@ -278,7 +281,7 @@ Eigen::Vector3f NightSceneBuilder::shadingNormal(const FaceVertices& fv, double 
 void NightSceneBuilder::addMeshFaces() {
   const SurfaceMesh& mesh = depth_mesh.mesh;
   const std::optional<ImageVertexProperties> props = ImageVertexProperties::find(mesh);
-  std::vector<int> index_of_vertex(mesh.n_vertices(), -1);
+  index_of_vertex.assign(mesh.n_vertices(), -1);
   // Pixel coordinates on the mesh are of its own grid; pixel centres map by the camera's rule.
   const double scale_x = depth_mesh.width > 0 ? static_cast<double>(width) / depth_mesh.width : 1.0;
   const double scale_y = depth_mesh.height > 0 ? static_cast<double>(height) / depth_mesh.height : 1.0;
@@ -495,6 +498,7 @@ double NightSceneBuilder::addProxy(std::size_t i) {
 // plane (only a record made without priors, or at another resolution), which emit nothing.
 void NightSceneBuilder::addEmitters() {
   emitter_of_light.assign(record.tree.lights.size(), -1);
+  proxied.assign(record.tree.lights.size(), 0);
   for (std::size_t i = 0; i < record.tree.lights.size(); ++i) {
     if (!light_on[i]) continue;
     const Light& light = record.tree.lights[i];
@@ -513,6 +517,7 @@ void NightSceneBuilder::addEmitters() {
         // The lamp's own faces are the lamp the proxy stands for: like an emitting face they
         // reflect nothing (lit by the proxy at centimetres, they held its light in creases).
         for (const std::size_t face : light_faces[i]) scene.face_reflectance[face].setZero();
+        proxied[i] = 1;
         emitting_area_m2 = area;
         ++light_proxies;
         light_proxies_moved += !without_faces && moved;
@@ -563,6 +568,53 @@ void NightSceneBuilder::markLightPixels() {
     for (const PixelRun& run : record.tree.lights[i].runs)
       for (int c = run.first_col; c <= run.last_col; ++c) light_pixels.at<int>(run.row, c) = id;
   }
+}
+
+// RenderScene's pixel texture: per texel of the mesh's grid, what a face made from that pixel
+// alone would reflect and emit (the rules of addMeshFaces, addEmitters and assignFaceEmitters:
+// a lit light's pixel emits its emitter and reflects nothing, one whose light emits from a
+// proxy reflects nothing either); per scene vertex made from a pixel, its texel.
+void NightSceneBuilder::addPixelTexture() {
+  const SurfaceMesh& mesh = depth_mesh.mesh;
+  const std::optional<ImageVertexProperties> props = ImageVertexProperties::find(mesh);
+  const int w = depth_mesh.width, h = depth_mesh.height;
+  const std::size_t texels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  if (!props || texels == 0 || depth_mesh.vertex_of_pixel.size() != texels) return;
+  const double scale_x = static_cast<double>(width) / w, scale_y = static_cast<double>(height) / h;
+  const Eigen::Vector3f default_xyz =
+      reflectanceFromLinearSrgb(Eigen::Vector3f::Constant(options.default_reflectance));
+  scene.texture_width = w;
+  scene.texture_height = h;
+  scene.texel_reflectance.assign(texels, default_xyz);
+  scene.texel_emitter.assign(texels, -1);
+  if (!roughness.empty()) scene.texel_roughness.assign(texels, 0.5f);
+  scene.vertex_texel.assign(scene.vertices.size(), -1);
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u) {
+      const std::size_t t = static_cast<std::size_t>(v) * static_cast<std::size_t>(w) + static_cast<std::size_t>(u);
+      const int x = std::clamp(static_cast<int>(std::lround((u + 0.5) * scale_x - 0.5)), 0, width - 1);
+      const int y = std::clamp(static_cast<int>(std::lround((v + 0.5) * scale_y - 0.5)), 0, height - 1);
+      if (!reflectance_xyz.empty()) {
+        const cv::Vec3f a = reflectance_xyz.at<cv::Vec3f>(y, x);
+        scene.texel_reflectance[t] = Eigen::Vector3f(a[0], a[1], a[2]);
+      }
+      if (!roughness.empty()) scene.texel_roughness[t] = std::clamp(roughness.at<float>(y, x), 0.f, 1.f);
+      const int light = light_index.at<int>(y, x);
+      if (light >= 0 && light_on[static_cast<std::size_t>(light)]) {
+        const bool from_proxy = proxied[static_cast<std::size_t>(light)] != 0;
+        const int emitter = from_proxy ? -1 : emitter_of_light[static_cast<std::size_t>(light)];
+        scene.texel_emitter[t] = emitter;
+        if (emitter >= 0 || from_proxy) scene.texel_reflectance[t].setZero();
+      }
+      const int vertex = depth_mesh.vertex_of_pixel[t];
+      if (vertex < 0) continue;
+      const OpenMesh::VertexHandle vh(vertex);
+      if (mesh.status(vh).deleted() ||
+          static_cast<VertexOrigin>(mesh.property(props->origin, vh)) != VertexOrigin::Pixel)
+        continue;
+      const int index = index_of_vertex[static_cast<std::size_t>(vertex)];
+      if (index >= 0) scene.vertex_texel[static_cast<std::size_t>(index)] = static_cast<std::int32_t>(t);
+    }
 }
 
 // The ego car's headlights and the night sky, as the options ask.
@@ -640,6 +692,7 @@ NightScene buildNightScene(const DepthMesh& depth_mesh, const cv::Mat& albedo, c
   builder.addEmitters();
   builder.assignFaceEmitters();
   builder.markLightPixels();
+  builder.addPixelTexture();
   builder.addHeadlightsAndSky();
   builder.writeReport();
   out.report.seconds = clock.seconds();

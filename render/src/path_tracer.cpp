@@ -204,6 +204,9 @@ struct Context {
   float shadow_roulette_y = 0.f;  // render units; 0 = off (PathTracerOptions::shadow_roulette)
   // RenderScene::surface_pixels when cracks are covered and the camera is the scene's size; else null.
   const std::uint8_t* surface_pixels = nullptr;
+  // The caster's triangle per slot when the render uses RenderScene's pixel texture (the camera
+  // is the texture's size); else null.
+  const std::vector<std::uint32_t>* slot_triangles = nullptr;
 };
 
 // The MIS weight of emission that a bounce from `from_point` (receiver normal `from_normal`,
@@ -252,6 +255,7 @@ struct Path {
   bool sees_emitter = false;  // the camera ray hit an emitting face
   Eigen::Vector3f camera_albedo = Eigen::Vector3f::Zero();  // reflectance at the camera ray's hit
   bool camera_missed = false;  // the camera ray hit nothing
+  std::int32_t texel = -1;  // the camera sample's pixel in RenderScene's pixel texture, -1 = unused
   SlotHit hit;
 };
 
@@ -284,6 +288,11 @@ class WaveTracer {
     if (c.options.film_within_pixel_centres) {
       px = std::clamp(px, kFrameInset_px, std::max(kFrameInset_px, static_cast<float>(cam.width - 1) - kFrameInset_px));
       py = std::clamp(py, kFrameInset_px, std::max(kFrameInset_px, static_cast<float>(cam.height - 1) - kFrameInset_px));
+    }
+    if (c.slot_triangles) {
+      const int x = std::clamp(static_cast<int>(std::lround(px)), 0, cam.width - 1);
+      const int y = std::clamp(static_cast<int>(std::lround(py)), 0, cam.height - 1);
+      p.texel = y * cam.width + x;
     }
     p.direction = {static_cast<float>((px - cam.cx) / cam.fx), static_cast<float>((py - cam.cy) / cam.fy), 1.f};
     p.z_per_distance = 1.f / p.direction.norm();
@@ -373,7 +382,9 @@ class WaveTracer {
       addSkyAndSunFound(path);
       return;
     }
-    const SlotShading& face = slotShading(c.shading, hit.slot);
+    SlotShading texel_shading;
+    const SlotShading& face =
+        texelShading(path, texel_shading) ? texel_shading : slotShading(c.shading, hit.slot);
     const Eigen::Vector3f& n = path.normal;
     const float abs_cos_hit = std::abs(n.dot(path.direction));
     addEmissionFound(path, face.emitter, face.emissive, abs_cos_hit);
@@ -401,6 +412,29 @@ class WaveTracer {
     path.emission_scale = 1.f / static_cast<float>(splits);
     if (!sampled) return;
     continuePath(path, bsdf, shadow_origin, wi);
+  }
+
+  // A camera ray's hit on a face whose three vertices were made from pixels, one of them the
+  // sample's own: `out` is the face's shading with that pixel's texel (reflectance, roughness,
+  // emitter). Its emission is found at the camera ray only, where no MIS weight applies.
+  bool texelShading(const Path& path, SlotShading& out) const {
+    if (path.bounce != 0 || path.texel < 0) return false;
+    const RenderScene& scene = c_.scene;
+    const auto& face = scene.faces[(*c_.slot_triangles)[path.hit.slot]];
+    bool own = false;
+    for (const std::uint32_t v : face) {
+      const std::int32_t t = scene.vertex_texel[v];
+      if (t < 0) return false;
+      own = own || t == path.texel;
+    }
+    if (!own) return false;
+    const auto texel = static_cast<std::size_t>(path.texel);
+    out = slotShading(c_.shading, path.hit.slot);
+    out.reflectance = scene.texel_reflectance[texel];
+    if (!scene.texel_roughness.empty()) out.roughness = scene.texel_roughness[texel];
+    out.emitter = scene.texel_emitter[texel];
+    out.emissive = -1;
+    return true;
   }
 
   // A ray that left the scene: sky and sun, MIS-weighted against their next-event estimation
@@ -690,6 +724,19 @@ class ProgressBar {
 
 }  // namespace
 
+namespace {
+
+// Whether the scene's pixel texture is complete (render_scene.h): a texel per pixel of its
+// grid, a texel index per vertex.
+bool hasPixelTexture(const RenderScene& scene) {
+  const std::size_t texels =
+      static_cast<std::size_t>(std::max(0, scene.texture_width)) * static_cast<std::size_t>(std::max(0, scene.texture_height));
+  return texels > 0 && scene.vertex_texel.size() == scene.vertices.size() && scene.texel_reflectance.size() == texels &&
+         scene.texel_emitter.size() == texels && (scene.texel_roughness.empty() || scene.texel_roughness.size() == texels);
+}
+
+}  // namespace
+
 struct PreparedRenderScene::Impl {
   explicit Impl(const RenderScene& rendered) : scene(rendered) {}
   const RenderScene& scene;
@@ -697,6 +744,7 @@ struct PreparedRenderScene::Impl {
   double build_seconds = 0;
   std::vector<EmissiveTriangle> emissive;
   std::vector<QuadShading> shading;  // by the caster's slot
+  std::vector<std::uint32_t> slot_triangles;  // the caster's triangle per slot, with a pixel texture
   double prepare_seconds = 0;  // the whole construction, BVH included
   // Light samplers built on first use, one per kind, shared by every render of the scene
   // (the hierarchy over the 1080p street's 188 000 emitting triangles takes a noticeable
@@ -730,7 +778,9 @@ PreparedRenderScene::PreparedRenderScene(const RenderScene& scene) : impl_(new I
   std::vector<int> face_to_emissive(scene.faces.size(), -1);
   for (std::size_t i = 0; i < impl_->emissive.size(); ++i)
     face_to_emissive[impl_->emissive[i].face] = static_cast<int>(i);
-  impl_->shading = buildSlotShading(scene, impl_->caster->slotTriangles(), face_to_emissive);
+  std::vector<std::uint32_t> slot_triangles = impl_->caster->slotTriangles();
+  impl_->shading = buildSlotShading(scene, slot_triangles, face_to_emissive);
+  if (hasPixelTexture(scene)) impl_->slot_triangles = std::move(slot_triangles);
   impl_->prepare_seconds = prepare_clock.seconds();
 }
 
@@ -765,6 +815,9 @@ Context makeContext(const RenderScene& scene, const PinholeCamera& camera, const
   if (options.cover_mesh_cracks && scene.surface_pixels.size() == pixels && camera.width == scene.camera.width &&
       camera.height == scene.camera.height)
     context.surface_pixels = scene.surface_pixels.data();
+  if (options.pixel_texture && !p.slot_triangles.empty() && camera.width == scene.texture_width &&
+      camera.height == scene.texture_height)
+    context.slot_triangles = &p.slot_triangles;
   if (options.noise_sigma && options.shadow_roulette > 0) {
     // A threshold that is not a finite positive float would skip every shadow ray (or none
     // reliably): the roulette is then off.

@@ -3,6 +3,7 @@
 #include <solo/geometry/depth_mesh.h>
 #include <solo/lighting/colorimetry.h>
 #include <solo/render/night_scene.h>
+#include <solo/render/path_tracer.h>
 
 #include "test_support.h"
 
@@ -147,6 +148,85 @@ TEST(NightScene, AnOnLightEmitsItsLuminanceInItsColourAndAnOffLightNothing) {
   EXPECT_NEAR(area("luminance_lights_area_mesh"), emitting_area_m2, 1e-6);
   EXPECT_EQ(area("luminance_lights_area_record"), 1.0);
   EXPECT_EQ(area("flux_lights_area_mesh"), 0.0);
+}
+
+// A fronto-parallel plane 4 m away, 12x8 pixels, albedo 0.2 over columns 0-5 and 0.6 over 6-11,
+// a lit window (50 cd/m^2) over columns 9-11; nothing else lights it. A face takes the pixel
+// under its centroid: of a quad's two triangles the upper-left one takes the quad's upper-left
+// pixel, the lower-right one the lower-right pixel, so an edge between columns follows the
+// quads' diagonals. The pixel texture gives each camera sample its own pixel's values.
+TEST(NightScene, ACameraRayTakesItsOwnPixelsMaterialAndLightNotItsQuadsDiagonal) {
+  const cv::Mat depth(8, 12, CV_32F, cv::Scalar(4.f));
+  const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 5.5, 3.5, 12, 8});
+  cv::Mat albedo(8, 12, CV_32FC3, cv::Scalar(0.2f, 0.2f, 0.2f));
+  albedo(cv::Rect(6, 0, 6, 8)).setTo(cv::Scalar(0.6f, 0.6f, 0.6f));
+  solo::LightRecord record;
+  record.tree.width = 12;
+  record.tree.height = 8;
+  record.tree.groups.push_back({});
+  solo::Light window;
+  window.id = 1;
+  window.map_id = 1000;
+  window.category = solo::LightCategory::WindowBuilding;
+  for (int row = 0; row < 8; ++row) window.runs.push_back({row, 9, 11});
+  window.pixels = 24;
+  record.tree.lights.push_back(window);
+  record.geometry.push_back({});
+  record.geometry.back().area_m2 = 1.0;
+  record.geometry.back().pixels_with_depth = 24;
+  solo::LightState state;
+  state.on = true;
+  state.xy = {1.0 / 3.0, 1.0 / 3.0};
+  state.strength = 50;
+  state.unit = solo::StrengthUnit::LuminanceCdPerM2;
+  record.instantiation.lights.push_back(state);
+  solo::NightSceneOptions options;
+  options.headlights = false;
+  const solo::NightScene night = solo::buildNightScene(mesh, albedo, {}, {}, record, options);
+  const solo::RenderScene& scene = night.scene;
+
+  // The texture: a texel per pixel with the pixel's values, a texel per pixel vertex.
+  ASSERT_EQ(scene.texture_width, 12);
+  ASSERT_EQ(scene.texture_height, 8);
+  ASSERT_EQ(scene.texel_reflectance.size(), 96u);
+  EXPECT_NEAR(scene.texel_reflectance[3 * 12 + 5].y(), 0.2f, 1e-5f);
+  EXPECT_NEAR(scene.texel_reflectance[3 * 12 + 6].y(), 0.6f, 1e-5f);
+  EXPECT_EQ(scene.texel_emitter[3 * 12 + 8], -1);
+  EXPECT_EQ(scene.texel_emitter[3 * 12 + 9], 0);
+  EXPECT_EQ(scene.texel_reflectance[3 * 12 + 9].norm(), 0.f) << "an emitting pixel reflects nothing";
+  ASSERT_EQ(scene.vertex_texel.size(), scene.vertices.size());
+  for (std::size_t v = 0; v < scene.vertices.size(); ++v) {
+    const Eigen::Vector2d uv = mesh.camera.project(scene.vertices[v].cast<double>());
+    EXPECT_EQ(scene.vertex_texel[v], std::lround(uv.y()) * 12 + std::lround(uv.x())) << "vertex " << v;
+  }
+
+  solo::PathTracerOptions o;
+  o.min_samples = o.max_samples = 64;
+  o.progress = false;
+  const solo::RenderOutput textured = solo::renderPathTraced(scene, o);
+  o.pixel_texture = false;
+  const solo::RenderOutput by_face = solo::renderPathTraced(scene, o);
+  for (int y = 1; y < 7; ++y) {
+    // Every sample of column 5 sees albedo 0.2, of column 6 0.6; by face, part of each sees
+    // the other column's (the lower-right triangles of the quads between them).
+    EXPECT_NEAR(textured.mean_albedo.at<cv::Vec3f>(y, 5)[1], 0.2f, 1e-5f) << "row " << y;
+    EXPECT_NEAR(textured.mean_albedo.at<cv::Vec3f>(y, 6)[1], 0.6f, 1e-5f) << "row " << y;
+    EXPECT_GT(by_face.mean_albedo.at<cv::Vec3f>(y, 5)[1], 0.2f + 0.02f) << "row " << y;
+    // The window's light: column 9 emits 50 over the whole pixel, column 8 nothing (the window
+    // lies in the plane: it lights no part of it); by face, part of column 8 emits.
+    EXPECT_NEAR(textured.radiance.at<cv::Vec3f>(y, 9)[1], 50.f, 1e-3f) << "row " << y;
+    EXPECT_EQ(textured.radiance.at<cv::Vec3f>(y, 8)[1], 0.f) << "row " << y;
+    EXPECT_EQ(textured.emitter_coverage.at<float>(y, 8), 0.f) << "row " << y;
+    EXPECT_GT(by_face.radiance.at<cv::Vec3f>(y, 8)[1], 1.f) << "row " << y;
+  }
+  // A render at another size keeps the faces' values.
+  solo::RenderScene half = scene;
+  half.camera = scene.camera.scaledTo(6, 4);
+  o.pixel_texture = true;
+  const solo::RenderOutput other = solo::renderPathTraced(half, o);
+  o.pixel_texture = false;
+  const solo::RenderOutput other_by_face = solo::renderPathTraced(half, o);
+  EXPECT_EQ(cv::norm(other.radiance, other_by_face.radiance, cv::NORM_INF), 0.0);
 }
 
 TEST(NightScene, AMeshFromADownsampledDepthMapTakesTheAlbedoUnderItsFacesAtFullResolution) {

@@ -70,6 +70,10 @@ struct PathTracerOptions {
   /// whose samples hit takes the value and AOVs of its farthest neighbour that has a hit (up to
   /// kCrackFillPasses rings). Off: every sample counts, as in a plain mesh render.
   bool cover_mesh_cracks = true;
+  /// A render at the size of RenderScene's pixel texture shades camera rays that hit a face
+  /// made from their own pixel with that pixel's texel (render_scene.h): edges between materials
+  /// and lights are the pixels' own, not the mesh quads' diagonals. Off: every hit the face's.
+  bool pixel_texture = true;
   int max_samples = 256;  ///< per pixel
   AdaptiveRule adaptive_rule = AdaptiveRule::ImageError;
   /// ImageError: the target for the image's relative RMSE of Y (root of the summed squared errors

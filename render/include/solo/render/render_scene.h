@@ -70,6 +70,18 @@ struct RenderScene {
   /// such a pixel that hits nothing went through that gap, and the renderer does not count it
   /// (path_tracer.h, "Mesh cracks"). Used only when rendering at the camera's own size.
   std::vector<std::uint8_t> surface_pixels;
+  /// Optional texture on the depth mesh's pixel grid (texture_width x texture_height texels,
+  /// row-major), used by a render at that size. A face takes the material and the light of one
+  /// pixel, so an edge between two materials follows the diagonals of the mesh's quads (teeth a
+  /// pixel long, in the day image a straight edge). A camera ray that hits a face whose three
+  /// vertices were made from pixels, one of them its own pixel's, takes that pixel's texel
+  /// instead: the edge is the pixels' own. Rays after the first bounce keep the faces' values.
+  /// Empty = off.
+  int texture_width = 0, texture_height = 0;
+  std::vector<std::int32_t> vertex_texel;        ///< per vertex: its pixel's texel, -1 for one not made from a pixel
+  std::vector<Eigen::Vector3f> texel_reflectance;  ///< per texel, as face_reflectance
+  std::vector<float> texel_roughness;            ///< per texel, as face_roughness; empty = no roughness map
+  std::vector<std::int32_t> texel_emitter;       ///< per texel, as face_emitter
 };
 
 /// Linear sRGB (D65) reflectance to XYZ relative to E: the sRGB matrix, then the white of
