@@ -182,6 +182,9 @@ void addNightRenderFlags(CLI::App* night_cmd, NightOptions& night) {
                         "Render at the image size divided by this factor, then upsample with the image's texture; "
                         "0 = auto: 2 above 1 megapixel (preset)")
       ->capture_default_str()->check(CLI::Range(0, 8));
+  night_cmd->add_flag("--pixel-texture,!--no-pixel-texture", night.conversion.render.pixel_texture,
+                      "Camera rays take their own pixel's material and light, not their mesh face's (edges between "
+                      "materials along the pixels, not the mesh's quad diagonals)");
   night_cmd->add_flag("--upsample-texture,!--no-upsample-texture", night.conversion.upsample.texture,
                       "A render below the image size gets the image's texture back when upsampled; off: bilinear");
   night_cmd->add_flag("--denoise,!--no-denoise", night.conversion.denoise.enabled,

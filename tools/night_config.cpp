@@ -76,6 +76,7 @@ std::string nightConfigText(const NightOptions& options) {
   line("indirect-clamp", number(o.render.indirect_clamp));
   line("mesh-downsample", std::to_string(o.mesh_downsample));
   line("render-downsample", std::to_string(o.render_downsample));
+  flag("pixel-texture", o.render.pixel_texture);
   flag("upsample-texture", o.upsample.texture);
   flag("denoise", o.denoise.enabled);
   line("firefly-sigma", number(o.denoise.firefly_sigma));

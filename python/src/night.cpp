@@ -126,6 +126,7 @@ const std::vector<Knob>& knobs() {
       valueKnob<float>("indirect_clamp", +[](O& o) -> float& { return o.render.indirect_clamp; }),
       valueKnob<int>("mesh_downsample", +[](O& o) -> int& { return o.mesh_downsample; }),
       valueKnob<int>("render_downsample", +[](O& o) -> int& { return o.render_downsample; }),
+      valueKnob<bool>("pixel_texture", +[](O& o) -> bool& { return o.render.pixel_texture; }),
       valueKnob<bool>("upsample_texture", +[](O& o) -> bool& { return o.upsample.texture; }),
       valueKnob<bool>("denoise", +[](O& o) -> bool& { return o.denoise.enabled; }),
       valueKnob<bool>("glare", +[](O& o) -> bool& { return o.post.glare; }),

@@ -1259,6 +1259,20 @@ void reportCracks(StageReport& r, const RenderTotals& totals, std::int64_t fille
                       " pixels with no hit took their farthest neighbour's value");
 }
 
+// Whether camera rays took their pixel's texel (PathTracerOptions::pixel_texture), and why not.
+void reportPixelTexture(StageReport& r, const Context& context, const PreparedRenderScene::Impl& p) {
+  const bool used = context.slot_triangles != nullptr;
+  r.add("pixel_texture", used);
+  if (used || p.slot_triangles.empty()) return;
+  const RenderScene& scene = context.scene;
+  if (!context.options.pixel_texture)
+    r.notes.push_back("pixel texture off: camera rays take their faces' material and light");
+  else
+    r.notes.push_back("pixel texture not used: the render is " + std::to_string(context.camera.width) + "x" +
+                      std::to_string(context.camera.height) + ", the mesh's pixel grid " +
+                      std::to_string(scene.texture_width) + "x" + std::to_string(scene.texture_height));
+}
+
 // The render's report: sampling, rays, BVH, lights and the techniques used.
 void reportRender(RenderOutput& out, double seconds, const Context& context, const PreparedRenderScene::Impl& p,
                   const RenderTotals& totals) {
@@ -1296,6 +1310,7 @@ void reportRender(RenderOutput& out, double seconds, const Context& context, con
   }
   r.add("seed", static_cast<std::int64_t>(options.seed));
   if (context.emissive.empty()) r.notes.push_back("no emitting triangle: no next-event estimation toward scene lights");
+  reportPixelTexture(r, context, p);
   if (scene.face_roughness.empty()) r.notes.push_back("no roughness map: diffuse only");
   else if (options.diffuse == DiffuseModel::Disney) r.notes.push_back("roughness map given: Disney diffuse + GGX specular");
   else r.notes.push_back("roughness map given: Lambert diffuse + GGX specular");

@@ -338,6 +338,24 @@ TEST_F(NightCli, DenoisePassesReachTheFilterAndZeroIsRefused) {
   EXPECT_TRUE(solo::test::listFolder(out).empty());
 }
 
+// --no-pixel-texture: camera rays take their faces' material and light (the render says so);
+// the image changes at the edges between materials.
+TEST_F(NightCli, PixelTextureIsOnByDefaultAndCanBeSwitchedOff) {
+  auto r = runSolo("night " + q(scene()) + " -o " + q(dir / "t.png") + " --preset draft --max-spp 1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(stage(readJson(dir / "t.report.json"), "render")["metrics"]["pixel_texture"], true);
+  r = runSolo("night " + q(scene()) + " -o " + q(dir / "f.png") + " --preset draft --max-spp 1 --no-pixel-texture");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto render = stage(readJson(dir / "f.report.json"), "render");
+  EXPECT_EQ(render["metrics"]["pixel_texture"], false);
+  bool said = false;
+  for (const auto& note : render["notes"]) said = said || note.get<std::string>().rfind("pixel texture off", 0) == 0;
+  EXPECT_TRUE(said) << render["notes"];
+  const cv::Mat a = cv::imread((dir / "t.png").string()), b = cv::imread((dir / "f.png").string());
+  ASSERT_FALSE(a.empty());
+  EXPECT_GT(cv::norm(a, b, cv::NORM_INF), 0.0);
+}
+
 TEST_F(NightCli, SamplerOptionReachesTheRendererAndUnknownSamplersAreRefused) {
   auto r = runSolo("night " + q(scene()) + " -o " + q(dir / "n.png") + " --preset draft");
   ASSERT_EQ(r.exit_code, 0) << r.output;
