@@ -575,6 +575,7 @@ LoopKind loopKind(const DepthImage& image, const VertexLoop& loop, std::vector<s
 
 std::vector<std::pair<std::size_t, std::size_t>> chordPieces(const std::vector<OpenMesh::Vec2i>& path) {
   const std::size_t n = path.size();
+  if (n < 2) return {};
   const std::int64_t ax = path.front()[0], ay = path.front()[1];
   const std::int64_t bx = path.back()[0], by = path.back()[1];
   const auto orient = [](std::int64_t px, std::int64_t py, std::int64_t qx, std::int64_t qy, std::int64_t rx,

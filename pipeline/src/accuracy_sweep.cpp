@@ -634,7 +634,8 @@ struct AccuracySweep::Impl {
   }
 
   /// The presets of `solo night` (draft, default, final); where the default reduces the image's
-  /// size, default at the full size and with bilinear upsampling; default with one stage off.
+  /// size, default at the full size and with bilinear upsampling; default with one stage or
+  /// technique off.
   std::vector<PipelineSetting> endToEndSettings() const {
     std::vector<PipelineSetting> settings;
     for (const std::string& preset : nightPresetNames())
@@ -662,6 +663,10 @@ struct AccuracySweep::Impl {
       no_solids.name = "default_no_solids";
       no_solids.night.mesh.close_solids = false;
       settings.push_back(no_solids);
+      PipelineSetting by_face = standard;
+      by_face.name = "default_no_pixel_texture";
+      by_face.night.render.pixel_texture = false;
+      settings.push_back(by_face);
     }
     return settings;
   }

@@ -778,6 +778,7 @@ TEST(ImageHoleFilling, RunsJoinedAroundAnOccluderWithAFartherSurfaceSeenThroughI
 TEST(ChordPieces, APathIsCutWhereItTouchesOrCrossesItsChord) {
   using Path = std::vector<OpenMesh::Vec2i>;
   using Pieces = std::vector<std::pair<std::size_t, std::size_t>>;
+  EXPECT_TRUE(solo::chordPieces(Path{{3, 4}}).empty()) << "no chord";
   // Below its chord all along: one piece.
   EXPECT_EQ(solo::chordPieces(Path{{0, 0}, {1, 1}, {2, 1}, {3, 0}}), (Pieces{{0, 3}}));
   // On the chord's line beyond its end (-1, 0): not a cut.

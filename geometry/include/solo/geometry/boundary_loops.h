@@ -94,7 +94,7 @@ struct DepthLoops {
 /// points where it touches the chord (a point on it) or crosses it (an edge whose ends lie on
 /// opposite sides of the chord's line and that separates the chord's ends; cut at the edge's
 /// end nearer the line). One range, the whole path, when it does not meet its chord: then its
-/// chord polygon is simple.
+/// chord polygon is simple. None for a path of fewer than two points.
 std::vector<std::pair<std::size_t, std::size_t>> chordPieces(const std::vector<OpenMesh::Vec2i>& path);
 
 /// How frame holes become backdrops: never (those a backdrop would close are reported
