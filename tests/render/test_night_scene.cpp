@@ -17,19 +17,21 @@ solo::DepthMesh planeMesh() {
   return solo::meshFromDepth(depth, {10, 10, 2.5, 1.5, 6, 4});
 }
 
-// A record at 6x4 pixels with one light that is on over columns first..last of every row.
+// A record at width x height pixels (6x4 by default) with one light that is on over columns
+// first..last of every row.
 solo::LightRecord oneLightRecord(solo::LightCategory category, int first_col, int last_col, double strength,
-                                 solo::StrengthUnit unit, int map_id, Eigen::Vector2d xy, double record_area_m2) {
+                                 solo::StrengthUnit unit, int map_id, Eigen::Vector2d xy, double record_area_m2,
+                                 int width = 6, int height = 4) {
   solo::LightRecord record;
-  record.tree.width = 6;
-  record.tree.height = 4;
+  record.tree.width = width;
+  record.tree.height = height;
   record.tree.groups.push_back({});
   solo::Light light;
   light.id = 1;
   light.map_id = map_id;
   light.category = category;
-  for (int row = 0; row < 4; ++row) light.runs.push_back({row, first_col, last_col});
-  light.pixels = 4 * (last_col - first_col + 1);
+  for (int row = 0; row < height; ++row) light.runs.push_back({row, first_col, last_col});
+  light.pixels = height * (last_col - first_col + 1);
   record.tree.lights.push_back(light);
   record.geometry.push_back({});
   record.geometry.back().area_m2 = record_area_m2;
@@ -160,26 +162,9 @@ TEST(NightScene, ACameraRayTakesItsOwnPixelsMaterialAndLightNotItsQuadsDiagonal)
   const solo::DepthMesh mesh = solo::meshFromDepth(depth, {10, 10, 5.5, 3.5, 12, 8});
   cv::Mat albedo(8, 12, CV_32FC3, cv::Scalar(0.2f, 0.2f, 0.2f));
   albedo(cv::Rect(6, 0, 6, 8)).setTo(cv::Scalar(0.6f, 0.6f, 0.6f));
-  solo::LightRecord record;
-  record.tree.width = 12;
-  record.tree.height = 8;
-  record.tree.groups.push_back({});
-  solo::Light window;
-  window.id = 1;
-  window.map_id = 1000;
-  window.category = solo::LightCategory::WindowBuilding;
-  for (int row = 0; row < 8; ++row) window.runs.push_back({row, 9, 11});
-  window.pixels = 24;
-  record.tree.lights.push_back(window);
-  record.geometry.push_back({});
-  record.geometry.back().area_m2 = 1.0;
-  record.geometry.back().pixels_with_depth = 24;
-  solo::LightState state;
-  state.on = true;
-  state.xy = {1.0 / 3.0, 1.0 / 3.0};
-  state.strength = 50;
-  state.unit = solo::StrengthUnit::LuminanceCdPerM2;
-  record.instantiation.lights.push_back(state);
+  const solo::LightRecord record = oneLightRecord(solo::LightCategory::WindowBuilding, 9, 11, 50,
+                                                  solo::StrengthUnit::LuminanceCdPerM2, 1000, {1.0 / 3.0, 1.0 / 3.0},
+                                                  1.0, 12, 8);
   solo::NightSceneOptions options;
   options.headlights = false;
   const solo::NightScene night = solo::buildNightScene(mesh, albedo, {}, {}, record, options);
