@@ -722,10 +722,6 @@ class ProgressBar {
   std::mutex mutex_;
 };
 
-}  // namespace
-
-namespace {
-
 // Whether the scene's pixel texture is complete (render_scene.h): a texel per pixel of its
 // grid, a texel index per vertex.
 bool hasPixelTexture(const RenderScene& scene) {
