@@ -85,7 +85,7 @@ TEST(NightConversionOptions, AutoDownsampleHalvesImagesAboveOneMegapixel) {
 
 // A street of 1.02 megapixels at the default settings: the mesh and the render are made at half
 // the size, the night image and the render's radiance come out at the image's size, and almost
-// every surface pixel gets the image's texture back.
+// every surface pixel gets the image's texture back; the half-size render uses the pixel texture.
 TEST(NightConversion, AnImageAboveOneMegapixelIsMeshedAndRenderedAtHalfSize) {
   TempDir dir;
   ASSERT_EQ(solo::test::runSolo("synth --size 1280x800 --seed 2 -o \"" + (dir / "s").string() + "\"").exit_code, 0);
@@ -106,6 +106,11 @@ TEST(NightConversion, AnImageAboveOneMegapixelIsMeshedAndRenderedAtHalfSize) {
   EXPECT_EQ(metric("mesh", "mesh_downsample"), 2);
   EXPECT_EQ(metric("render", "render_width"), 640);
   EXPECT_EQ(metric("render", "render_height"), 400);
+  // The half-size render is at the mesh's grid: camera rays take their pixel's texel.
+  bool pixel_texture = false;
+  for (const solo::StageReport& s : r.stages)
+    if (s.name == "render" && s.find("pixel_texture")) pixel_texture = std::get<bool>(*s.find("pixel_texture"));
+  EXPECT_TRUE(pixel_texture);
   const std::int64_t textured = metric("render", "upsampled_textured_pixels");
   const std::int64_t sky = metric("complete", "sky_pixels");
   EXPECT_GT(textured, (1280 * 800 - sky) * 9 / 10) << "sky " << sky;
