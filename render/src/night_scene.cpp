@@ -19,6 +19,12 @@ namespace solo {
 
 namespace {
 
+// The map pixel (x or y, clamped to [0, size)) under mesh-grid coordinate `coordinate`, pixel
+// centres mapped by the camera's rule for a map `scale` times the mesh's grid.
+int mapPixel(double coordinate, double scale, int size) {
+  return std::clamp(static_cast<int>(std::lround((coordinate + 0.5) * scale - 0.5)), 0, size - 1);
+}
+
 // A face that shows one of a light's pixels: a candidate to emit the light.
 struct SeenFace {
   std::size_t face;
@@ -264,8 +270,7 @@ Eigen::Vector3f NightSceneBuilder::shadingNormal(const FaceVertices& fv, double 
   Eigen::Vector3f sum = Eigen::Vector3f::Zero(), centroid = Eigen::Vector3f::Zero();
   for (int k = 0; k < 3; ++k) {
     const OpenMesh::Vec2i& p = fv.pixels[static_cast<std::size_t>(k)];
-    const int x = std::clamp(static_cast<int>(std::lround((p[0] + 0.5) * scale_x - 0.5)), 0, width - 1);
-    const int y = std::clamp(static_cast<int>(std::lround((p[1] + 0.5) * scale_y - 0.5)), 0, height - 1);
+    const int x = mapPixel(p[0], scale_x, width), y = mapPixel(p[1], scale_y, height);
     const cv::Vec3f n = normals.at<cv::Vec3f>(y, x);
     sum += Eigen::Vector3f(n[0], n[1], n[2]);
     centroid += scene.vertices[fv.face[static_cast<std::size_t>(k)]];
@@ -294,10 +299,8 @@ void NightSceneBuilder::addMeshFaces() {
     float rough = 0.5f;
     int shown_light = -1;  // the light this face shows, if it emits
     if (fv.with_pixel > 0) {
-      const int x =
-          std::clamp(static_cast<int>(std::lround((fv.u / fv.with_pixel + 0.5) * scale_x - 0.5)), 0, width - 1);
-      const int y =
-          std::clamp(static_cast<int>(std::lround((fv.v / fv.with_pixel + 0.5) * scale_y - 0.5)), 0, height - 1);
+      const int x = mapPixel(fv.u / fv.with_pixel, scale_x, width);
+      const int y = mapPixel(fv.v / fv.with_pixel, scale_y, height);
       if (!reflectance_map.empty()) {
         const cv::Vec3f a = reflectance_map.at<cv::Vec3f>(y, x);
         rgb = Eigen::Vector3f(a[0], a[1], a[2]).cwiseMax(0.f).cwiseMin(1.f);
@@ -592,8 +595,7 @@ void NightSceneBuilder::addPixelTexture() {
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u) {
       const std::size_t t = static_cast<std::size_t>(v) * static_cast<std::size_t>(w) + static_cast<std::size_t>(u);
-      const int x = std::clamp(static_cast<int>(std::lround((u + 0.5) * scale_x - 0.5)), 0, width - 1);
-      const int y = std::clamp(static_cast<int>(std::lround((v + 0.5) * scale_y - 0.5)), 0, height - 1);
+      const int x = mapPixel(u, scale_x, width), y = mapPixel(v, scale_y, height);
       if (!reflectance_xyz.empty()) {
         const cv::Vec3f a = reflectance_xyz.at<cv::Vec3f>(y, x);
         scene.texel_reflectance[t] = Eigen::Vector3f(a[0], a[1], a[2]);
