@@ -196,6 +196,10 @@ void addNightRenderFlags(CLI::App* night_cmd, NightOptions& night) {
   night_cmd->add_option("--denoise-passes", night.conversion.denoise.iterations,
                         "A-trous passes of the render filter, taps 1, 2, ..., 2^(N-1) px apart")
       ->capture_default_str()->check(CLI::Range(1, 10));
+  night_cmd->add_option("--denoise-fine-passes", night.conversion.denoise.fine_passes,
+                        "Render filter passes after those, taps 2^(N-1), ..., 2, 1 px apart: they average out the "
+                        "a-trous grid (blocks) around rare bright samples; 0 = none")
+      ->capture_default_str()->check(CLI::Range(0, 10));
 }
 
 // The night camera's and the post-process's flags.

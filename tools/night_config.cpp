@@ -81,6 +81,7 @@ std::string nightConfigText(const NightOptions& options) {
   flag("denoise", o.denoise.enabled);
   line("firefly-sigma", number(o.denoise.firefly_sigma));
   line("denoise-passes", std::to_string(o.denoise.iterations));
+  line("denoise-fine-passes", std::to_string(o.denoise.fine_passes));
   flag("glare", o.post.glare);
   flag("noise", o.post.noise);
   line("sensor-white", number(o.sensor_white_cd_m2));

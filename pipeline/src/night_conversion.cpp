@@ -333,6 +333,8 @@ void validateNightConversionOptions(const NightConversionOptions& o) {
   requireInRange(o.render.max_bounces, 1, 64, "--max-bounces");
   requireInRange(o.render.indirect_clamp, 0, 1e30, "--indirect-clamp");
   requireInRange(o.denoise.firefly_sigma, 0, 1e30, "--firefly-sigma");
+  requireInRange(o.denoise.iterations, 1, 10, "--denoise-passes");
+  requireInRange(o.denoise.fine_passes, 0, 10, "--denoise-fine-passes");
   requireInRange(o.refinement.optimization.max_iterations, 1, 100000, "--optimize-iterations");
   requireInRange(o.refinement.optimization.function_tolerance, 0, 1, "--optimize-tolerance");
   requireInRange(o.night_scene.headlight_flux_lm, 0, 1e9, "--headlight-flux");

@@ -60,6 +60,8 @@ void validate(const RenderOutput& r, const PinholeCamera& camera, const RenderDe
                                 std::to_string(size.height));
   if (o.iterations < 1 || o.iterations > 10)
     throw std::invalid_argument("denoiseRender: iterations must be 1 to 10, got " + std::to_string(o.iterations));
+  if (o.fine_passes < 0 || o.fine_passes > 10)
+    throw std::invalid_argument("denoiseRender: fine_passes must be 0 to 10, got " + std::to_string(o.fine_passes));
   if (!(o.albedo_floor > 0) || !(o.normal_exponent >= 0) || !(o.albedo_sigma >= 0) || !(o.plane_tolerance > 0) ||
       !(o.luminance_sigma > 0) || !(o.firefly_sigma >= 0) || !std::isfinite(o.firefly_sigma))
     throw std::invalid_argument(
@@ -329,6 +331,15 @@ Estimate atrousPass(const Guides& g, const Estimate& in, int step, const RenderD
   return out;
 }
 
+// The taps' spacing of each pass, px: 1, 2, ..., 2^(iterations - 1), then the fine passes
+// 2^(fine_passes - 1), ..., 2, 1.
+std::vector<int> passSteps(const RenderDenoiseOptions& o) {
+  std::vector<int> steps;
+  for (int pass = 0; pass < o.iterations; ++pass) steps.push_back(1 << pass);
+  for (int pass = o.fine_passes - 1; pass >= 0; --pass) steps.push_back(1 << pass);
+  return steps;
+}
+
 StageReport skippedReport() {
   StageReport report;
   report.name = "denoise";
@@ -351,7 +362,7 @@ StageReport denoiseRender(RenderOutput& render, const PinholeCamera& camera, con
   cv::divide(render.radiance, albedo, estimate.irradiance);
   const FireflyClamp fireflies = clampFireflies(render, guides, albedo, estimate.irradiance, options);
   estimate.variance = initialVariance(render, guides, albedo);
-  for (int pass = 0; pass < options.iterations; ++pass) estimate = atrousPass(guides, estimate, 1 << pass, options);
+  for (const int step : passSteps(options)) estimate = atrousPass(guides, estimate, step, options);
 
   cv::Mat filtered;
   cv::multiply(estimate.irradiance, albedo, filtered);
@@ -365,7 +376,9 @@ StageReport denoiseRender(RenderOutput& render, const PinholeCamera& camera, con
       .add("pixels_kept_emitter", counts.emitter)
       .add("pixels_kept_no_surface", counts.no_surface)
       .add("iterations", static_cast<std::int64_t>(options.iterations))
-      .add("footprint_radius", static_cast<std::int64_t>(2 * ((1 << options.iterations) - 1)), "px")
+      .add("fine_passes", static_cast<std::int64_t>(options.fine_passes))
+      .add("footprint_radius",
+           static_cast<std::int64_t>(2 * ((1 << options.iterations) - 1) + 2 * ((1 << options.fine_passes) - 1)), "px")
       .add("luminance_weight", !render.std_error.empty())
       .add("luminance_ratio", y_before > 0 ? y_after / y_before : 1.0)
       .add("fireflies_clamped", fireflies.pixels)

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Error of linear renders against a reference render of the same scene (docs/accuracy.md, "Render denoising").
 
-  render_error.py [--box N] REF.exr RUN.exr...
+  render_error.py [--box N] [--gradient] REF.exr RUN.exr...
 
 Each EXR is a `solo night --render-exr` output (linear XYZ, render units) with its light-id AOV
 beside it (STEM.lightid.npy). Over the pixels whose light id is 0 in both images, on the
@@ -9,7 +9,10 @@ luminance Y: relative RMSE sqrt(sum (y - r)^2 / sum r^2) and mean ratio sum y / 
 and clipped at the reference's white W (95th percentile of its Y / 0.8, the clip level of the
 render error in docs/accuracy.md). With --box N, also the clipped error at low spatial frequency:
 the same relative RMSE over the means of N x N pixel boxes (tiled from the top-left corner; a
-box's mean over its kept pixels, each box weighted by their count). Needs oiiotool (openimageio-tools, in tools/setup.sh) and
+box's mean over its kept pixels, each box weighted by their count). With --gradient, also the
+clipped error at the highest spatial frequency: sqrt(sum (dt - dr)^2 / sum r^2) over the
+differences d of horizontally and vertically adjacent kept pixels (blocks and grids a filter
+prints raise it; a smooth error does not). Needs oiiotool (openimageio-tools, in tools/setup.sh) and
 numpy (Debian python3-numpy, not needed by the build or the tests).
 """
 import os
@@ -61,18 +64,32 @@ def box_error(test, ref, keep, box):
     return np.sqrt((n[used] * (mt - mr) ** 2).sum() / (n[used] * mr ** 2).sum())
 
 
+def gradient_error(test, ref, keep):
+    """Relative RMSE of the differences of adjacent kept pixels of `test` against `ref`."""
+    num = 0.0
+    for axis in (0, 1):
+        pair = np.logical_and(np.delete(keep, 0, axis), np.delete(keep, -1, axis))
+        diff = np.diff(test, axis=axis) - np.diff(ref, axis=axis)
+        num += (diff[pair] ** 2).sum()
+    return np.sqrt(num / (ref[keep] ** 2).sum())
+
+
 def main(argv):
-    box = 0
-    if len(argv) > 2 and argv[1] == "--box":
-        box = int(argv[2])
-        argv = argv[:1] + argv[3:]
+    box, gradient = 0, False
+    while len(argv) > 1 and argv[1] in ("--box", "--gradient"):
+        if argv[1] == "--box":
+            box = int(argv[2])
+            argv = argv[:1] + argv[3:]
+        else:
+            gradient = True
+            argv = argv[:1] + argv[2:]
     if len(argv) < 3:
         sys.exit(__doc__)
     ref_y, ref_id = load(argv[1])
     white = np.percentile(ref_y[ref_id == 0], 95) / 0.8
     print(f"reference {argv[1]}: white W = {white:.4g}")
     print("run".ljust(28) + "rel.RMSE  mean ratio  rel.RMSE(clip W)  mean ratio(clip W)" +
-          (f"  boxes {box}x{box} (clip W)" if box else ""))
+          (f"  boxes {box}x{box} (clip W)" if box else "") + ("  gradient (clip W)" if gradient else ""))
     for exr in argv[2:]:
         y, light_id = load(exr)
         keep = (light_id == 0) & (ref_id == 0)
@@ -85,6 +102,8 @@ def main(argv):
         if box:
             both = (light_id == 0) & (ref_id == 0)
             line += f"  {box_error(np.minimum(y, white), np.minimum(ref_y, white), both, box):20.4f}"
+        if gradient:
+            line += f"  {gradient_error(np.minimum(y, white), np.minimum(ref_y, white), keep):18.4f}"
         print(line)
 
 

@@ -314,18 +314,22 @@ TEST_F(NightCli, ContactSheetFramesProposedLightsInMagentaAndSaysSo) {
   EXPECT_EQ(cv::norm(proposed(layout.labels[0]), given(layout.labels[0]), cv::NORM_INF), 0.0) << "day label";
 }
 
-// --denoise-passes sets the filter's a-trous passes: 2 passes, taps 1 and 2 px apart, reach
-// 2 (2^2 - 1) = 6 px; the default 5 reach 62 px. 0 is refused before anything is written.
-TEST_F(NightCli, DenoisePassesReachTheFilterAndZeroIsRefused) {
+// --denoise-passes and --denoise-fine-passes set the filter's a-trous passes: 2 passes, taps 1
+// and 2 px apart, and no fine pass reach 2 (2^2 - 1) = 6 px; the default 5 and 2 reach
+// 62 + 6 = 68 px. 0 passes or 11 fine passes are refused before anything is written.
+TEST_F(NightCli, DenoisePassesAndFinePassesReachTheFilterAndOutOfRangeIsRefused) {
   auto r = runSolo("night " + q(scene()) + " -o " + q(dir / "n.png") + " --preset draft --max-spp 1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   auto denoise = stage(readJson(dir / "n.report.json"), "denoise")["metrics"];
   EXPECT_EQ(denoise["iterations"], 5);
-  EXPECT_EQ(denoise["footprint_radius"]["value"], 62);
-  r = runSolo("night " + q(scene()) + " -o " + q(dir / "p.png") + " --preset draft --max-spp 1 --denoise-passes 2");
+  EXPECT_EQ(denoise["fine_passes"], 2);
+  EXPECT_EQ(denoise["footprint_radius"]["value"], 68);
+  r = runSolo("night " + q(scene()) + " -o " + q(dir / "p.png") +
+              " --preset draft --max-spp 1 --denoise-passes 2 --denoise-fine-passes 0");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   denoise = stage(readJson(dir / "p.report.json"), "denoise")["metrics"];
   EXPECT_EQ(denoise["iterations"], 2);
+  EXPECT_EQ(denoise["fine_passes"], 0);
   EXPECT_EQ(denoise["footprint_radius"]["value"], 6);
   const cv::Mat a = cv::imread((dir / "n.png").string()), b = cv::imread((dir / "p.png").string());
   ASSERT_FALSE(a.empty());
@@ -335,6 +339,9 @@ TEST_F(NightCli, DenoisePassesReachTheFilterAndZeroIsRefused) {
   r = runSolo("night " + q(scene()) + " -o " + q(out / "z.png") + " --denoise-passes 0");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("--denoise-passes"), std::string::npos) << r.output;
+  r = runSolo("night " + q(scene()) + " -o " + q(out / "z.png") + " --denoise-fine-passes 11");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--denoise-fine-passes"), std::string::npos) << r.output;
   EXPECT_TRUE(solo::test::listFolder(out).empty());
 }
 

@@ -20,6 +20,11 @@ struct RenderDenoiseOptions {
   /// A-trous passes, taps 1, 2, ..., 2^(iterations - 1) px apart: a footprint of
   /// 2 (2^iterations - 1) px around a pixel (5: 62 px). 1 to 10.
   int iterations = 5;
+  /// Passes after those, with taps 2^(fine_passes - 1), ..., 2, 1 px apart. A pass of step s
+  /// leaves a pattern of period s wherever its luminance weights differ from tap to tap (a
+  /// rare bright sample among dark ones: the a-trous grid, blocks of 4-16 px); the fine passes
+  /// average it out. 0 to 10; they add 2 (2^fine_passes - 1) px to the footprint.
+  int fine_passes = 2;
   /// Albedo (per XYZ channel) below this is taken as this when the radiance is divided by it
   /// and multiplied back, so a black surface keeps its radiance and no division blows up. > 0.
   float albedo_floor = 0.02f;
