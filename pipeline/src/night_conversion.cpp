@@ -34,11 +34,11 @@ NightConversionOptions::NightConversionOptions() {
   // same clipped error for 1.1-1.2x the render time (docs/rendering.md, "Light selection").
   render.near_field_lights = false;
   render.seed = 0;
-  // The night camera: -2 EV night-mode compensation, sensor noise at 0.6 of the calibration at
+  // The night camera: -2 EV night-mode compensation, sensor noise at 0.9 of the calibration at
   // the chosen ISO, a video knee up to 8x white, glare only from what clips
   // (docs/post-processing.md, docs/realism.md).
   camera.compensation_ev = -2;
-  post.noise_options.std_scale = 0.6;
+  post.noise_options.std_scale = 0.9;
   post.glare_options.scatter_fraction = 0.02;
   post.encoding_options.white_clip = 8;
   post.encoding_options.knee_point = 0.7;
