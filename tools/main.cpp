@@ -123,6 +123,10 @@ void addNightSceneFlags(CLI::App* night_cmd, NightOptions& night) {
   night_cmd->add_flag("-v,--verbose", night.verbose, "Every stage's notes on the terminal (the report has them)");
   night_cmd->add_flag("--complete,!--no-complete", night.conversion.refinement.complete,
                       "Depth completion: a depth for every pixel that is not sky (default on)");
+  night_cmd->add_option("--min-depth-share", night.conversion.min_depth_share,
+                        "Refuse a depth map with less than this share of its pixels holding a depth (sparser LiDAR: "
+                        "densify it first, or lower this and accept the completion's guess)")
+      ->capture_default_str()->check(CLI::Range(0.0, 1.0));
   night_cmd->add_flag("--optimize,!--no-optimize", night.conversion.refinement.optimize, "Normal-guided depth optimisation (preset)");
   night_cmd->add_option("--optimize-iterations", night.conversion.refinement.optimization.max_iterations, "Its solver iterations (preset)")
       ->capture_default_str()->check(CLI::Range(1, 100000));

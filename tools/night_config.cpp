@@ -50,6 +50,7 @@ std::string nightConfigText(const NightOptions& options) {
   flag("16bit", j.sixteen_bit);
   flag("refine", o.refine);
   flag("complete", o.refinement.complete);
+  line("min-depth-share", number(o.min_depth_share));
   flag("optimize", o.refinement.optimize);
   line("optimize-iterations", std::to_string(o.refinement.optimization.max_iterations));
   line("optimize-tolerance", number(o.refinement.optimization.function_tolerance));

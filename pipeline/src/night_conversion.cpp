@@ -319,7 +319,7 @@ int resolveDownsample(int requested, int width, int height) {
 }
 
 void validateNightConversionOptions(const NightConversionOptions& o) {
-  requireInRange(o.min_depth_share, 0, 1, "min_depth_share");
+  requireInRange(o.min_depth_share, 0, 1, "--min-depth-share");
   requireInRange(o.mesh_downsample, kAutoDownsample, 8, "--mesh-downsample");
   requireInRange(o.render_downsample, kAutoDownsample, 8, "--render-downsample");
   requireInRange(o.render.min_samples, 1, 1 << 20, "--min-spp");
@@ -357,8 +357,8 @@ void requireDenseDepth(const Scene& scene, const NightConversionOptions& o) {
   char problem[320];
   std::snprintf(problem, sizeof problem,
                 "only %.2f %% of the depth map's pixels hold a depth, below the %g %% from which depth completion "
-                "can densify it (a LiDAR projected into the image covers 2-5 %%; densify it first, "
-                "docs/scene-format.md)",
+                "can densify it (a LiDAR projected into the image covers 2-5 %%; densify it first, or lower "
+                "--min-depth-share; docs/scene-format.md)",
                 100.0 * share, 100.0 * o.min_depth_share);
   throw InputError(scene.manifest.depth, problem);
 }

@@ -286,6 +286,7 @@ TEST(NightJob, TheBundledLidarSampleIsRefusedByTheCli) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("lidar_depth.png"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("densify"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--min-depth-share"), std::string::npos) << r.output;
   EXPECT_TRUE(solo::test::listFolder(dir.path()).empty());
 }
 

@@ -460,3 +460,25 @@ TEST(ContactSheet, DepthColoursAreLogarithmicAndInvalidIsBlack) {
   EXPECT_EQ(rgb.at<cv::Vec3b>(3), cv::Vec3b(0, 0, 0));
   EXPECT_EQ(rgb.at<cv::Vec3b>(4), cv::Vec3b(0, 0, 0));
 }
+
+// A user who accepts the completion's guess lowers --min-depth-share: the bundled 0.2 % LiDAR
+// sample (4 818 returns in 1936x1216 pixels), refused at the default 1 %, then converts, every
+// pixel below the highest return filled (no labels: what has no depth above it is sky, docs/
+// depth-refinement.md). A share above 1 is refused before anything is written.
+TEST_F(NightCli, MinDepthShareLetsTheSparseLidarSampleThrough) {
+  const std::filesystem::path lidar = std::filesystem::path(SOLO_PROJECT_DATA_DIR) / "samples/dgp-real/scene.json";
+  auto r = runSolo("night " + q(lidar) + " -o " + q(dir / "n.png") + " --preset draft --max-spp 1 --min-depth-share 0.001");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto report = readJson(dir / "n.report.json");
+  EXPECT_EQ(stage(report, "input")["metrics"]["depth_valid"], 4818);
+  const auto& complete = stage(report, "complete")["metrics"];
+  EXPECT_EQ(complete["sky_rule"], "no depth above (no labels)");
+  EXPECT_GT(complete["filled_share"]["value"].get<double>(), 99.0);
+  EXPECT_TRUE(std::filesystem::exists(dir / "n.png"));
+  const auto out = dir / "out";
+  std::filesystem::create_directory(out);
+  r = runSolo("night " + q(lidar) + " -o " + q(out / "m.png") + " --min-depth-share 2");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--min-depth-share"), std::string::npos) << r.output;
+  EXPECT_TRUE(solo::test::listFolder(out).empty());
+}
