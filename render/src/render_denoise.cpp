@@ -275,8 +275,8 @@ struct Taps {
   TapArray luminance;  // |Y_p - Y_q|
   TapArray spread;     // luminance_sigma x sqrt(v_p + v_q)
   TapArray spline;     // the kernel's weight; 0 for a tap left out
-  std::array<const cv::Vec3f*, kTaps> irradiance{};
-  std::array<float, kTaps> variance_q{};
+  std::array<const cv::Vec3f*, kTaps> irradiance;  // set where spline != 0
+  std::array<float, kTaps> variance_q;             // set where spline != 0
 };
 
 // ln of neighbour q's tangent-plane and albedo weight for pixel `c`, and whether q counts at
@@ -291,11 +291,10 @@ bool geometryLogWeight(const Centre& c, const Guides& g, int yq, int xq, const R
   return log_w > kNegligibleLogWeight;
 }
 
-// The taps of pixel (x, y) at spacing `step`: those off the image, not filtered or of
-// negligible geometric weight get a zero kernel weight.
-Taps gatherTaps(const Guides& g, const Estimate& in, int step, const RenderDenoiseOptions& o, const Centre& c, int x,
-                int y) {
-  Taps t;
+// Fills `t` with the taps of pixel (x, y) at spacing `step`: those off the image, not filtered
+// or of negligible geometric weight get a zero kernel weight (and nothing else is read of them).
+void gatherTaps(const Guides& g, const Estimate& in, int step, const RenderDenoiseOptions& o, const Centre& c, int x,
+                int y, Taps& t) {
   t.spline.setZero();
   t.log_w.setZero();
   t.cos_n.setOnes();
@@ -319,7 +318,6 @@ Taps gatherTaps(const Guides& g, const Estimate& in, int step, const RenderDenoi
       t.spread(k) = o.luminance_sigma * std::sqrt(c.variance + t.variance_q[k]);
     }
   }
-  return t;
 }
 
 // Pixel (x, y)'s filtered irradiance and its variance: the weighted mean over its 5x5 taps.
@@ -332,7 +330,8 @@ void filterPixel(const Guides& g, const Estimate& in, int step, const RenderDeno
                  g.log_albedo.at<float>(y, x),
                  in.irradiance.at<cv::Vec3f>(y, x)[1],
                  luminance ? in.variance.at<float>(y, x) : 0.f};
-  const Taps t = gatherTaps(g, in, step, o, c, x, y);
+  Taps t;
+  gatherTaps(g, in, step, o, c, x, y, t);
   TapArray log_w = t.log_w;
   if (o.normal_exponent > 0) log_w += o.normal_exponent * t.cos_n.log();
   if (luminance) log_w -= t.luminance / (t.spread + 1e-30f);
