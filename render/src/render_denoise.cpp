@@ -401,7 +401,11 @@ StageReport denoiseRender(RenderOutput& render, const PinholeCamera& camera, con
   cv::divide(render.radiance, albedo, estimate.irradiance);
   const FireflyClamp fireflies = clampFireflies(render, guides, albedo, estimate.irradiance, options);
   estimate.variance = initialVariance(render, guides, albedo);
-  for (const int step : passSteps(options)) estimate = atrousPass(guides, estimate, step, options);
+  std::int64_t footprint_radius_px = 0;  // each pass reaches two taps further
+  for (const int step : passSteps(options)) {
+    estimate = atrousPass(guides, estimate, step, options);
+    footprint_radius_px += 2 * step;
+  }
 
   cv::Mat filtered;
   cv::multiply(estimate.irradiance, albedo, filtered);
@@ -416,8 +420,7 @@ StageReport denoiseRender(RenderOutput& render, const PinholeCamera& camera, con
       .add("pixels_kept_no_surface", counts.no_surface)
       .add("iterations", static_cast<std::int64_t>(options.iterations))
       .add("fine_passes", static_cast<std::int64_t>(options.fine_passes))
-      .add("footprint_radius",
-           static_cast<std::int64_t>(2 * ((1 << options.iterations) - 1) + 2 * ((1 << options.fine_passes) - 1)), "px")
+      .add("footprint_radius", footprint_radius_px, "px")
       .add("luminance_weight", !render.std_error.empty())
       .add("luminance_ratio", y_before > 0 ? y_after / y_before : 1.0)
       .add("fireflies_clamped", fireflies.pixels)
