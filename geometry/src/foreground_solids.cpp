@@ -4,6 +4,8 @@
 #include "solo/core/scene.h"
 #include "triangle_raster.h"
 
+#include <opencv2/core/utility.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -59,15 +61,31 @@ std::vector<std::uint8_t> floatingSheets(const DepthMesh& m, const std::vector<i
         if (m.vertexAt(p[0] + du, p[1] + dv) < 0) return true;
     return false;
   };
-  std::vector<std::uint8_t> floating(count, 1), has_boundary(count, 0);
-  for (const auto h : mesh.halfedges()) {
-    if (mesh.status(mesh.edge_handle(h)).deleted() || !mesh.is_boundary(h)) continue;
-    const int c = component[mesh.face_handle(mesh.opposite_halfedge_handle(h)).idx()];
-    if (c < 0) continue;
-    has_boundary[c] = 1;
-    if (floating[c] && atBorder(mesh.from_vertex_handle(h))) floating[c] = 0;
+  // The half-edges in slices, each with its own flags (1: has a boundary, 2: touches the border).
+  const int halfedges = static_cast<int>(mesh.n_halfedges());
+  const int slices = std::max(1, cv::getNumThreads());
+  std::vector<std::vector<std::uint8_t>> flags(slices, std::vector<std::uint8_t>(count, 0));
+  cv::parallel_for_(cv::Range(0, slices), [&](const cv::Range& range) {
+    for (int slice = range.start; slice < range.end; ++slice) {
+      std::vector<std::uint8_t>& flag = flags[slice];
+      const int first = static_cast<int>(std::int64_t(halfedges) * slice / slices);
+      const int last = static_cast<int>(std::int64_t(halfedges) * (slice + 1) / slices);
+      for (int i = first; i < last; ++i) {
+        const OpenMesh::HalfedgeHandle h(i);
+        if (mesh.status(mesh.edge_handle(h)).deleted() || !mesh.is_boundary(h)) continue;
+        const int c = component[mesh.face_handle(mesh.opposite_halfedge_handle(h)).idx()];
+        if (c < 0) continue;
+        flag[c] |= 1;
+        if (!(flag[c] & 2) && atBorder(mesh.from_vertex_handle(h))) flag[c] |= 2;
+      }
+    }
+  });
+  std::vector<std::uint8_t> floating(count, 0);
+  for (int c = 0; c < count; ++c) {
+    std::uint8_t any = 0;
+    for (const auto& flag : flags) any |= flag[c];
+    floating[c] = any == 1;
   }
-  for (int c = 0; c < count; ++c) floating[c] = floating[c] && has_boundary[c];
   return floating;
 }
 
@@ -178,8 +196,7 @@ SolidClosing closeForegroundSolids(DepthMesh& m, const std::vector<OpenMesh::Fac
     }
   }
   const auto backOf = [&](OpenMesh::VertexHandle v) { return OpenMesh::VertexHandle(back_of[v.idx()]); };
-  const bool was_enabled = omerr().is_enabled();
-  omerr().disable();
+  const QuietOpenMeshErrors quiet;  // refused faces are counted, not printed
   for (const auto f : solid_faces) {
     OpenMesh::VertexHandle v[3];
     int k = 0;
@@ -191,7 +208,6 @@ SolidClosing closeForegroundSolids(DepthMesh& m, const std::vector<OpenMesh::Fac
     result.faces_added += mesh.add_face(a, b, backOf(b)).is_valid();
     result.faces_added += mesh.add_face(a, backOf(b), backOf(a)).is_valid();
   }
-  if (was_enabled) omerr().enable();
   for (const auto& [class_id, n] : solids_per_class)
     result.classes.push_back(std::to_string(class_id) + ":" + std::to_string(n));
   return result;

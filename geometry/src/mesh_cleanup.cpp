@@ -8,11 +8,14 @@
 #include "solo/geometry/mesh_repair.h"
 #include "solo/core/scene.h"
 
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <future>
+#include <optional>
 
 namespace solo {
 namespace {
@@ -62,11 +65,13 @@ constexpr double kBackdropSolidRoom_m = 0.25;
 // What a backdrop stays behind (CV_32F maps, metres, 0 for none): `farthest`, the farthest
 // surface at each pixel centre, with the room the foreground solids and floating slabs closed
 // after it will take (their thickness plus kBackdropSolidRoom_m); `observed`, the depth
-// observed where the mesh shows nothing (the removed surface).
+// observed where the mesh shows nothing (the removed surface). `farthest_surface`, when given,
+// is the mesh's farthestSurfaceDepth, found beforehand.
 void backdropDepthBounds(const DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
-                         const DepthMeshCleanupOptions& options, cv::Mat& farthest, cv::Mat& observed) {
+                         const DepthMeshCleanupOptions& options, cv::Mat& farthest, cv::Mat& observed,
+                         const cv::Mat* farthest_surface = nullptr) {
   const SurfaceMesh& mesh = m.mesh;
-  farthest = farthestSurfaceDepth(mesh, m.camera, m.width, m.height);
+  farthest = farthest_surface ? farthest_surface->clone() : farthestSurfaceDepth(mesh, m.camera, m.width, m.height);
   std::vector<int> sheet_of_vertex;
   std::vector<std::uint8_t> floating;
   if (options.close_solids && options.solids.floating_sheet_thickness_m > 0) {
@@ -79,18 +84,21 @@ void backdropDepthBounds(const DepthMesh& m, const cv::Mat& depth_m, const cv::M
         for (const auto v : mesh.fv_range(f)) sheet_of_vertex[v.idx()] = component[f.idx()];
   }
   if (options.close_solids)
-    for (int v = 0; v < m.height; ++v)
-      for (int u = 0; u < m.width; ++u) {
-        const int i = m.vertexAt(u, v);
-        if (i < 0 || mesh.status(OpenMesh::VertexHandle(i)).deleted()) continue;
-        double t = classThicknessM(
-            cityscapesClassOfInstance(mesh.property(m.properties.instance, OpenMesh::VertexHandle(i))));
-        if (t <= 0 && !floating.empty() && sheet_of_vertex[i] >= 0 && floating[sheet_of_vertex[i]])
-          t = options.solids.floating_sheet_thickness_m;
-        if (t <= 0) continue;
-        float& slot = farthest.at<float>(v, u);
-        slot = std::max(slot, static_cast<float>(mesh.point(OpenMesh::VertexHandle(i))[2] + t + kBackdropSolidRoom_m));
-      }
+    cv::parallel_for_(cv::Range(0, m.height), [&](const cv::Range& rows) {
+      for (int v = rows.start; v < rows.end; ++v)
+        for (int u = 0; u < m.width; ++u) {
+          const int i = m.vertexAt(u, v);
+          if (i < 0 || mesh.status(OpenMesh::VertexHandle(i)).deleted()) continue;
+          double t = classThicknessM(
+              cityscapesClassOfInstance(mesh.property(m.properties.instance, OpenMesh::VertexHandle(i))));
+          if (t <= 0 && !floating.empty() && sheet_of_vertex[i] >= 0 && floating[sheet_of_vertex[i]])
+            t = options.solids.floating_sheet_thickness_m;
+          if (t <= 0) continue;
+          float& slot = farthest.at<float>(v, u);
+          slot = std::max(slot,
+                          static_cast<float>(mesh.point(OpenMesh::VertexHandle(i))[2] + t + kBackdropSolidRoom_m));
+        }
+    });
   observed = cv::Mat(m.height, m.width, CV_32F, cv::Scalar(0.0f));
   for (int v = 0; v < m.height; ++v)
     for (int u = 0; u < m.width; ++u) {
@@ -228,28 +236,31 @@ HoleClosing closeSomeHoles(DepthMesh& m, const DepthMeshCleanupOptions& options,
   return closeHoles(m.mesh, subset.holes, options.hole_filling, mapping);
 }
 
-// The backdrops `which` of `source`, behind the mesh's farthest surfaces.
+// The backdrops `which` of `source`, behind the mesh's farthest surfaces (`farthest_surface`:
+// found beforehand, or none).
 HoleClosing closeBackdrops(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
                            const DepthMeshCleanupOptions& options, const DepthLoops& source,
-                           const std::vector<std::size_t>& which) {
+                           const std::vector<std::size_t>& which, const cv::Mat* farthest_surface = nullptr) {
   cv::Mat farthest, observed;
-  backdropDepthBounds(m, depth_m, had_depth, options, farthest, observed);
+  backdropDepthBounds(m, depth_m, had_depth, options, farthest, observed, farthest_surface);
   return closeSomeHoles(m, options, source, which, &farthest, &observed, false);
 }
 
 // Takes the patches of `own` (indices into the first pass's holes) out of the mesh; returns the
 // vertices that went with them.
 std::int64_t removeHolePatches(DepthMesh& m, const HoleClosing& first, const std::vector<std::size_t>& own) {
-  const auto live_vertices = [&m] {
-    std::int64_t n = 0;
-    for (const auto v : m.mesh.vertices()) n += !m.mesh.status(v).deleted();
-    return n;
-  };
-  const std::int64_t before = live_vertices();
+  std::vector<OpenMesh::VertexHandle> touched;
   for (const std::size_t k : own)
-    for (const auto f : first.hole_faces[k])
-      if (!m.mesh.status(f).deleted()) m.mesh.delete_face(f, true);
-  return before - live_vertices();
+    for (const auto f : first.hole_faces[k]) {
+      if (m.mesh.status(f).deleted()) continue;
+      for (const auto v : m.mesh.fv_range(f)) touched.push_back(v);
+      m.mesh.delete_face(f, true);
+    }
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  std::int64_t removed = 0;
+  for (const auto v : touched) removed += m.mesh.status(v).deleted();
+  return removed;
 }
 
 // Counts a first-pass patch taken out: its hole is closed inside a backdrop instead.
@@ -265,38 +276,157 @@ void uncountPatch(HoleClosing& first, std::size_t k) {
   first.hole_faces[k].clear();
 }
 
-// A backdrop whose patch met the mesh, with frame holes closed on their own beside it: those
-// may lie behind the same occluder, their patch where the backdrop has to pass (a pole one
-// pixel wide at the mesh's size). On a copy of the mesh their patches are taken out and every
-// frame hole joins a backdrop run, as a frame hole whose own patch fails does; the copy is kept
-// when it leaves fewer holes open. Updates `first` (the first pass) and `more` (the backdrops).
-void joinOwnFrameHolesToBackdrops(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
-                                  const DepthMeshCleanupOptions& options, const DepthLoops& loops,
-                                  const std::vector<std::size_t>& first_pass, HoleClosing& first,
-                                  HoleClosing& more, StageReport& report) {
+// The first pass's frame holes closed on their own (indices into its holes).
+std::vector<std::size_t> ownFrameHolePatches(const DepthLoops& loops, const std::vector<std::size_t>& first_pass,
+                                             const HoleClosing& first) {
   std::vector<std::size_t> own;
   for (std::size_t k = 0; k < first_pass.size(); ++k)
     if (loops.frame_hole[first_pass[k]] && first.hole_methods[k] != "open" && !first.hole_faces[k].empty())
       own.push_back(k);
-  if (own.empty()) return;
-  DepthMesh trial = m;
-  const std::int64_t vertices_removed = removeHolePatches(trial, first, own);
-  const DepthLoops joined = classifyDepthLoops(trial, had_depth, depth_m, BackdropMode::EveryFrameHole);
-  std::vector<std::size_t> joined_backdrops;
-  for (std::size_t i = 0; i < joined.holes.size(); ++i)
-    if (joined.backdrop[i]) joined_backdrops.push_back(i);
-  if (joined_backdrops.empty()) return;
-  HoleClosing trial_more = closeBackdrops(trial, depth_m, had_depth, options, joined, joined_backdrops);
-  report.add("frame_holes_tried_in_backdrops", static_cast<std::int64_t>(own.size()));
-  if (trial_more.left_open >= more.left_open) return;
-  m = trial;
+  return own;
+}
+
+// The backdrops closed again on a mesh (a copy, or the mesh itself when the first backdrops
+// are closed on a copy) with the patches of the frame holes closed on their own taken out,
+// every frame hole a backdrop run.
+struct BackdropJoin {
+  DepthMesh& mesh;
+  bool tried = false;  // the joined classification had a backdrop to close
+  HoleClosing backdrops;
+  std::int64_t vertices_removed = 0;
+
+  explicit BackdropJoin(DepthMesh& on) : mesh(on) {}
+
+  // `farthest_surface`: the mesh's farthestSurfaceDepth without the patches, or none.
+  void run(const cv::Mat& depth_m, const cv::Mat& had_depth, const DepthMeshCleanupOptions& options,
+           const HoleClosing& first, const std::vector<std::size_t>& own, const cv::Mat* farthest_surface = nullptr) {
+    vertices_removed = removeHolePatches(mesh, first, own);
+    const DepthLoops joined = classifyDepthLoops(mesh, had_depth, depth_m, BackdropMode::EveryFrameHole);
+    std::vector<std::size_t> joined_backdrops;
+    for (std::size_t i = 0; i < joined.holes.size(); ++i)
+      if (joined.backdrop[i]) joined_backdrops.push_back(i);
+    if (joined_backdrops.empty()) return;
+    backdrops = closeBackdrops(mesh, depth_m, had_depth, options, joined, joined_backdrops, farthest_surface);
+    tried = true;
+  }
+
+  // Whether it leaves fewer holes open than the backdrops `more` (counted in the report).
+  bool better(const HoleClosing& more, const std::vector<std::size_t>& own, StageReport& report) const {
+    if (!tried) return false;
+    report.add("frame_holes_tried_in_backdrops", static_cast<std::int64_t>(own.size()));
+    return backdrops.left_open < more.left_open;
+  }
+};
+
+// Takes the join's counts: `first` (the first pass) loses the patches taken out, `more` (the
+// backdrops) becomes the join's; `m` holds the join's mesh.
+void adoptBackdropJoin(const DepthMesh& m, BackdropJoin& join, const std::vector<std::size_t>& own,
+                       HoleClosing& first, HoleClosing& more, StageReport& report) {
   for (const std::size_t k : own) uncountPatch(first, k);
-  first.vertices_added -= vertices_removed;
+  first.vertices_added -= join.vertices_removed;
   first.patch_faces.erase(std::remove_if(first.patch_faces.begin(), first.patch_faces.end(),
                                          [&m](OpenMesh::FaceHandle f) { return m.mesh.status(f).deleted(); }),
                           first.patch_faces.end());
-  more = std::move(trial_more);
+  more = std::move(join.backdrops);
   report.add("frame_holes_joined_to_backdrops", static_cast<std::int64_t>(own.size()));
+}
+
+// Whether a frame hole of `own` (indices into the first pass) has a loop vertex on or beside
+// (8-neighbourhood) a pixel of the backdrops' polygons: their runs and closing paths.
+bool ownFrameHolesBesideBackdrops(const DepthMesh& m, const DepthLoops& loops,
+                                  const std::vector<std::size_t>& backdrop_holes,
+                                  const std::vector<std::size_t>& first_pass, const std::vector<std::size_t>& own) {
+  cv::Mat polygon(m.height, m.width, CV_8U, cv::Scalar(0));
+  const auto mark = [&](const OpenMesh::Vec2i& p) {
+    if (p[0] >= 0 && p[1] >= 0 && p[0] < m.width && p[1] < m.height) polygon.at<std::uint8_t>(p[1], p[0]) = 1;
+  };
+  for (const std::size_t b : backdrop_holes) {
+    for (const auto v : loops.holes[b]) mark(m.mesh.property(m.properties.pixel, v));
+    for (const auto& p : loops.frame_paths[b]) mark(p);
+  }
+  cv::dilate(polygon, polygon, cv::Mat::ones(3, 3, CV_8U));
+  for (const std::size_t k : own)
+    for (const auto v : loops.holes[first_pass[k]]) {
+      const OpenMesh::Vec2i p = m.mesh.property(m.properties.pixel, v);
+      if (p[0] >= 0 && p[1] >= 0 && p[0] < m.width && p[1] < m.height && polygon.at<std::uint8_t>(p[1], p[0]))
+        return true;
+    }
+  return false;
+}
+
+struct MeshSize {
+  std::size_t vertices, edges, faces;
+  bool operator==(const MeshSize& o) const { return vertices == o.vertices && edges == o.edges && faces == o.faces; }
+};
+
+MeshSize meshSize(const SurfaceMesh& mesh) { return {mesh.n_vertices(), mesh.n_edges(), mesh.n_faces()}; }
+
+// The backdrops of the first classification (`backdrop_holes` of `loops`). One whose patch
+// meets the mesh may have frame holes beside it that closed on their own with patches where it
+// has to pass (behind a lamp pole one pixel wide at the mesh's size, the runs on both sides of
+// the pole closed along the frame behind it): then the backdrops are closed again on a copy of
+// the mesh without those patches (BackdropJoin), kept when it leaves fewer holes open. When
+// such frame holes touch a backdrop's polygon and there is more than one thread, the copy is
+// taken before the backdrops and the join runs beside them; it is used when the backdrops leave
+// a hole open and add nothing to the mesh (else it is run again after them), so the mesh is the
+// same either way.
+HoleClosing closeFirstBackdrops(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
+                                const DepthMeshCleanupOptions& options, const DepthLoops& loops,
+                                const std::vector<std::size_t>& backdrop_holes,
+                                const std::vector<std::size_t>& first_pass, HoleClosing& first, StageReport& report) {
+  const std::vector<std::size_t> own = ownFrameHolePatches(loops, first_pass, first);
+  const auto joinAfter = [&](HoleClosing& more) {
+    if (more.left_open == 0 || own.empty()) return;
+    DepthMesh trial = m;
+    BackdropJoin join(trial);
+    join.run(depth_m, had_depth, options, first, own);
+    if (!join.better(more, own, report)) return;
+    m = trial;
+    adoptBackdropJoin(m, join, own, first, more, report);
+  };
+  const bool beside_backdrops = !own.empty() && cv::getNumThreads() >= 2 &&
+                                ownFrameHolesBesideBackdrops(m, loops, backdrop_holes, first_pass, own);
+  report.add("backdrop_join_beside", beside_backdrops);
+  if (!beside_backdrops) {
+    HoleClosing more = closeBackdrops(m, depth_m, had_depth, options, loops, backdrop_holes);
+    joinAfter(more);
+    return more;
+  }
+  // Side by side: the backdrops on a copy, the join on the mesh itself (with its farthest
+  // surfaces without the patches, found while the copy is made; it changes the mesh only once
+  // the copy is taken).
+  std::optional<DepthMesh> copy;
+  std::promise<void> copied;
+  std::shared_future<void> copy_taken = copied.get_future().share();
+  BackdropJoin join(m);
+  std::future<void> beside = std::async(std::launch::async, [&] {
+    std::vector<std::uint8_t> patch_face(m.mesh.n_faces(), 0);
+    for (const std::size_t k : own)
+      for (const auto f : first.hole_faces[k]) patch_face[f.idx()] = 1;
+    const cv::Mat farthest_surface = farthestSurfaceDepth(m.mesh, m.camera, m.width, m.height, &patch_face);
+    copy_taken.get();
+    join.run(depth_m, had_depth, options, first, own, &farthest_surface);
+  });
+  try {
+    copy.emplace(m);
+  } catch (...) {
+    copied.set_exception(std::current_exception());
+    throw;
+  }
+  copied.set_value();
+  const MeshSize before = meshSize(copy->mesh);
+  HoleClosing more = closeBackdrops(*copy, depth_m, had_depth, options, loops, backdrop_holes);
+  beside.get();
+  // What the one-after-the-other order does: the join only when the backdrops leave a hole
+  // open, tried on the mesh as they left it (here: unchanged).
+  const bool unchanged = meshSize(copy->mesh) == before && more.faces_added == 0;
+  if (more.left_open > 0 && unchanged && join.better(more, own, report)) {
+    adoptBackdropJoin(m, join, own, first, more, report);
+    return more;
+  }
+  m = *copy;
+  if (!unchanged) joinAfter(more);
+  return more;
 }
 
 // Closes the holes of a depth mesh. Backdrops are filled after every other hole: they lie
@@ -333,14 +463,15 @@ HoleClosing closeDepthHoles(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat&
   }
   if (!backdrop_holes.empty()) {
     const Stopwatch backdrop_clock;
-    HoleClosing more = closeBackdrops(m, depth_m, had_depth, options, *backdrop_source, backdrop_holes);
+    HoleClosing more =
+        backdrop_source == &loops
+            ? closeFirstBackdrops(m, depth_m, had_depth, options, loops, backdrop_holes, first_pass, holes, report)
+            : closeBackdrops(m, depth_m, had_depth, options, again, backdrop_holes);
     if (backdrop_source == &again && more.left_open == 0) {
       // The frame holes left open are closed now, inside the backdrops (counted there).
       holes.holes -= retried;
       holes.left_open -= retried;
     }
-    if (more.left_open > 0 && backdrop_source == &loops)
-      joinOwnFrameHolesToBackdrops(m, depth_m, had_depth, options, loops, first_pass, holes, more, report);
     appendHoleClosing(holes, more);
     report.add("seconds_backdrops", backdrop_clock.seconds(), "s");  // part of seconds_hole_filling
   }

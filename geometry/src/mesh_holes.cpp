@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <stdexcept>
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
@@ -683,8 +684,7 @@ void HoleCloser::attachAccepted() {
     const auto vh = mesh.add_vertex(SurfaceMesh::Point(points[i].x(), points[i].y(), points[i].z()));
     handle_of_new.push_back(vh);
   }
-  const bool was_enabled = omerr().is_enabled();
-  omerr().disable();
+  const QuietOpenMeshErrors quiet;
   // General meshes: a patch whose faces OpenMesh refuses in their order (at a vertex with two
   // boundary fans, e.g. a merged pinch) is tried again grown face by face from the mesh's edges,
   // after the other patches.
@@ -713,7 +713,6 @@ void HoleCloser::attachAccepted() {
     if (attempt.hole < result.hole_faces.size()) result.hole_faces[attempt.hole] = added;
     if (pixels) labelNewVertices(attempt, first_new, handle_of_new);
   }
-  if (was_enabled) omerr().enable();
   // New vertices of patches that were not attached are isolated: remove them.
   for (const auto vh : handle_of_new)
     if (!mesh.status(vh).deleted() && mesh.is_isolated(vh)) mesh.delete_vertex(vh, false);
@@ -837,7 +836,11 @@ void HoleCloser::warnOpen(const std::vector<std::uint8_t>& open) {
 
 }  // namespace
 
-cv::Mat farthestSurfaceDepth(const SurfaceMesh& mesh, const PinholeCamera& camera, int width, int height) {
+cv::Mat farthestSurfaceDepth(const SurfaceMesh& mesh, const PinholeCamera& camera, int width, int height,
+                             const std::vector<std::uint8_t>* left_out) {
+  if (left_out && left_out->size() != mesh.n_faces())
+    throw std::invalid_argument("farthestSurfaceDepth: left_out has " + std::to_string(left_out->size()) +
+                                " entries for " + std::to_string(mesh.n_faces()) + " faces");
   // Each vertex projected once; the faces rasterized in one slice per thread, each into its
   // own map, merged by the maximum.
   const int vertex_count = static_cast<int>(mesh.n_vertices());
@@ -861,7 +864,7 @@ cv::Mat farthestSurfaceDepth(const SurfaceMesh& mesh, const PinholeCamera& camer
       const int last = static_cast<int>(std::int64_t(face_count) * (slice + 1) / slices);
       for (int fi = first; fi < last; ++fi) {
         const OpenMesh::FaceHandle f(fi);
-        if (mesh.status(f).deleted()) continue;
+        if (mesh.status(f).deleted() || (left_out && (*left_out)[fi])) continue;
         Eigen::Vector2d uv[3];
         double inverse_depth[3];
         int k = 0;

@@ -1,6 +1,38 @@
 #include "solo/geometry/surface_mesh.h"
 
+#include <mutex>
+
 namespace solo {
+namespace {
+
+// OpenMesh's error stream is one global object: silencing is counted across threads.
+struct QuietState {
+  std::mutex mutex;
+  int holders = 0;
+  bool was_enabled = false;
+};
+
+QuietState& quietState() {
+  static QuietState state;
+  return state;
+}
+
+}  // namespace
+
+QuietOpenMeshErrors::QuietOpenMeshErrors() {
+  QuietState& state = quietState();
+  const std::lock_guard<std::mutex> lock(state.mutex);
+  if (state.holders++ == 0) {
+    state.was_enabled = omerr().is_enabled();
+    omerr().disable();
+  }
+}
+
+QuietOpenMeshErrors::~QuietOpenMeshErrors() {
+  QuietState& state = quietState();
+  const std::lock_guard<std::mutex> lock(state.mutex);
+  if (--state.holders == 0 && state.was_enabled) omerr().enable();
+}
 
 ImageVertexProperties ImageVertexProperties::getOrAdd(SurfaceMesh& mesh) {
   ImageVertexProperties p;
@@ -57,14 +89,15 @@ SurfaceMesh toSurfaceMesh(const TriangleMesh& soup, std::int64_t* faces_refused)
   for (const Eigen::Vector3d& p : soup.vertices) mesh.add_vertex(SurfaceMesh::Point(p.x(), p.y(), p.z()));
   std::int64_t refused = 0;
   // OpenMesh reports refused faces on its error stream; they are counted here instead.
-  const bool was_enabled = omerr().is_enabled();
-  omerr().disable();
-  for (const auto& f : soup.faces) {
-    const auto h = mesh.add_face(OpenMesh::VertexHandle(static_cast<int>(f[0])), OpenMesh::VertexHandle(static_cast<int>(f[1])),
-                                 OpenMesh::VertexHandle(static_cast<int>(f[2])));
-    if (!h.is_valid()) ++refused;
+  {
+    const QuietOpenMeshErrors quiet;
+    for (const auto& f : soup.faces) {
+      const auto h = mesh.add_face(OpenMesh::VertexHandle(static_cast<int>(f[0])),
+                                   OpenMesh::VertexHandle(static_cast<int>(f[1])),
+                                   OpenMesh::VertexHandle(static_cast<int>(f[2])));
+      if (!h.is_valid()) ++refused;
+    }
   }
-  if (was_enabled) omerr().enable();
   if (faces_refused) *faces_refused = refused;
   return mesh;
 }

@@ -159,6 +159,45 @@ TEST(NightConversion, FrameHolesClosedBehindAThinPoleJoinTheBackdropThatMeetsThe
   EXPECT_EQ(metric("after_degenerate_faces"), 0);
 }
 
+// The same street: with two threads the join is tried beside the backdrops (the frame holes
+// closed on their own touch the backdrop's polygon), on one thread after them. The mesh is the
+// same, point for point and face for face.
+TEST(NightConversion, TheJoinBesideTheBackdropsLeavesTheMeshOfTheJoinAfterThem) {
+  TempDir dir;
+  ASSERT_EQ(solo::test::runSolo("synth --seed 3 -o \"" + (dir / "s").string() + "\"").exit_code, 0);
+  const solo::Scene scene = solo::loadScene(dir / "s" / "scene.json");
+  const NightConversionOptions o = solo::nightPreset("draft");
+  const int threads_before = cv::getNumThreads();
+  solo::NightConversionResult runs[2];
+  for (const int threads : {1, 2}) {
+    cv::setNumThreads(threads);
+    solo::runNightSceneStages(scene, o, {}, runs[threads - 1]);
+  }
+  cv::setNumThreads(threads_before);
+  for (const int threads : {1, 2}) {
+    const solo::StageReport* mesh = nullptr;
+    for (const solo::StageReport& s : runs[threads - 1].stages)
+      if (s.name == "mesh") mesh = &s;
+    ASSERT_NE(mesh, nullptr);
+    ASSERT_TRUE(mesh->find("backdrop_join_beside"));
+    EXPECT_EQ(std::get<bool>(*mesh->find("backdrop_join_beside")), threads == 2);
+    EXPECT_GT(integerMetric(*mesh, "frame_holes_joined_to_backdrops"), 0) << threads << " threads";
+  }
+  const solo::SurfaceMesh& one = runs[0].mesh.mesh;
+  const solo::SurfaceMesh& two = runs[1].mesh.mesh;
+  ASSERT_EQ(one.n_vertices(), two.n_vertices());
+  ASSERT_EQ(one.n_faces(), two.n_faces());
+  std::size_t points_differing = 0, faces_differing = 0;
+  for (const auto v : one.vertices()) points_differing += one.point(v) != two.point(v);
+  for (const auto f : one.faces()) {
+    auto a = one.cfv_begin(f);
+    auto b = two.cfv_begin(solo::SurfaceMesh::FaceHandle(f.idx()));
+    for (int k = 0; k < 3; ++k, ++a, ++b) faces_differing += a->idx() != b->idx();
+  }
+  EXPECT_EQ(points_differing, 0u);
+  EXPECT_EQ(faces_differing, 0u);
+}
+
 // The embedded scene at the default preset: a frame hole's own patch fails, and classified
 // again with every frame hole a backdrop run, no chain closes. The backdrop chain found first
 // (6 runs) is then closed as it was, not dropped: no backdrop loop is left in the mesh. The

@@ -74,8 +74,10 @@ struct PixelMapping {
 
 /// The depth (metres) of the farthest live face of `mesh` along each pixel centre's ray
 /// (`camera`, a width x height image; CV_32F, 0 where no face covers the centre): rasterized
-/// in inverse depth, which is affine in the image over a planar triangle.
-cv::Mat farthestSurfaceDepth(const SurfaceMesh& mesh, const PinholeCamera& camera, int width, int height);
+/// in inverse depth, which is affine in the image over a planar triangle. `left_out`, when
+/// given: per face index, non-zero for a face not counted (as if deleted).
+cv::Mat farthestSurfaceDepth(const SurfaceMesh& mesh, const PinholeCamera& camera, int width, int height,
+                             const std::vector<std::uint8_t>* left_out = nullptr);
 
 /// Fills the holes (loops in border half-edge direction, see findBoundaryLoops). With `pixels`
 /// (and options.image_space_first) every hole is first filled in image space (fillHoleInImage);

@@ -49,6 +49,17 @@ struct ImageVertexProperties {
   static std::optional<ImageVertexProperties> find(const SurfaceMesh& mesh);
 };
 
+/// Silences OpenMesh's error stream (where add_face reports a face it refuses; callers count
+/// them) while an instance lives. Instances may nest and live on several threads at once: the
+/// stream is restored when the last one ends.
+class QuietOpenMeshErrors {
+ public:
+  QuietOpenMeshErrors();
+  ~QuietOpenMeshErrors();
+  QuietOpenMeshErrors(const QuietOpenMeshErrors&) = delete;
+  QuietOpenMeshErrors& operator=(const QuietOpenMeshErrors&) = delete;
+};
+
 /// OpenMesh's garbage collection (deleted elements removed, handles renumbered densely),
 /// instantiated here rather than run from libOpenMeshCore: Debian builds that library with its
 /// assertions on, and each status lookup there compares property type names. A binary holding
