@@ -16,7 +16,10 @@
 #include <cmath>
 #include <random>
 #include <limits>
+#include <future>
+#include <optional>
 #include <set>
+#include <thread>
 
 namespace {
 
@@ -358,6 +361,38 @@ TEST(SharedMeshesBunny, UnreferencedVerticesAreDropped) {
 }
 
 }  // namespace
+
+// OpenMesh's error stream is silenced while any guard lives, on any thread, and restored (to
+// what it was) when the last one ends.
+TEST(SurfaceMesh, QuietOpenMeshErrorsNestsAndRestoresTheStreamAcrossThreads) {
+  ASSERT_TRUE(omerr().is_enabled());
+  std::optional<solo::QuietOpenMeshErrors> outer;
+  outer.emplace();
+  EXPECT_FALSE(omerr().is_enabled());
+  {
+    const solo::QuietOpenMeshErrors nested;
+    EXPECT_FALSE(omerr().is_enabled());
+  }
+  EXPECT_FALSE(omerr().is_enabled()) << "the outer guard still lives";
+  std::promise<void> inner_made, outer_gone;
+  bool quiet_after_outer = false;
+  std::thread other([&] {
+    const solo::QuietOpenMeshErrors inner;
+    inner_made.set_value();
+    outer_gone.get_future().wait();
+    quiet_after_outer = !omerr().is_enabled();
+  });
+  inner_made.get_future().wait();
+  outer.reset();
+  outer_gone.set_value();
+  other.join();
+  EXPECT_TRUE(quiet_after_outer) << "the other thread's guard outlived the first one";
+  EXPECT_TRUE(omerr().is_enabled()) << "restored when the last guard ended";
+  omerr().disable();
+  { const solo::QuietOpenMeshErrors guard; }
+  EXPECT_FALSE(omerr().is_enabled()) << "a stream that was off stays off";
+  omerr().enable();
+}
 
 TEST(SurfaceMesh, CollectGarbageMatchesOpenMeshsOwnAndKeepsTheImageProperties) {
   // collectGarbage instantiates OpenMesh's compaction in solo (Debian's library runs it with

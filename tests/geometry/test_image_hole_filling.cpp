@@ -16,6 +16,7 @@
 
 #include <cmath>
 #include <set>
+#include <stdexcept>
 
 namespace {
 
@@ -826,6 +827,33 @@ TEST(ImageHoleFilling, AFrameHoleAlongItsChordIsCutThereAndItsNotchesClosed) {
     for (int v = pole.y + 1; v < pole.y + pole.height - 1; ++v)
       for (int u = pole.x; u < pole.x + pole.width; ++u)
         EXPECT_NEAR(farthest.at<float>(v, u), 12.0f + 0.5f * u, 0.5f) << "pixel (" << u << ", " << v << ")";
+}
+
+// farthestSurfaceDepth with faces left out is the map of the mesh with those faces deleted,
+// bit for bit: a wall at 20 m with a pole at 8 m in front of it, cleaned (the wall's patch
+// behind the pole makes two layers there), every third face left out.
+TEST(ImageHoleFilling, FarthestSurfaceWithFacesLeftOutIsTheMapWithThemDeleted) {
+  cv::Mat depth(kCamera.height, kCamera.width, CV_32F, cv::Scalar(20.0f));
+  depth(cv::Rect(15, 5, 3, 20)).setTo(8.0f);
+  solo::DepthMesh m = solo::meshFromDepth(depth, kCamera, {});
+  solo::cleanDepthMesh(m, depth, {}, {});
+  std::vector<std::uint8_t> left_out(m.mesh.n_faces(), 0);
+  solo::SurfaceMesh without = m.mesh;
+  for (const auto f : m.mesh.faces())
+    if (f.idx() % 3 == 0) {
+      left_out[f.idx()] = 1;
+      without.delete_face(solo::SurfaceMesh::FaceHandle(f.idx()), false);
+    }
+  const cv::Mat all = solo::farthestSurfaceDepth(m.mesh, kCamera, kCamera.width, kCamera.height);
+  const cv::Mat expected = solo::farthestSurfaceDepth(without, kCamera, kCamera.width, kCamera.height);
+  const cv::Mat got = solo::farthestSurfaceDepth(m.mesh, kCamera, kCamera.width, kCamera.height, &left_out);
+  EXPECT_EQ(cv::countNonZero(got != expected), 0);
+  EXPECT_GT(cv::countNonZero(all != expected), 0) << "leaving the faces out changes the map";
+  // Behind the pole the wall's patch is the farthest surface wherever one of its faces stays.
+  EXPECT_NEAR(all.at<float>(15, 16), 20.0f, 0.5f);
+  left_out.pop_back();
+  EXPECT_THROW(solo::farthestSurfaceDepth(m.mesh, kCamera, kCamera.width, kCamera.height, &left_out),
+               std::invalid_argument);
 }
 
 TEST(ImageHoleFilling, DefaultSceneClosesEveryFrameHole) {
