@@ -366,10 +366,10 @@ MeshSize meshSize(const SurfaceMesh& mesh) { return {mesh.n_vertices(), mesh.n_e
 // has to pass (behind a lamp pole one pixel wide at the mesh's size, the runs on both sides of
 // the pole closed along the frame behind it): then the backdrops are closed again on a copy of
 // the mesh without those patches (BackdropJoin), kept when it leaves fewer holes open. When
-// such frame holes touch a backdrop's polygon and there is more than one thread, the copy is
-// taken before the backdrops and the join runs beside them; it is used when the backdrops leave
-// a hole open and add nothing to the mesh (else it is run again after them), so the mesh is the
-// same either way.
+// such frame holes touch a backdrop's polygon and there is more than one thread, the two run
+// side by side, the backdrops on a copy taken first and the join on the mesh itself; the join
+// is kept under the same rule when the backdrops added nothing (else it is tried again after
+// them), otherwise the copy becomes the mesh, so the mesh is the same either way.
 HoleClosing closeFirstBackdrops(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
                                 const DepthMeshCleanupOptions& options, const DepthLoops& loops,
                                 const std::vector<std::size_t>& backdrop_holes,
