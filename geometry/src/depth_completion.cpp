@@ -131,11 +131,16 @@ std::unordered_map<int, Segment> describeSegments(const CompletionState& s) {
 
 // Step 2: a hole above the first depth of its column takes the nearest depth below it of its own
 // segment, else the nearest below it: a vertical surface (a facade, a vehicle's back) keeps its
-// depth along an image column, and nothing above says otherwise. Returns the pixels extended.
-std::int64_t extendColumnsUpward(CompletionState& s) {
+// depth along an image column, and nothing above says otherwise. Only with labels (`sky_by_labels`):
+// without them the sky is what lies above the first depth of the columns around, so the holes
+// above a column's own first depth lie between the rows of a sparse sensor (a LiDAR's columns
+// between returns); extended, every column would carry its first return up as a streak, so
+// they are interpolated (step 3). Returns the pixels extended.
+std::int64_t extendColumnsUpward(CompletionState& s, bool sky_by_labels) {
   const int w = s.hole.cols, h = s.hole.rows;
   s.extended = cv::Mat(s.hole.size(), CV_8U, cv::Scalar(0));
   std::int64_t extended = 0;
+  if (!sky_by_labels) return extended;
   std::vector<std::pair<int, float>> below_by_segment;  // nearest depth below, per segment
   for (int x = 0; x < w; ++x) {
     int first = h;
@@ -394,7 +399,7 @@ DepthCompletionResult completeDepth(const cv::Mat& depth_m, const cv::Mat& image
   }
 
   // Steps 2 to 4.
-  const std::int64_t extended = extendColumnsUpward(s);
+  const std::int64_t extended = extendColumnsUpward(s, !labels.empty());
   std::int64_t within = 0, across_segments = 0, across_pixels = 0;
   for (const auto& [id, segment] : describeSegments(s)) {
     if (segment.holes == 0) continue;
