@@ -361,40 +361,28 @@ struct MeshSize {
 
 MeshSize meshSize(const SurfaceMesh& mesh) { return {mesh.n_vertices(), mesh.n_edges(), mesh.n_faces()}; }
 
-// The backdrops of the first classification (`backdrop_holes` of `loops`). One whose patch
-// meets the mesh may have frame holes beside it that closed on their own with patches where it
-// has to pass (behind a lamp pole one pixel wide at the mesh's size, the runs on both sides of
-// the pole closed along the frame behind it): then the backdrops are closed again on a copy of
-// the mesh without those patches (BackdropJoin), kept when it leaves fewer holes open. When
-// such frame holes touch a backdrop's polygon and there is more than one thread, the two run
-// side by side, the backdrops on a copy taken first and the join on the mesh itself; the join
-// is kept under the same rule when the backdrops added nothing (else it is tried again after
-// them), otherwise the copy becomes the mesh, so the mesh is the same either way.
-HoleClosing closeFirstBackdrops(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
-                                const DepthMeshCleanupOptions& options, const DepthLoops& loops,
-                                const std::vector<std::size_t>& backdrop_holes,
-                                const std::vector<std::size_t>& first_pass, HoleClosing& first, StageReport& report) {
-  const std::vector<std::size_t> own = ownFrameHolePatches(loops, first_pass, first);
-  const auto joinAfter = [&](HoleClosing& more) {
-    if (more.left_open == 0 || own.empty()) return;
-    DepthMesh trial = m;
-    BackdropJoin join(trial);
-    join.run(depth_m, had_depth, options, first, own);
-    if (!join.better(more, own, report)) return;
-    m = trial;
-    adoptBackdropJoin(m, join, own, first, more, report);
-  };
-  const bool beside_backdrops = !own.empty() && cv::getNumThreads() >= 2 &&
-                                ownFrameHolesBesideBackdrops(m, loops, backdrop_holes, first_pass, own);
-  report.add("backdrop_join_beside", beside_backdrops);
-  if (!beside_backdrops) {
-    HoleClosing more = closeBackdrops(m, depth_m, had_depth, options, loops, backdrop_holes);
-    joinAfter(more);
-    return more;
-  }
-  // Side by side: the backdrops on a copy, the join on the mesh itself (with its farthest
-  // surfaces without the patches, found while the copy is made; it changes the mesh only once
-  // the copy is taken).
+// The join tried after the backdrops `more` closed on the mesh, when they left a hole open.
+void joinAfterBackdrops(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
+                        const DepthMeshCleanupOptions& options, const std::vector<std::size_t>& own,
+                        HoleClosing& first, HoleClosing& more, StageReport& report) {
+  if (more.left_open == 0 || own.empty()) return;
+  DepthMesh trial = m;
+  BackdropJoin join(trial);
+  join.run(depth_m, had_depth, options, first, own);
+  if (!join.better(more, own, report)) return;
+  m = trial;
+  adoptBackdropJoin(m, join, own, first, more, report);
+}
+
+// The backdrops and the join side by side: the backdrops on a copy taken first, the join on the
+// mesh itself (with its farthest surfaces without the patches, found while the copy is made; it
+// changes the mesh only once the copy is taken). Then what the one-after-the-other order does:
+// the join kept when the backdrops left a hole open and added nothing (else tried again after
+// them), otherwise the copy becomes the mesh.
+HoleClosing closeBackdropsBesideJoin(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
+                                     const DepthMeshCleanupOptions& options, const DepthLoops& loops,
+                                     const std::vector<std::size_t>& backdrop_holes,
+                                     const std::vector<std::size_t>& own, HoleClosing& first, StageReport& report) {
   std::optional<DepthMesh> copy;
   std::promise<void> copied;
   std::shared_future<void> copy_taken = copied.get_future().share();
@@ -417,15 +405,35 @@ HoleClosing closeFirstBackdrops(DepthMesh& m, const cv::Mat& depth_m, const cv::
   const MeshSize before = meshSize(copy->mesh);
   HoleClosing more = closeBackdrops(*copy, depth_m, had_depth, options, loops, backdrop_holes);
   beside.get();
-  // What the one-after-the-other order does: the join only when the backdrops leave a hole
-  // open, tried on the mesh as they left it (here: unchanged).
   const bool unchanged = meshSize(copy->mesh) == before && more.faces_added == 0;
   if (more.left_open > 0 && unchanged && join.better(more, own, report)) {
     adoptBackdropJoin(m, join, own, first, more, report);
     return more;
   }
   m = *copy;
-  if (!unchanged) joinAfter(more);
+  if (!unchanged) joinAfterBackdrops(m, depth_m, had_depth, options, own, first, more, report);
+  return more;
+}
+
+// The backdrops of the first classification (`backdrop_holes` of `loops`). One whose patch
+// meets the mesh may have frame holes beside it that closed on their own with patches where it
+// has to pass (behind a lamp pole one pixel wide at the mesh's size, the runs on both sides of
+// the pole closed along the frame behind it): then the backdrops are closed again on a copy of
+// the mesh without those patches (BackdropJoin), kept when it leaves fewer holes open. When
+// such frame holes touch a backdrop's polygon and there is more than one thread, the two run
+// side by side (closeBackdropsBesideJoin), with the same mesh as a result.
+HoleClosing closeFirstBackdrops(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
+                                const DepthMeshCleanupOptions& options, const DepthLoops& loops,
+                                const std::vector<std::size_t>& backdrop_holes,
+                                const std::vector<std::size_t>& first_pass, HoleClosing& first, StageReport& report) {
+  const std::vector<std::size_t> own = ownFrameHolePatches(loops, first_pass, first);
+  const bool beside_backdrops = !own.empty() && cv::getNumThreads() >= 2 &&
+                                ownFrameHolesBesideBackdrops(m, loops, backdrop_holes, first_pass, own);
+  report.add("backdrop_join_beside", beside_backdrops);
+  if (beside_backdrops)
+    return closeBackdropsBesideJoin(m, depth_m, had_depth, options, loops, backdrop_holes, own, first, report);
+  HoleClosing more = closeBackdrops(m, depth_m, had_depth, options, loops, backdrop_holes);
+  joinAfterBackdrops(m, depth_m, had_depth, options, own, first, more, report);
   return more;
 }
 
