@@ -331,8 +331,10 @@ void adoptBackdropJoin(const DepthMesh& m, BackdropJoin& join, const std::vector
   report.add("frame_holes_joined_to_backdrops", static_cast<std::int64_t>(own.size()));
 }
 
-// Whether a frame hole of `own` (indices into the first pass) has a loop vertex on or beside
-// (8-neighbourhood) a pixel of the backdrops' polygons: their runs and closing paths.
+// Whether a frame hole of `own` (indices into the first pass) closed along the image frame has
+// a loop vertex on or beside (8-neighbourhood) a pixel of the backdrops' polygons (their runs
+// and closing paths): the patch of such a hole reaches from the frame to where the backdrop
+// passes.
 bool ownFrameHolesBesideBackdrops(const DepthMesh& m, const DepthLoops& loops,
                                   const std::vector<std::size_t>& backdrop_holes,
                                   const std::vector<std::size_t>& first_pass, const std::vector<std::size_t>& own) {
@@ -345,12 +347,14 @@ bool ownFrameHolesBesideBackdrops(const DepthMesh& m, const DepthLoops& loops,
     for (const auto& p : loops.frame_paths[b]) mark(p);
   }
   cv::dilate(polygon, polygon, cv::Mat::ones(3, 3, CV_8U));
-  for (const std::size_t k : own)
+  for (const std::size_t k : own) {
+    if (loops.frame_paths[first_pass[k]].empty()) continue;
     for (const auto v : loops.holes[first_pass[k]]) {
       const OpenMesh::Vec2i p = m.mesh.property(m.properties.pixel, v);
       if (p[0] >= 0 && p[1] >= 0 && p[0] < m.width && p[1] < m.height && polygon.at<std::uint8_t>(p[1], p[0]))
         return true;
     }
+  }
   return false;
 }
 
@@ -419,9 +423,9 @@ HoleClosing closeBackdropsBesideJoin(DepthMesh& m, const cv::Mat& depth_m, const
 // meets the mesh may have frame holes beside it that closed on their own with patches where it
 // has to pass (behind a lamp pole one pixel wide at the mesh's size, the runs on both sides of
 // the pole closed along the frame behind it): then the backdrops are closed again on a copy of
-// the mesh without those patches (BackdropJoin), kept when it leaves fewer holes open. When
-// such frame holes touch a backdrop's polygon and there is more than one thread, the two run
-// side by side (closeBackdropsBesideJoin), with the same mesh as a result.
+// the mesh without those patches (BackdropJoin), kept when it leaves fewer holes open. When one
+// of them closed along the image frame touches a backdrop's polygon and there is more than one
+// thread, the two run side by side (closeBackdropsBesideJoin), with the same mesh as a result.
 HoleClosing closeFirstBackdrops(DepthMesh& m, const cv::Mat& depth_m, const cv::Mat& had_depth,
                                 const DepthMeshCleanupOptions& options, const DepthLoops& loops,
                                 const std::vector<std::size_t>& backdrop_holes,
