@@ -159,8 +159,8 @@ TEST(NightConversion, FrameHolesClosedBehindAThinPoleJoinTheBackdropThatMeetsThe
   EXPECT_EQ(metric("after_degenerate_faces"), 0);
 }
 
-// The same street: with two threads the join is tried beside the backdrops (the frame holes
-// closed on their own touch the backdrop's polygon), on one thread after them. The mesh is the
+// The same street: with two threads the join is tried beside the backdrops (a frame hole closed
+// on its own along the image frame touches the backdrop's polygon), on one thread after them. The mesh is the
 // same, point for point and face for face.
 TEST(NightConversion, TheJoinBesideTheBackdropsLeavesTheMeshOfTheJoinAfterThem) {
   TempDir dir;
