@@ -90,8 +90,9 @@ struct RenderScene {
 Eigen::Vector3f reflectanceFromLinearSrgb(const Eigen::Vector3f& rgb);
 
 /// The ego vehicle's two headlights as in the reference: 0.3 x 0.15 m, at (+-0.5, 0.3, 0.5) m
-/// from the camera (OpenCV frame), aimed forward and 45 degrees down, yawed 18 degrees
-/// outward, spread 125 degrees, the reference colour, with the given radiance luminance Y.
+/// from the camera (OpenCV frame), aimed forward and 45 degrees up (the reference's literal
+/// rotation: docs/rendering.md, "Ego headlights"), yawed 18 degrees outward, spread 125 degrees,
+/// the reference colour, with the given radiance luminance Y.
 std::vector<RectangleLight> egoHeadlights(float luminance_y);
 
 }  // namespace solo
