@@ -706,6 +706,9 @@ int probe(int argc, char** argv) {
   solo::PathTracerOptions o;
   o.progress = false;
   o.diffuse = solo::DiffuseModel::Lambert;
+  // The whole pixel, as the full image samples an inner pixel: a one-pixel film's outermost
+  // pixel centre is its only one, and every camera ray would go through it.
+  o.film_within_pixel_centres = false;
   applyNearFieldSetting(o);
   o.sampler = argc > 8 ? solo::parseSamplerKind(argv[8]) : solo::SamplerKind::Independent;
   o.min_samples = o.max_samples = argc > 7 ? std::max(2, std::atoi(argv[7])) : 2;
