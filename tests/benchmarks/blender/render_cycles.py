@@ -23,7 +23,9 @@ Mapping from solo's scene (scene.json):
   * camera: square pixels only; lens / sensor_width = fx / width, principal point through
     shift_x = (width/2 - (cx + 0.5)) / max(w, h), shift_y = ((cy + 0.5) - height/2) / max(w, h)
     (solo's pixel i has its centre at coordinate i).
-  * surfaces: Diffuse BSDF (roughness 0 = Lambert) coloured by a face-domain colour attribute;
+  * surfaces: Diffuse BSDF (roughness 0 = Lambert) coloured by a face-domain colour attribute,
+    flat-shaded with the faces' geometric normals (the exporter drops solo's shading normals:
+    README.md, "What is compared");
     emitting faces get an Emission shader (strength 1, colour = radiance from a face attribute,
     so emitted radiance equals solo's) added to the diffuse one, in their own material so that
     Cycles samples only them as mesh lights. Cycles' mesh emission is two-sided like solo's.
