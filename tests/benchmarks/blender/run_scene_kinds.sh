@@ -147,7 +147,7 @@ def cycles_model(d, noise):
     slope = (cpu[n[-1]] - cpu[n[-2]]) / (n[-1] - n[-2])
     k = statistics.median(err[s] * s ** 0.5 for s in n)
     seconds = lambda e: cpu[n[0]] + slope * max(0.0, (k / e) ** 2 - n[0])
-    points = " / ".join("%d: %.3f in %.1f s" % (s, err[s], cpu[s]) for s in n)
+    points = " / ".join("%d: %.3f in %.1f s, mean %.3f" % (s, err[s], cpu[s], ratio.get(s, float("nan"))) for s in n)
     return seconds, k, slope, points
 
 print("\nSolo and Cycles: CPU seconds to equal error (relative RMSE of Y against solo's reference, its noise taken out)\n")
