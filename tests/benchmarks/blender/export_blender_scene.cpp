@@ -44,9 +44,9 @@
 //   Every command: SOLO_NEAR_FIELD=0 renders without near-field light selection.
 //   export_blender_scene compare OUT_DIR IMAGE.exr
 //       Relative RMSE of IMAGE's Y (second channel) against the reference on the pixels where no
-//       emitter is seen and off the image's border (`counted`), the ratio of their means there, the share of the squared error in the
-//       worst 1 % of those pixels, the three worst pixels, and the error without the pixels
-//       within 1 and 2 pixels of a seen emitter.
+//       emitter is seen and off the image's border (`counted`), the ratio of their means there,
+//       the share of the squared error in the worst 1 % of those pixels, the three worst pixels,
+//       and the error without the pixels within 1 and 2 pixels of a seen emitter.
 //
 // Differences from the production scene, so both renderers solve the same problem: every emitter
 // is uniform (Cycles has no g(v, n) profile), the headlights emit over the full hemisphere (solo
