@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <limits>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 namespace solo {
@@ -130,17 +131,26 @@ std::unordered_map<int, Segment> describeSegments(const CompletionState& s) {
 }
 
 // Step 2: a hole above the first depth of its column takes the nearest depth below it of its own
-// segment, else the nearest below it: a vertical surface (a facade, a vehicle's back) keeps its
-// depth along an image column, and nothing above says otherwise. Only with labels (`sky_by_labels`):
-// without them the sky is what lies above the first depth of the columns around, so the holes
-// above a column's own first depth lie between the rows of a sparse sensor (a LiDAR's columns
-// between returns); extended, every column would carry its first return up as a streak, so
-// they are interpolated (step 3). Returns the pixels extended.
+// segment; in a column where its segment has no depth below it, it is left to step 3 when the
+// segment has depth elsewhere (the rest of a facade says more than the car or pole below it) and
+// takes the nearest depth below it when the segment has none: a vertical surface (a facade, a
+// vehicle's back) keeps its depth along an image column, and nothing above says otherwise.
+// Only with labels (`sky_by_labels`): without them the sky is what lies above the first depth of
+// the columns around, so the holes above a column's own first depth lie between the rows of a
+// sparse sensor (a LiDAR's columns between returns); extended, every column would carry its
+// first return up as a streak, so they are interpolated (step 3). Returns the pixels extended.
 std::int64_t extendColumnsUpward(CompletionState& s, bool sky_by_labels) {
   const int w = s.hole.cols, h = s.hole.rows;
   s.extended = cv::Mat(s.hole.size(), CV_8U, cv::Scalar(0));
   std::int64_t extended = 0;
   if (!sky_by_labels) return extended;
+  std::unordered_set<int> segments_with_depth;
+  for (int y = 0; y < h; ++y) {
+    const int* id = s.segments.ptr<int>(y);
+    const std::uint8_t* valid = s.valid.ptr<std::uint8_t>(y);
+    for (int x = 0, last = 0; x < w; ++x)
+      if (valid[x] && (segments_with_depth.empty() || id[x] != last)) segments_with_depth.insert(last = id[x]);
+  }
   std::vector<std::pair<int, float>> below_by_segment;  // nearest depth below, per segment
   for (int x = 0; x < w; ++x) {
     int first = h;
@@ -163,6 +173,7 @@ std::int64_t extendColumnsUpward(CompletionState& s, bool sky_by_labels) {
       if (y >= first || !s.hole.at<std::uint8_t>(y, x)) continue;
       const auto it = std::find_if(below_by_segment.begin(), below_by_segment.end(),
                                    [id](const auto& e) { return e.first == id; });
+      if (it == below_by_segment.end() && segments_with_depth.count(id)) continue;
       s.inverse_depth.at<float>(y, x) = it != below_by_segment.end() ? it->second : below_any;
       s.extended.at<std::uint8_t>(y, x) = 255;
       ++extended;

@@ -186,6 +186,25 @@ TEST(DepthCompletion, AFacadeAboveTheHighestReturnKeepsItsColumnsDepth) {
   EXPECT_EQ(cv::countNonZero(r.depth_m(cv::Rect(0, 0, 90, 10))), 0);
 }
 
+TEST(DepthCompletion, AFacadeAboveACarTallerThanTheHighestReturnKeepsTheFacadesPlane) {
+  // The wall of the previous test, its depth known from row 25 down, and a car in front of it
+  // (columns 30-45) whose roof at row 20 is above that: in those columns the highest return is
+  // the car's. The wall above the car takes the wall's own plane, not the car's 6 m.
+  const cv::Size size(90, 60);
+  cv::Mat depth(size, CV_32F), labels(size, CV_32S, cv::Scalar(11)), truth(size, CV_32F);
+  for (int y = 0; y < size.height; ++y)
+    for (int x = 0; x < size.width; ++x) truth.at<float>(y, x) = static_cast<float>(1.0 / (0.02 + 0.0008 * x));
+  labels(cv::Rect(0, 0, 90, 10)).setTo(23);
+  truth.copyTo(depth);
+  depth(cv::Rect(0, 0, 90, 25)).setTo(0);
+  labels(cv::Rect(30, 20, 16, 40)).setTo(26);
+  depth(cv::Rect(30, 20, 16, 40)).setTo(6);
+  const solo::DepthCompletionResult r = solo::completeDepth(depth, {}, labels, {});
+  EXPECT_EQ(std::get<std::int64_t>(*r.report.find("extended_upward_pixels")), 74 * 15);
+  for (int y = 10; y < 20; ++y)
+    for (int x = 30; x < 46; ++x) ASSERT_NEAR(r.depth_m.at<float>(y, x), truth.at<float>(y, x), 1e-3 * truth.at<float>(y, x));
+}
+
 TEST(DepthCompletion, ExtremeRangesAndImageEdgesStayFiniteAndBounded) {
   // 0.5 m beside 1 km, a hole between them, and an edge-aware guide with a hard edge.
   const cv::Size size(64, 48);
