@@ -9,9 +9,13 @@
 //    no pixel above it holds a depth in its column or the columns within sky_column_window of
 //    it (the sky is the top of every column; a LiDAR's columns between returns are not sky).
 // 2. Above the first depth of its column, a hole takes the nearest depth below it of its own
-//    segment, else the nearest below it: a vertical surface (a facade, the back of a vehicle)
-//    keeps its depth along an image column, and nothing above says otherwise (the top of a
-//    facade above a LiDAR's highest beam, a textureless wall under the sky).
+//    segment: a vertical surface (a facade, the back of a vehicle) keeps its depth along an
+//    image column, and nothing above says otherwise (the top of a facade above a LiDAR's
+//    highest beam, a textureless wall under the sky). Where its segment has no depth below it
+//    in the column (a car is the column's highest return), it is left to step 3 when the
+//    segment has depth elsewhere, and takes the nearest depth below it when the segment has none.
+//    Labelled scenes only (without labels the holes above a column's first depth lie between a
+//    sparse sensor's returns).
 // 3. Within each segment (instance id, or label id without instances): the segment's holes are
 //    filled from its own valid pixels by pull-push interpolation (Gortler et al. 1996), so a hole
 //    is never filled across an instance border from a segment that has depth of its own. A
