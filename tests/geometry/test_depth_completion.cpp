@@ -166,43 +166,51 @@ TEST(DepthCompletion, ScatteredReturnsWithoutLabelsAreInterpolatedNotCarriedUpCo
   EXPECT_LT(meanAbsRelOver(r.depth_m, truth, facade_filled), 0.2);
 }
 
+// A 90x60 wall seen at an angle (depth varies along x only, as for any vertical plane; its
+// exact depth in `truth`), the sky in rows 0-9 and no depth in rows 10-24 (above a LiDAR's
+// highest beam); labels 11 (building) and 23 (sky).
+struct WallAboveTheHighestReturn {
+  cv::Mat depth, labels, truth;
+  WallAboveTheHighestReturn() : depth(60, 90, CV_32F), labels(60, 90, CV_32S, cv::Scalar(11)) {
+    truth = planeDepth(depth.size(), 0.0008, 0, 0.02);
+    labels(cv::Rect(0, 0, 90, 10)).setTo(23);
+    truth.copyTo(depth);
+    depth(cv::Rect(0, 0, 90, 25)).setTo(0);
+  }
+  // An object of labelId `label` at depth_m over `rect`, in the truth and, below row 25 or
+  // where it rises above it, in the depth.
+  void placeObject(const cv::Rect& rect, int label, float depth_m) {
+    labels(rect).setTo(label);
+    truth(rect).setTo(depth_m);
+    depth(rect).setTo(depth_m);
+  }
+  // Completes the depth; every pixel of `rect` must come back on the wall's plane.
+  solo::DepthCompletionResult completedOnTheWallOver(const cv::Rect& rect) const {
+    const solo::DepthCompletionResult r = solo::completeDepth(depth, {}, labels, {});
+    for (int y = rect.y; y < rect.y + rect.height; ++y)
+      for (int x = rect.x; x < rect.x + rect.width; ++x)
+        EXPECT_NEAR(r.depth_m.at<float>(y, x), truth.at<float>(y, x), 1e-3 * truth.at<float>(y, x)) << x << ", " << y;
+    return r;
+  }
+};
+
 TEST(DepthCompletion, AFacadeAboveTheHighestReturnKeepsItsColumnsDepth) {
-  // A wall seen at an angle (depth varies along x only, as for any vertical plane), the sky
-  // above it, and no depth in its upper rows (above a LiDAR's highest beam); a near car
-  // in front of its lower part, then the road.
-  const cv::Size size(90, 60);
-  cv::Mat depth(size, CV_32F), labels(size, CV_32S, cv::Scalar(11)), truth(size, CV_32F);
-  for (int y = 0; y < size.height; ++y)
-    for (int x = 0; x < size.width; ++x) truth.at<float>(y, x) = static_cast<float>(1.0 / (0.02 + 0.0008 * x));
-  labels(cv::Rect(0, 0, 90, 10)).setTo(23);
-  labels(cv::Rect(20, 30, 30, 20)).setTo(26);
-  truth(cv::Rect(20, 30, 30, 20)).setTo(6);
-  truth.copyTo(depth);
-  depth(cv::Rect(0, 0, 90, 25)).setTo(0);
-  const solo::DepthCompletionResult r = solo::completeDepth(depth, {}, labels, {});
+  // A near car in front of the wall's lower part, below its highest return.
+  WallAboveTheHighestReturn wall;
+  wall.placeObject(cv::Rect(20, 30, 30, 20), 26, 6);
+  const solo::DepthCompletionResult r = wall.completedOnTheWallOver(cv::Rect(0, 10, 90, 15));
   EXPECT_EQ(std::get<std::int64_t>(*r.report.find("extended_upward_pixels")), 90 * 15);
-  for (int y = 10; y < 25; ++y)
-    for (int x = 0; x < 90; ++x) ASSERT_NEAR(r.depth_m.at<float>(y, x), truth.at<float>(y, x), 1e-3 * truth.at<float>(y, x));
   EXPECT_EQ(cv::countNonZero(r.depth_m(cv::Rect(0, 0, 90, 10))), 0);
 }
 
 TEST(DepthCompletion, AFacadeAboveACarTallerThanTheHighestReturnKeepsTheFacadesPlane) {
-  // The wall of the previous test, its depth known from row 25 down, and a car in front of it
-  // (columns 30-45) whose roof at row 20 is above that: in those columns the highest return is
-  // the car's. The wall above the car takes the wall's own plane, not the car's 6 m.
-  const cv::Size size(90, 60);
-  cv::Mat depth(size, CV_32F), labels(size, CV_32S, cv::Scalar(11)), truth(size, CV_32F);
-  for (int y = 0; y < size.height; ++y)
-    for (int x = 0; x < size.width; ++x) truth.at<float>(y, x) = static_cast<float>(1.0 / (0.02 + 0.0008 * x));
-  labels(cv::Rect(0, 0, 90, 10)).setTo(23);
-  truth.copyTo(depth);
-  depth(cv::Rect(0, 0, 90, 25)).setTo(0);
-  labels(cv::Rect(30, 20, 16, 40)).setTo(26);
-  depth(cv::Rect(30, 20, 16, 40)).setTo(6);
-  const solo::DepthCompletionResult r = solo::completeDepth(depth, {}, labels, {});
+  // A car in front of the wall (columns 30-45) whose roof at row 20 is above the wall's highest
+  // return: in those columns the highest return is the car's. The wall above the car takes the
+  // wall's own plane, not the car's 6 m.
+  WallAboveTheHighestReturn wall;
+  wall.placeObject(cv::Rect(30, 20, 16, 40), 26, 6);
+  const solo::DepthCompletionResult r = wall.completedOnTheWallOver(cv::Rect(30, 10, 16, 10));
   EXPECT_EQ(std::get<std::int64_t>(*r.report.find("extended_upward_pixels")), 74 * 15);
-  for (int y = 10; y < 20; ++y)
-    for (int x = 30; x < 46; ++x) ASSERT_NEAR(r.depth_m.at<float>(y, x), truth.at<float>(y, x), 1e-3 * truth.at<float>(y, x));
 }
 
 TEST(DepthCompletion, ExtremeRangesAndImageEdgesStayFiniteAndBounded) {
