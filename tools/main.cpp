@@ -147,6 +147,10 @@ void addNightSceneFlags(CLI::App* night_cmd, NightOptions& night) {
                       "Shade faces made from pixels with the normal map's normals (default on)");
   night_cmd->add_flag("--remove-day-light,!--no-remove-day-light", night.conversion.night_scene.remove_day_light,
                       "Without an albedo map, take the day's sun and sky out of the day image (default off; docs/rendering.md)");
+  night_cmd->add_flag("--day-shadows-from-image,!--day-shadows-from-rays",
+                      night.conversion.night_scene.day_light.shadows_from_image,
+                      "With --remove-day-light: read the sun's shadows from the image's lit and shadowed regions (default) "
+                      "or trace shadow rays through the mesh (docs/rendering.md)");
   night_cmd->add_option("--headlight-flux", night.conversion.night_scene.headlight_flux_lm, "Flux of each headlight, lm")->capture_default_str();
 }
 

@@ -63,6 +63,7 @@ std::string nightConfigText(const NightOptions& options) {
   flag("headlights", o.night_scene.headlights);
   flag("shading-normals", o.night_scene.shading_normals);
   flag("remove-day-light", o.night_scene.remove_day_light);
+  flag("day-shadows-from-image", o.night_scene.day_light.shadows_from_image);
   line("headlight-flux", number(o.night_scene.headlight_flux_lm));
   line("light-sampler", quoted("light-sampler", lightSamplerName(o.render.light_sampler)));
   flag("near-field-lights", o.render.near_field_lights);

@@ -163,6 +163,8 @@ void NightSceneBuilder::prepareReflectance(const cv::Mat& albedo, const cv::Mat&
       report.notes.push_back(std::string("no albedo map: the day image with its light taken out (") +
                              dayLightMethodName(removed.method) + ") stands in for the reflectance");
       for (const std::string& note : removed.report.notes) report.notes.push_back("day light: " + note);
+      report.add("day_light_method", std::string(dayLightMethodName(removed.method)));
+      report.add("day_light_shadows", std::string(options.day_light.shadows_from_image ? "image" : "rays"));
       report.add("day_light_seconds", removed.report.seconds, "s");
     } else {
       report.notes.push_back("no albedo map: the linearised day image stands in for the reflectance");

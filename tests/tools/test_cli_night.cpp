@@ -153,6 +153,31 @@ TEST_F(NightCli, TheExampleConfigOfTheDocsIsReadAsDocumented) {
   EXPECT_EQ(readJson(dir / "n.report.json")["seed"], 42);
 }
 
+TEST_F(NightCli, WithoutAnAlbedoMapTheDayLightIsRemovedOnRequestWithTheImagesShadowsByDefault) {
+  auto manifest = nlohmann::json::parse(readText(scene()));
+  manifest.erase("albedo");
+  const auto no_albedo = sceneDir() / "no_albedo.json";
+  writeText(no_albedo, manifest.dump());
+  const auto night = [&](const std::string& name, const std::string& flags) {
+    const auto r = runSolo("night " + q(no_albedo) + " -o " + q(dir / (name + ".png")) + " --preset draft " + flags);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return stage(readJson(dir / (name + ".report.json")), "scene");
+  };
+  const auto kept = night("kept", "");
+  EXPECT_TRUE(hasNote(kept, "no albedo map: the linearised day image stands in for the reflectance"));
+  EXPECT_FALSE(kept["metrics"].contains("day_light_shadows"));
+  const auto from_image = night("image", "--remove-day-light");
+  EXPECT_EQ(from_image["metrics"]["day_light_shadows"], "image");
+  EXPECT_GT(from_image["metrics"]["day_light_seconds"]["value"].get<double>(), 0.0);
+  const auto rays = night("rays", "--remove-day-light --day-shadows-from-rays");
+  EXPECT_EQ(rays["metrics"]["day_light_shadows"], "rays");
+  // Each names how the day was lit; the removal ran on the same geometry both times.
+  for (const auto& s : {from_image, rays}) {
+    const std::string method = s["metrics"]["day_light_method"];
+    EXPECT_TRUE(method == "sun-and-sky" || method == "sky-only" || method == "day-image") << method;
+  }
+}
+
 TEST_F(NightCli, ConfigFileErrorsNameTheFileAndWriteNothing) {
   const auto out = dir / "out";
   std::filesystem::create_directory(out);

@@ -53,6 +53,13 @@ struct DayLightRemovalOptions {
   /// and place and the camera's pose): no search, its shadows traced through the mesh (also with
   /// shadows_from_image). Zero (the default) or not finite: searched.
   Eigen::Vector3f sun_direction = Eigen::Vector3f::Zero();
+
+  /// The defaults with `shadows_from_image` on.
+  static DayLightRemovalOptions withShadowsFromImage() {
+    DayLightRemovalOptions options;
+    options.shadows_from_image = true;
+    return options;
+  }
 };
 
 /// The scene as the removal sees it: a triangle mesh in the camera frame (metres) with the

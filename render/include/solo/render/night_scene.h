@@ -33,7 +33,10 @@ struct NightSceneOptions {
   /// interreflections through the mesh; day_light_removal.h) before it stands in for the
   /// reflectance. Off: the linearised day image, as it is (docs/rendering.md).
   bool remove_day_light = false;
-  DayLightRemovalOptions day_light;
+  /// The removal's options; the sun's shadows are read from the image (`shadows_from_image`):
+  /// on path-traced synthetic days its night images are closer to those of the exact albedo
+  /// than with shadow rays (docs/rendering.md, "Albedo from the day image").
+  DayLightRemovalOptions day_light = DayLightRemovalOptions::withShadowsFromImage();
 };
 
 struct NightScene {
