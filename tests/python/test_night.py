@@ -83,6 +83,21 @@ def test_options_are_the_presets():
         solo.night_options(max_spp=2.5)
 
 
+def test_day_light_removal_options_match_the_cli(solo_binary, tmp_path):
+    import subprocess
+
+    default = solo.night_options()
+    assert default["remove_day_light"] is False and default["day_shadows_from_image"] is True
+    assert default["shading_normals"] is True
+    config = tmp_path / "night.toml"
+    subprocess.run([str(solo_binary), "night", "--remove-day-light", "--day-shadows-from-rays",
+                    "--no-shading-normals", "--write-config", str(config)], check=True, capture_output=True)
+    text = config.read_text()
+    ours = solo.night_options(remove_day_light=True, day_shadows_from_image=False, shading_normals=False)
+    for name in ("remove_day_light", "day_shadows_from_image", "shading_normals"):
+        assert f"{name.replace('_', '-')} = {str(ours[name]).lower()}" in text
+
+
 def test_bad_option_carries_the_cli_message(solo_binary, default_dir, tmp_path):
     from conftest import cli_error
 
