@@ -148,8 +148,9 @@ std::int64_t extendColumnsUpward(CompletionState& s, bool sky_by_labels) {
   for (int y = 0; y < h; ++y) {
     const int* id = s.segments.ptr<int>(y);
     const std::uint8_t* valid = s.valid.ptr<std::uint8_t>(y);
-    for (int x = 0, last = 0; x < w; ++x)
-      if (valid[x] && (segments_with_depth.empty() || id[x] != last)) segments_with_depth.insert(last = id[x]);
+    const int* last = nullptr;  // the row's last id inserted (runs of one segment insert once)
+    for (int x = 0; x < w; ++x)
+      if (valid[x] && (!last || id[x] != *last)) segments_with_depth.insert(*(last = &id[x]));
   }
   std::vector<std::pair<int, float>> below_by_segment;  // nearest depth below, per segment
   for (int x = 0; x < w; ++x) {

@@ -168,10 +168,11 @@ TEST(DepthCompletion, ScatteredReturnsWithoutLabelsAreInterpolatedNotCarriedUpCo
 
 // A 90x60 wall seen at an angle (depth varies along x only, as for any vertical plane; its
 // exact depth in `truth`), the sky in rows 0-9 and no depth in rows 10-24 (above a LiDAR's
-// highest beam); labels 11 (building) and 23 (sky).
+// highest beam); labels 11 (building, or `wall_label`) and 23 (sky).
 struct WallAboveTheHighestReturn {
   cv::Mat depth, labels, truth;
-  WallAboveTheHighestReturn() : depth(60, 90, CV_32F), labels(60, 90, CV_32S, cv::Scalar(11)) {
+  explicit WallAboveTheHighestReturn(int wall_label = 11)
+      : depth(60, 90, CV_32F), labels(60, 90, CV_32S, cv::Scalar(wall_label)) {
     truth = planeDepth(depth.size(), 0.0008, 0, 0.02);
     labels(cv::Rect(0, 0, 90, 10)).setTo(23);
     truth.copyTo(depth);
@@ -211,6 +212,14 @@ TEST(DepthCompletion, AFacadeAboveACarTallerThanTheHighestReturnKeepsTheFacadesP
   wall.placeObject(cv::Rect(30, 20, 16, 40), 26, 6);
   const solo::DepthCompletionResult r = wall.completedOnTheWallOver(cv::Rect(30, 10, 16, 10));
   EXPECT_EQ(std::get<std::int64_t>(*r.report.find("extended_upward_pixels")), 74 * 15);
+}
+
+TEST(DepthCompletion, ASegmentWithDepthIsKnownWhateverItsIdAndWhereverItsDepthIs) {
+  // The wall unlabelled (id 0) and the car from column 30 to the right edge: the wall's only
+  // depth starts every row it has depth in, before the car's.
+  WallAboveTheHighestReturn wall(0);
+  wall.placeObject(cv::Rect(30, 20, 60, 40), 26, 6);
+  wall.completedOnTheWallOver(cv::Rect(30, 10, 60, 10));
 }
 
 TEST(DepthCompletion, ExtremeRangesAndImageEdgesStayFiniteAndBounded) {
