@@ -149,8 +149,8 @@ void addNightSceneFlags(CLI::App* night_cmd, NightOptions& night) {
                       "Without an albedo map, take the day's sun and sky out of the day image (default off; docs/rendering.md)");
   night_cmd->add_flag("--day-shadows-from-image,!--day-shadows-from-rays",
                       night.conversion.night_scene.day_light.shadows_from_image,
-                      "With --remove-day-light: read the sun's shadows from the image's lit and shadowed regions (default) "
-                      "or trace shadow rays through the mesh (docs/rendering.md)");
+                      "With --remove-day-light: read the sun's shadows from the image's lit and shadowed regions "
+                      "(default) or trace shadow rays through the mesh (docs/rendering.md)");
   night_cmd->add_option("--headlight-flux", night.conversion.night_scene.headlight_flux_lm, "Flux of each headlight, lm")->capture_default_str();
 }
 

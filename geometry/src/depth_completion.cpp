@@ -10,7 +10,6 @@
 #include <cstdint>
 #include <limits>
 #include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 namespace solo {
@@ -144,14 +143,11 @@ std::int64_t extendColumnsUpward(CompletionState& s, bool sky_by_labels) {
   s.extended = cv::Mat(s.hole.size(), CV_8U, cv::Scalar(0));
   std::int64_t extended = 0;
   if (!sky_by_labels) return extended;
-  std::unordered_set<int> segments_with_depth;
-  for (int y = 0; y < h; ++y) {
-    const int* id = s.segments.ptr<int>(y);
-    const std::uint8_t* valid = s.valid.ptr<std::uint8_t>(y);
-    const int* last = nullptr;  // the row's last id inserted (runs of one segment insert once)
-    for (int x = 0; x < w; ++x)
-      if (valid[x] && (!last || id[x] != *last)) segments_with_depth.insert(*(last = &id[x]));
-  }
+  const std::unordered_map<int, Segment> segments = describeSegments(s);  // nothing extended yet
+  const auto has_depth = [&segments](int id) {
+    const auto it = segments.find(id);
+    return it != segments.end() && it->second.valid > 0;
+  };
   std::vector<std::pair<int, float>> below_by_segment;  // nearest depth below, per segment
   for (int x = 0; x < w; ++x) {
     int first = h;
@@ -174,7 +170,7 @@ std::int64_t extendColumnsUpward(CompletionState& s, bool sky_by_labels) {
       if (y >= first || !s.hole.at<std::uint8_t>(y, x)) continue;
       const auto it = std::find_if(below_by_segment.begin(), below_by_segment.end(),
                                    [id](const auto& e) { return e.first == id; });
-      if (it == below_by_segment.end() && segments_with_depth.count(id)) continue;
+      if (it == below_by_segment.end() && has_depth(id)) continue;
       s.inverse_depth.at<float>(y, x) = it != below_by_segment.end() ? it->second : below_any;
       s.extended.at<std::uint8_t>(y, x) = 255;
       ++extended;

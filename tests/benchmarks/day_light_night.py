@@ -8,7 +8,9 @@ Each SCENE_DIR is a `solo synth --day-render path` folder. For each, `solo night
 `--remove-day-light --day-shadows-from-rays`, `--remove-day-light`) and once with the exact
 albedo (gt/albedo.png). Printed: each way's mean absolute difference from the exact albedo's
 night image in 8-bit sRGB codes over 4x4 pixel boxes (the box means take the sensor noise out),
-and the removal's method from the report. Images and reports go to WORK_DIR/<scene>/.
+and the removal's method from the report. The two manifests (no_albedo.json, exact_albedo.json)
+are written beside each scene's own, whose relative paths they share; images and reports go to
+WORK_DIR/<scene>/.
 Environment: SOLO (the binary, build/release/tools/solo by default); the solo Python module is
 read from the build's python/ folder beside it.
 """
