@@ -844,8 +844,11 @@ struct SampleBudget {
   bool pooled = false;  // replicate variances pooled over the tile (pool_error_gain)
   // AdaptiveRule::ImageError: a pixel takes samples_per_sigma x (uniform_share x image_sigma +
   // (1 - uniform_share) x its neighbours' per-sample standard deviation of Y), within min and
-  // max; the image's constants from the pilot.
+  // max; the image's constants from the pilot. Every pixel first takes first_samples
+  // (min_samples, or fewer when the min_samples budget is spread by the rule).
   bool allocate = false;
+  int first_samples = 2;
+  bool spreads_min_samples = false;  // the target needs fewer samples than min_samples everywhere
   double samples_per_sigma = 0, image_sigma = 0, uniform_share = 0;
 };
 
@@ -872,6 +875,7 @@ SampleBudget sampleBudget(const PathTracerOptions& options) {
   budget.min_samples = (std::max(2, options.min_samples) + replicates - 1) / replicates * replicates;
   budget.max_samples = std::max(budget.min_samples, options.max_samples);
   budget.pooled = replicates > 1 && options.pool_error_gain;
+  budget.first_samples = budget.min_samples;
   return budget;
 }
 
@@ -942,7 +946,7 @@ class TileRenderer {
   // evolves as if it were sampled alone.
   void render() {
     for (PixelState& p : pixels_) wave_.push_back(&p);
-    for (int k = 0; k < budget_.min_samples; ++k) takeSamples();
+    for (int k = 0; k < budget_.first_samples; ++k) takeSamples();
     if (budget_.allocate) {
       allotSamples();
       return;
@@ -1045,7 +1049,7 @@ class TileRenderer {
       const double sigma = neighbourSigma(k);
       const double spread = budget_.uniform_share * budget_.image_sigma + (1 - budget_.uniform_share) * sigma;
       const double wanted = spread > 0 ? std::ceil(budget_.samples_per_sigma * spread) : budget_.min_samples;
-      p.allotted = std::isfinite(wanted) ? static_cast<int>(std::clamp<double>(wanted, budget_.min_samples, budget_.max_samples))
+      p.allotted = std::isfinite(wanted) ? static_cast<int>(std::clamp<double>(wanted, budget_.first_samples, budget_.max_samples))
                                          : budget_.max_samples;
     }
     for (;;) {
@@ -1359,6 +1363,15 @@ void setImageErrorBudget(const PreparedRenderScene& prepared, const PinholeCamer
   budget.image_sigma = count > 0 ? sigma_sum / static_cast<double>(count) : 0.0;
   budget.samples_per_sigma = square_sum > 0 ? sigma_sum / (options.relative_error * options.relative_error * square_sum)
                                             : std::numeric_limits<double>::infinity();  // nothing lit: the cap decides
+  // The target met with fewer samples than min_samples everywhere: min_samples alone would
+  // sample every pixel evenly, so the rule spreads that budget instead (a pilot mean of
+  // min_samples) after a first pass of half of it (from 4 on: the spread needs 2 samples).
+  budget.spreads_min_samples =
+      min_samples >= 4 && budget.image_sigma > 0 && budget.samples_per_sigma * budget.image_sigma < min_samples;
+  if (budget.spreads_min_samples) {
+    budget.first_samples = min_samples / 2;
+    budget.samples_per_sigma = min_samples / budget.image_sigma;
+  }
 }
 
 }  // namespace
@@ -1403,6 +1416,11 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   if (budget.allocate) {
     out.report.add("adaptive_rule", std::string("image_error"));
     out.report.add("pilot_samples_per_pixel", static_cast<double>(pilot_samples) / (static_cast<double>(width) * height));
+    out.report.add("image_error_budget", std::string(budget.spreads_min_samples ? "min_samples" : "relative_error"));
+    if (budget.spreads_min_samples)
+      out.report.notes.push_back("the pilot meets the relative error target below min_samples: the min_samples "
+                                 "budget is spread by the rule after " +
+                                 std::to_string(budget.first_samples) + " samples a pixel");
   }
   return out;
 }

@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 namespace {
 
@@ -85,6 +86,54 @@ TEST(PathTracerAdaptive, ImageErrorRuleBeatsFixedSamplingAtEqualSamples) {
   std::printf("relative RMSE over %d seeds: image-error rule %.4f at %.1f spp (mean), fixed %.4f\n", seeds,
               std::sqrt(adaptive * scale), spp_sum / seeds, std::sqrt(fixed * scale));
   EXPECT_LT(spp_sum / seeds, 200) << "the rule must leave room below max_samples";
+  EXPECT_LT(adaptive, 0.8 * fixed);
+}
+
+// A target the pilot meets below min_samples (here 50 %) would give every pixel min_samples,
+// i.e. fixed sampling. The rule spreads that budget instead: every pixel takes min_samples / 2,
+// then counts by the spread with a pilot mean of min_samples. Over 6 seeds its error is below
+// fixed sampling's at its own mean samples per pixel.
+TEST(PathTracerAdaptive, ATargetMetBelowMinSamplesSpreadsTheMinSamplesBudget) {
+  const solo::RenderScene scene = lampBehindAScreen();
+  const solo::PreparedRenderScene prepared(scene);
+  solo::PathTracerOptions o;
+  o.progress = false;
+  o.diffuse = solo::DiffuseModel::Lambert;
+  o.seed = 1000;
+  o.min_samples = o.max_samples = 4096;
+  const solo::RenderOutput reference = solo::renderPathTraced(prepared, scene.camera, o);
+
+  double adaptive = 0, fixed = 0, norm = 0, spp_sum = 0;
+  const int seeds = 6;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    solo::PathTracerOptions a;
+    a.progress = false;
+    a.diffuse = solo::DiffuseModel::Lambert;
+    a.seed = static_cast<std::uint64_t>(seed);
+    a.relative_error = 0.5;
+    a.min_samples = 16;
+    a.max_samples = 256;
+    const solo::RenderOutput out = solo::renderPathTraced(prepared, scene.camera, a);
+    ASSERT_NE(out.report.find("image_error_budget"), nullptr);
+    EXPECT_EQ(std::get<std::string>(*out.report.find("image_error_budget")), "min_samples");
+    double fewest = 0, most = 0;
+    cv::minMaxLoc(out.samples, &fewest, &most);
+    EXPECT_EQ(fewest, 8) << "the first pass is half of min_samples";
+    EXPECT_GT(most, 32);
+    double spp = cv::mean(out.samples)[0];
+    spp += std::get<double>(*out.report.find("pilot_samples_per_pixel"));
+    spp_sum += spp;
+    adaptive += squaredError(out, reference, &norm);
+
+    solo::PathTracerOptions f = a;
+    f.min_samples = f.max_samples = static_cast<int>(std::lround(spp));
+    fixed += squaredError(solo::renderPathTraced(prepared, scene.camera, f), reference, &norm);
+  }
+  const double scale = 1.0 / (seeds * norm);
+  std::printf("relative RMSE over %d seeds: min_samples budget spread %.4f at %.1f spp (mean), fixed %.4f\n", seeds,
+              std::sqrt(adaptive * scale), spp_sum / seeds, std::sqrt(fixed * scale));
+  EXPECT_GT(spp_sum / seeds, 8);
+  EXPECT_LT(spp_sum / seeds, 24) << "about min_samples";
   EXPECT_LT(adaptive, 0.8 * fixed);
 }
 

@@ -14,7 +14,7 @@
 # equal-sample runs against the references already in WORK_DIR, e.g. after a change to the
 # sampler; Cycles' renders are kept). A kind whose reference or Cycles log exists in WORK_DIR is
 # not rendered again. SOLO_RELATIVE_ERROR and SOLO_ADAPTIVE_RULE=threshold reach the exporter's
-# default adaptive run. About 13 minutes on 2 cores.
+# default adaptive run. About 12 minutes on 2 cores.
 #
 #   ERROR_SOURCES=1 tests/benchmarks/blender/run_scene_kinds.sh [WORK_DIR]
 #

@@ -35,7 +35,9 @@ enum class AdaptiveRule {
   /// resolution gives the image's scale, then every pixel takes, after its min_samples, a count
   /// half even, half proportional to its neighbours' per-sample standard deviation (the
   /// allocation that minimises the summed squared error for a total, hedged against spreads
-  /// that min_samples underestimates; docs/rendering.md, "Adaptive sampling"). Applies when
+  /// that min_samples underestimates; docs/rendering.md, "Adaptive sampling"). A target the
+  /// pilot meets below min_samples (>= 4) spreads the min_samples budget the same way after
+  /// min_samples / 2 a pixel, instead of sampling every pixel evenly. Applies when
   /// relative_error is the only target (no absolute_error, no noise_sigma); otherwise, and with
   /// relative_error 0, PixelThreshold.
   ImageError,
