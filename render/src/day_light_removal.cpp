@@ -1102,6 +1102,75 @@ ImageSun fitImageSun(const SurfaceMap& map, const cv::Mat& smooth, const std::ve
   return out;
 }
 
+constexpr float kMinShadowAmbient = 0.2f, kMaxShadowAmbient = 1.5f;  // bounds of g_c (below)
+// Pixels this close to the other mode take a visibility of their own: the sun (0.53 degrees)
+// draws a penumbra 0.9 % of the caster's distance wide, tens of pixels on a near road.
+constexpr int kPenumbraBandPx = 20;
+
+struct ShadowAmbient {
+  std::vector<Eigen::Vector3f> scale, lit_albedo;  // per region; ones / zeros where not split
+};
+
+// What a split region's cast shadow receives of its traced ambient light, per channel: the
+// traced E counts the sky that the caster hides (a caster outside the mesh, or its far side
+// read as the surfaces' 25th percentile), so the shadowed mode de-lit by E comes out darker than
+// the lit mode de-lit by n.w_c + E. g_c = exp(median log(I_c / E_c) over the shadowed mode -
+// median log(I_c / (n.w_c + E_c)) over the lit mode) makes the two one albedo; a_c is the lit
+// mode's albedo exp(median log(I_c / (n.w_c + E_c))).
+ShadowAmbient shadowAmbientScales(const SurfaceMap& map, const cv::Mat& smooth, const std::vector<Eigen::Vector3f>& ambient,
+                                  const Eigen::Vector3f& floor, const ImageSun& sun_fit,
+                                  const std::array<Eigen::Vector3f, 3>& w) {
+  const std::size_t regions = sun_fit.modes.size();
+  ShadowAmbient out{std::vector<Eigen::Vector3f>(regions, Eigen::Vector3f::Ones()),
+                    std::vector<Eigen::Vector3f>(regions, Eigen::Vector3f::Zero())};
+  std::vector<std::vector<std::size_t>> members(regions);
+  for (std::size_t i = 0; i < map.valid.size(); ++i) {
+    const int r = sun_fit.region[i];
+    if (r >= 0 && sun_fit.modes[static_cast<std::size_t>(r)].bimodal && std::isfinite(sun_fit.log_ratio[i]))
+      members[static_cast<std::size_t>(r)].push_back(i);
+  }
+  tbb::parallel_for(std::size_t{0}, regions, [&](std::size_t r) {
+    if (members[r].empty()) return;
+    const RegionModes& modes = sun_fit.modes[r];
+    std::array<std::vector<float>, 3> lit, dark;
+    for (const std::size_t i : members[r]) {
+      const cv::Vec3f c = smooth.at<cv::Vec3f>(static_cast<int>(i / map.width), static_cast<int>(i % map.width));
+      const Eigen::Vector3f e = ambient[i].cwiseMax(floor);
+      const bool is_lit = sun_fit.log_ratio[i] > modes.threshold;
+      for (std::size_t k = 0; k < 3; ++k) {
+        const int ch = static_cast<int>(k);
+        const float direct = is_lit ? std::max(0.f, map.normal[i].dot(w[k])) : 0.f;
+        (is_lit ? lit : dark)[k].push_back(std::log(std::max(c[ch], 1e-6f) / (direct + e[ch])));
+      }
+    }
+    if (lit[0].empty() || dark[0].empty()) return;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const float lit_log = medianOf(lit[k]);
+      out.lit_albedo[r][static_cast<int>(k)] = std::exp(lit_log);
+      out.scale[r][static_cast<int>(k)] =
+          std::clamp(std::exp(medianOf(dark[k]) - lit_log), kMinShadowAmbient, kMaxShadowAmbient);
+    }
+  });
+  return out;
+}
+
+// Pixels of split regions within kPenumbraBandPx of a pixel of the other mode (CV_8U, 255).
+cv::Mat penumbraBand(const SurfaceMap& map, const ImageSun& sun_fit) {
+  cv::Mat lit(map.height, map.width, CV_8U, cv::Scalar(0)), dark(map.height, map.width, CV_8U, cv::Scalar(0));
+  for (std::size_t i = 0; i < map.valid.size(); ++i) {
+    const int r = sun_fit.region[i];
+    if (r < 0 || !sun_fit.modes[static_cast<std::size_t>(r)].bimodal || !std::isfinite(sun_fit.log_ratio[i])) continue;
+    const bool is_lit = sun_fit.log_ratio[i] > sun_fit.modes[static_cast<std::size_t>(r)].threshold;
+    (is_lit ? lit : dark).at<std::uint8_t>(static_cast<int>(i / map.width), static_cast<int>(i % map.width)) = 255;
+  }
+  const cv::Mat disc =
+      cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * kPenumbraBandPx + 1, 2 * kPenumbraBandPx + 1));
+  cv::Mat near_lit, near_dark;
+  cv::dilate(lit, near_lit, disc);
+  cv::dilate(dark, near_dark, disc);
+  return (lit & near_dark) | (dark & near_lit);
+}
+
 // The albedo I / (V max(0, n.w_c) + E_c) at every pixel, E floored; sky pixels keep the day image.
 cv::Mat divideImageShading(const cv::Mat& day, const SurfaceMap& map, const std::vector<Eigen::Vector3f>& ambient,
                            const Eigen::Vector3f& floor, const cv::Mat& visibility, const std::array<Eigen::Vector3f, 3>& w) {
@@ -1119,6 +1188,48 @@ cv::Mat divideImageShading(const cv::Mat& day, const SurfaceMap& map, const std:
     }
   });
   return albedo;
+}
+
+// The split regions' pixels de-lit with their shadow's ambient scale g_c: I / (V n.w_c +
+// (g_c + V (1 - g_c)) E_c). In the penumbra band V is the pixel's own, the visibility that
+// gives it the lit mode's albedo in green (clamped to [0, 1]), since a penumbra wider than the
+// guided filter leaves partly shaded pixels counted as lit or shadowed.
+// Reports the penumbra band's pixels and the split regions' median g (green).
+void divideSplitRegions(const cv::Mat& day, const SurfaceMap& map, const cv::Mat& smooth,
+                        const std::vector<Eigen::Vector3f>& ambient, const Eigen::Vector3f& floor, const ImageSun& sun_fit,
+                        const std::array<Eigen::Vector3f, 3>& w, const cv::Mat& visibility, cv::Mat& albedo,
+                        StageReport& report) {
+  const ShadowAmbient shadow = shadowAmbientScales(map, smooth, ambient, floor, sun_fit, w);
+  const cv::Mat band = penumbraBand(map, sun_fit);
+  std::vector<float> scales;
+  for (std::size_t r = 0; r < sun_fit.modes.size(); ++r)
+    if (sun_fit.modes[r].bimodal) scales.push_back(shadow.scale[r][1]);
+  if (!scales.empty()) report.add("shadow_ambient_scale_median", static_cast<double>(medianOf(scales)));
+  report.add("penumbra_band_pixels", static_cast<std::int64_t>(cv::countNonZero(band)));
+  tbb::parallel_for(0, map.height, [&](int y) {
+    for (int x = 0; x < map.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * map.width + x;
+      const int r = sun_fit.region[i];
+      if (!map.valid[i] || r < 0 || !sun_fit.modes[static_cast<std::size_t>(r)].bimodal) continue;
+      const Eigen::Vector3f& g = shadow.scale[static_cast<std::size_t>(r)];
+      const Eigen::Vector3f& a = shadow.lit_albedo[static_cast<std::size_t>(r)];
+      const Eigen::Vector3f e = ambient[i].cwiseMax(floor);
+      std::array<float, 3> direct{};
+      for (std::size_t k = 0; k < 3; ++k) direct[k] = std::max(0.f, map.normal[i].dot(w[k]));
+      float v = visibility.at<float>(y, x);
+      if (band.at<std::uint8_t>(y, x) && a[1] > 0.f) {
+        const float denominator = direct[1] + (1.f - g[1]) * e[1];
+        if (denominator > 0.f)
+          v = std::clamp((std::max(smooth.at<cv::Vec3f>(y, x)[1], 0.f) / a[1] - g[1] * e[1]) / denominator, 0.f, 1.f);
+      }
+      const cv::Vec3f& c = day.at<cv::Vec3f>(y, x);
+      cv::Vec3f& out = albedo.at<cv::Vec3f>(y, x);
+      for (int k = 0; k < 3; ++k) {
+        const float shading = v * direct[static_cast<std::size_t>(k)] + (g[k] + v * (1.f - g[k])) * e[k];
+        if (shading > 0.f) out[k] = std::max(c[k], 0.f) / shading;
+      }
+    }
+  });
 }
 
 // The image's sun and shadows divided out (fills out.albedo before the white balance, and the
@@ -1142,6 +1253,7 @@ void removeImageShadows(const cv::Mat& day, const SurfaceMap& map, const cv::Mat
   for (int c = 0; c < 3; ++c) out.ambient_scale[c] = 1.f / std::max(w[static_cast<std::size_t>(c)].norm(), 1e-6f);
   const cv::Mat visibility = sunVisibility(map, smooth, sun_fit, caster, out.sun_direction);
   out.albedo = divideImageShading(day, map, ambient, floor, visibility, w);
+  divideSplitRegions(day, map, smooth, ambient, floor, sun_fit, w, visibility, out.albedo, out.report);
 }
 
 void writeReport(const Eigen::Vector3f& up, DayLightRemoval& out) {
