@@ -1134,7 +1134,7 @@ ShadowAmbient shadowAmbientScales(const SurfaceMap& map, const cv::Mat& smooth, 
     const RegionModes& modes = sun_fit.modes[r];
     std::array<std::vector<float>, 3> lit, dark;
     for (const std::size_t i : members[r]) {
-      const cv::Vec3f c = smooth.at<cv::Vec3f>(static_cast<int>(i / map.width), static_cast<int>(i % map.width));
+      const cv::Vec3f& c = smooth.at<cv::Vec3f>(static_cast<int>(i / map.width), static_cast<int>(i % map.width));
       const Eigen::Vector3f e = ambient[i].cwiseMax(floor);
       const bool is_lit = sun_fit.log_ratio[i] > modes.threshold;
       for (std::size_t k = 0; k < 3; ++k) {
