@@ -6,6 +6,7 @@
 #include <solo/pipeline/accuracy_sweep.h>
 #include <solo/pipeline/data_dir.h>
 #include <solo/pipeline/night_conversion.h>
+#include <solo/pipeline/night_batch.h>
 #include <solo/pipeline/night_job.h>
 #include <solo/pipeline/night_presets.h>
 
@@ -149,7 +150,8 @@ RealismRow runRealismCase(const RealismCase& c, const fs::path& scene_file, cons
   const std::optional<double> windows =
       meanLuminanceCdM2(result.rendered, litWindowMask(result.rendered), window_pixels);
 
-  RealismRow row{c.name, c.variant, c.street ? std::to_string(c.street_seed) : std::string(), {}};
+  RealismRow row{c.name, c.variant, c.street ? std::to_string(c.street_seed) : std::string(), {},
+                 std::to_string(night.seed)};
   row.values = {{"width_px", scene.width()}, {"height_px", scene.height()}};
   for (const NamedNightStatistic& n : namedNightStatistics(s)) row.values.emplace_back(n.key, n.value);
   row.values.insert(row.values.end(),
@@ -181,12 +183,11 @@ std::string formatted(const std::optional<double>& v, const char* format) {
 }
 
 /// Refuses a street size out of range, an unknown preset or an output that is not a folder;
-/// returns the night conversion's options (preset applied, the bench's seed).
+/// returns the night conversion's options (preset applied; each scene's seed is set per run).
 NightConversionOptions checkedNightOptions(const RealismBenchOptions& o) {
   if (o.width < 16 || o.height < 16 || o.width > 4096 || o.height > 4096)
     throw InputError("--size", "street size must be between 16 and 4096 pixels per side");
   NightConversionOptions night = nightPreset(o.preset);  // throws for an unknown preset
-  night.seed = o.seed;
   std::error_code ec;
   if (fs::exists(o.output, ec) && !fs::is_directory(o.output, ec))
     throw InputError(o.output, "exists and is not a folder");
@@ -196,7 +197,7 @@ NightConversionOptions checkedNightOptions(const RealismBenchOptions& o) {
 }  // namespace
 
 RealismRow medianRow(const std::vector<RealismRow>& rows) {
-  RealismRow median{"MEDIAN", "", "", {}};
+  RealismRow median{"MEDIAN", "", "", {}, ""};
   for (std::size_t k = 0; k < rows.front().values.size(); ++k) {
     const std::string& key = rows.front().values[k].first;
     if (key == "width_px" || key == "height_px") {
@@ -235,11 +236,11 @@ std::vector<std::string> missedTargets(const RealismRow& row) {
 }
 
 std::string realismCsv(const std::vector<RealismRow>& rows, std::uint64_t seed, const std::string& preset) {
-  std::string csv = "scene,variant,street_seed,seed,preset";
+  std::string csv = "scene,variant,street_seed,seed,night_seed,preset";
   for (const auto& [key, value] : rows.front().values) csv += "," + key;
   csv += ",missed_targets\n";
   for (const RealismRow& r : rows) {
-    csv += r.scene + "," + r.variant + "," + r.street_seed + "," + std::to_string(seed) + "," + preset;
+    csv += r.scene + "," + r.variant + "," + r.street_seed + "," + std::to_string(seed) + "," + r.night_seed + "," + preset;
     for (const auto& [key, value] : r.values) csv += "," + (value ? shortestNumber(*value) : std::string());
     std::string missed;
     for (const std::string& m : missedTargets(r)) missed += (missed.empty() ? "" : ";") + m;
@@ -308,8 +309,9 @@ std::string realismReadme(const RealismBenchOptions& o, const std::vector<Realis
     << realismTable(rows) << "\n"
     << "The median row against the real-night medians and the reference pipeline's renderings:\n\n"
     << closerThanReference(rows.back()) << "\n"
-    << "- seed: " << o.seed << " (lights, render and sensor noise of every run; the streets' own seeds are in "
-    << "their names and in column `street_seed`)\n"
+    << "- seed: " << o.seed << " (each scene's lights, render and sensor noise take the seed `solo night --batch` "
+    << "derives from it and the scene's name, column `night_seed`, so that no two scenes share one draw of their "
+    << "lights; the streets' own seeds are in their names and in column `street_seed`)\n"
     << "- streets: made by `solo synth` in `scenes/`, " << o.width << "x" << o.height << " (one at twice that); "
     << (o.quick ? "quick: the default scene and two streets" : "full set") << "\n"
     << "- columns: mean, p50, clipped, bright, noise, chroma noise, cast and halo radius as `solo eval night`; day "
@@ -358,7 +360,9 @@ std::vector<RealismRow> runRealismBench(const RealismBenchOptions& o,
     const RealismCase& c = cases[i];
     const fs::path scene_file = c.street ? makeStreet(c, o.output) : default_scene;
     cv::Mat night8;
-    rows.push_back(runRealismCase(c, scene_file, night, o.output, night8));
+    NightConversionOptions scene_night = night;
+    scene_night.seed = nightBatchSceneSeed(o.seed, c.name);
+    rows.push_back(runRealismCase(c, scene_file, scene_night, o.output, night8));
     tiles.push_back({c.name, night8});
     if (progress) progress(progressLine(i, cases.size(), rows.back()));
   }

@@ -19,7 +19,7 @@ using solo::RealismRow;
 
 /// A row meeting every target: values in the columns missedTargets reads, plus a size.
 RealismRow goodRow(const std::string& scene, double mean) {
-  RealismRow row{scene, "default", "2", {}};
+  RealismRow row{scene, "default", "2", {}, ""};
   row.values = {{"width_px", 160.0}, {"height_px", 90.0},   {"mean", mean},        {"clipped", 0.001},
                 {"bright", 0.002},   {"noise", 0.8},        {"chroma_noise", 0.5}, {"cast_cb", -10.0},
                 {"cast_cr", 5.0},    {"night_to_day", 0.3}, {"road_cd_m2", 1.0}};
@@ -73,16 +73,17 @@ TEST(RealismBench, MissedTargetsNameEachStatisticOutsideItsRangeOrWithoutValue) 
   EXPECT_TRUE(solo::missedTargets(edges).empty());
 }
 
-TEST(RealismBench, CsvHasTheNamesSeedPresetEveryColumnAndTheMissedTargets) {
+TEST(RealismBench, CsvHasTheNamesSeedsPresetEveryColumnAndTheMissedTargets) {
   RealismRow missing = goodRow("street-s2-default", 25.5);
   set(missing, "bright", std::nullopt);
-  RealismRow embedded{"default-scene", "embedded", "", goodRow("x", 45).values};
+  RealismRow embedded{"default-scene", "embedded", "", goodRow("x", 45).values, "11"};
+  missing.night_seed = "12";
   const std::string csv = solo::realismCsv({embedded, missing}, 7, "draft");
   EXPECT_EQ(csv,
-            "scene,variant,street_seed,seed,preset,width_px,height_px,mean,clipped,bright,noise,chroma_noise,"
-            "cast_cb,cast_cr,night_to_day,road_cd_m2,missed_targets\n"
-            "default-scene,embedded,,7,draft,160,90,45,0.001,0.002,0.8,0.5,-10,5,0.3,1,\n"
-            "street-s2-default,default,2,7,draft,160,90,25.5,0.001,,0.8,0.5,-10,5,0.3,1,mean;bright\n");
+            "scene,variant,street_seed,seed,night_seed,preset,width_px,height_px,mean,clipped,bright,noise,"
+            "chroma_noise,cast_cb,cast_cr,night_to_day,road_cd_m2,missed_targets\n"
+            "default-scene,embedded,,7,11,draft,160,90,45,0.001,0.002,0.8,0.5,-10,5,0.3,1,\n"
+            "street-s2-default,default,2,7,12,draft,160,90,25.5,0.001,,0.8,0.5,-10,5,0.3,1,mean;bright\n");
 }
 
 TEST(RealismBench, TableMarksMissedCellsAndNamesTheMedianRow) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
+#include <set>
 #include <sstream>
 
 using solo::test::readText;
@@ -256,6 +257,13 @@ TEST(CliBench, RealismQuickMeasuresEachNightImageAsEvalNightDoes) {
   }
   EXPECT_EQ(csv.rows[1].at("street_seed"), "2");
   EXPECT_EQ(csv.rows[2].at("variant"), "wide-sky");
+  // Each scene draws its lights with its own seed, as `solo night --batch` gives it: the synthetic
+  // streets number their lights alike, and one seed for all would light the same windows in each.
+  const std::set<std::string> night_seeds = {csv.rows[0].at("night_seed"), csv.rows[1].at("night_seed"),
+                                             csv.rows[2].at("night_seed")};
+  EXPECT_EQ(night_seeds.size(), 3u);
+  EXPECT_EQ(night_seeds.count(""), 0u);
+  EXPECT_EQ(csv.rows[3].at("night_seed"), "");
   // The median row: the middle of the three scenes' values.
   const auto& median = csv.rows[3];
   EXPECT_EQ(median.at("scene"), "MEDIAN");

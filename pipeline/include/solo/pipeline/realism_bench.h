@@ -29,6 +29,9 @@ struct RealismBenchOptions {
 struct RealismRow {
   std::string scene, variant, street_seed;
   std::vector<std::pair<std::string, std::optional<double>>> values;
+  /// The seed of the scene's lights, render and sensor noise: nightBatchSceneSeed(bench seed,
+  /// scene name), as `solo night --batch` gives each scene its own; empty in the median row.
+  std::string night_seed;
 
   /// The value of column `key`; none when the row has no such column or no value there.
   std::optional<double> get(const std::string& key) const;
