@@ -61,7 +61,9 @@ enum class PathComponent {
 /// renders, benchmarks, tests); the night conversion's are set once in NightConversionOptions
 /// (pipeline/night_conversion.h: 2 to 8 spp to the sensor noise, power light sampling, seed 0).
 struct PathTracerOptions {
-  int min_samples = 16;   ///< per pixel before the error estimate is trusted; at least 2 are taken
+  /// Per pixel before the error estimate is trusted; at least 2 are taken. The image-error rule
+  /// spreads min_samples x pixels when its target needs fewer (AdaptiveRule::ImageError).
+  int min_samples = 16;
   /// Camera samples stay within the outermost pixel centres (1/64 px inside): a depth mesh ends
   /// there, and the outer half of each frame pixel would otherwise see nothing behind it.
   bool film_within_pixel_centres = true;
