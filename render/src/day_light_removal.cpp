@@ -1171,34 +1171,16 @@ cv::Mat penumbraBand(const SurfaceMap& map, const ImageSun& sun_fit) {
   return (lit & near_dark) | (dark & near_lit);
 }
 
-// The albedo I / (V max(0, n.w_c) + E_c) at every pixel, E floored; sky pixels keep the day image.
-cv::Mat divideImageShading(const cv::Mat& day, const SurfaceMap& map, const std::vector<Eigen::Vector3f>& ambient,
-                           const Eigen::Vector3f& floor, const cv::Mat& visibility, const std::array<Eigen::Vector3f, 3>& w) {
-  cv::Mat albedo = day.clone();
-  tbb::parallel_for(0, map.height, [&](int y) {
-    for (int x = 0; x < map.width; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * map.width + x;
-      if (!map.valid[i]) continue;
-      const float v = visibility.at<float>(y, x);
-      cv::Vec3f& a = albedo.at<cv::Vec3f>(y, x);
-      for (int c = 0; c < 3; ++c) {
-        const float direct = v * std::max(0.f, map.normal[i].dot(w[static_cast<std::size_t>(c)]));
-        a[c] = std::max(a[c], 0.f) / (direct + std::max(ambient[i][c], floor[c]));
-      }
-    }
-  });
-  return albedo;
-}
-
-// The split regions' pixels de-lit with their shadow's ambient scale g_c: I / (V n.w_c +
-// (g_c + V (1 - g_c)) E_c). In the penumbra band V is the pixel's own, the visibility that
-// gives it the lit mode's albedo in green (clamped to [0, 1]), since a penumbra wider than the
-// guided filter leaves partly shaded pixels counted as lit or shadowed.
-// Reports the penumbra band's pixels and the split regions' median g (green).
-void divideSplitRegions(const cv::Mat& day, const SurfaceMap& map, const cv::Mat& smooth,
-                        const std::vector<Eigen::Vector3f>& ambient, const Eigen::Vector3f& floor, const ImageSun& sun_fit,
-                        const std::array<Eigen::Vector3f, 3>& w, const cv::Mat& visibility, cv::Mat& albedo,
-                        StageReport& report) {
+// The albedo I / (V max(0, n.w_c) + g_c E_c) at every pixel, E floored; sky pixels keep the day
+// image. In a split region g_c is its shadow's ambient scale, taken in proportion to the shadow:
+// I / (V n.w_c + (g_c + V (1 - g_c)) E_c); elsewhere g_c = 1. In the penumbra band V is the
+// pixel's own, the visibility that gives it the lit mode's albedo in green (clamped to [0, 1]),
+// since a penumbra wider than the guided filter leaves partly shaded pixels counted as lit or
+// shadowed. Reports the band's pixels and the split regions' median g (green).
+cv::Mat divideImageShading(const cv::Mat& day, const SurfaceMap& map, const cv::Mat& smooth,
+                           const std::vector<Eigen::Vector3f>& ambient, const Eigen::Vector3f& floor,
+                           const ImageSun& sun_fit, const std::array<Eigen::Vector3f, 3>& w, const cv::Mat& visibility,
+                           StageReport& report) {
   const ShadowAmbient shadow = shadowAmbientScales(map, smooth, ambient, floor, sun_fit, w);
   const cv::Mat band = penumbraBand(map, sun_fit);
   std::vector<float> scales;
@@ -1206,30 +1188,33 @@ void divideSplitRegions(const cv::Mat& day, const SurfaceMap& map, const cv::Mat
     if (sun_fit.modes[r].bimodal) scales.push_back(shadow.scale[r][1]);
   if (!scales.empty()) report.add("shadow_ambient_scale_median", static_cast<double>(medianOf(scales)));
   report.add("penumbra_band_pixels", static_cast<std::int64_t>(cv::countNonZero(band)));
+  cv::Mat albedo = day.clone();
   tbb::parallel_for(0, map.height, [&](int y) {
     for (int x = 0; x < map.width; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * map.width + x;
+      if (!map.valid[i]) continue;
       const int r = sun_fit.region[i];
-      if (!map.valid[i] || r < 0 || !sun_fit.modes[static_cast<std::size_t>(r)].bimodal) continue;
-      const Eigen::Vector3f& g = shadow.scale[static_cast<std::size_t>(r)];
-      const Eigen::Vector3f& a = shadow.lit_albedo[static_cast<std::size_t>(r)];
+      const bool split = r >= 0 && sun_fit.modes[static_cast<std::size_t>(r)].bimodal;
+      const Eigen::Vector3f g = split ? shadow.scale[static_cast<std::size_t>(r)] : Eigen::Vector3f::Ones();
       const Eigen::Vector3f e = ambient[i].cwiseMax(floor);
       std::array<float, 3> direct{};
       for (std::size_t k = 0; k < 3; ++k) direct[k] = std::max(0.f, map.normal[i].dot(w[k]));
       float v = visibility.at<float>(y, x);
-      if (band.at<std::uint8_t>(y, x) && a[1] > 0.f) {
+      const float lit_albedo = split ? shadow.lit_albedo[static_cast<std::size_t>(r)][1] : 0.f;
+      if (band.at<std::uint8_t>(y, x) && lit_albedo > 0.f) {
         const float denominator = direct[1] + (1.f - g[1]) * e[1];
         if (denominator > 0.f)
-          v = std::clamp((std::max(smooth.at<cv::Vec3f>(y, x)[1], 0.f) / a[1] - g[1] * e[1]) / denominator, 0.f, 1.f);
+          v = std::clamp((std::max(smooth.at<cv::Vec3f>(y, x)[1], 0.f) / lit_albedo - g[1] * e[1]) / denominator, 0.f,
+                         1.f);
       }
-      const cv::Vec3f& c = day.at<cv::Vec3f>(y, x);
-      cv::Vec3f& out = albedo.at<cv::Vec3f>(y, x);
+      cv::Vec3f& a = albedo.at<cv::Vec3f>(y, x);
       for (int k = 0; k < 3; ++k) {
         const float shading = v * direct[static_cast<std::size_t>(k)] + (g[k] + v * (1.f - g[k])) * e[k];
-        if (shading > 0.f) out[k] = std::max(c[k], 0.f) / shading;
+        if (shading > 0.f) a[k] = std::max(a[k], 0.f) / shading;
       }
     }
   });
+  return albedo;
 }
 
 // The image's sun and shadows divided out (fills out.albedo before the white balance, and the
@@ -1252,8 +1237,7 @@ void removeImageShadows(const cv::Mat& day, const SurfaceMap& map, const cv::Mat
   out.sun_direction = w[1].normalized();
   for (int c = 0; c < 3; ++c) out.ambient_scale[c] = 1.f / std::max(w[static_cast<std::size_t>(c)].norm(), 1e-6f);
   const cv::Mat visibility = sunVisibility(map, smooth, sun_fit, caster, out.sun_direction);
-  out.albedo = divideImageShading(day, map, ambient, floor, visibility, w);
-  divideSplitRegions(day, map, smooth, ambient, floor, sun_fit, w, visibility, out.albedo, out.report);
+  out.albedo = divideImageShading(day, map, smooth, ambient, floor, sun_fit, w, visibility, out.report);
 }
 
 void writeReport(const Eigen::Vector3f& up, DayLightRemoval& out) {
