@@ -240,7 +240,8 @@ std::string realismCsv(const std::vector<RealismRow>& rows, std::uint64_t seed, 
   for (const auto& [key, value] : rows.front().values) csv += "," + key;
   csv += ",missed_targets\n";
   for (const RealismRow& r : rows) {
-    csv += r.scene + "," + r.variant + "," + r.street_seed + "," + std::to_string(seed) + "," + r.night_seed + "," + preset;
+    csv += r.scene + "," + r.variant + "," + r.street_seed + "," + std::to_string(seed) + "," + r.night_seed + "," +
+           preset;
     for (const auto& [key, value] : r.values) csv += "," + (value ? shortestNumber(*value) : std::string());
     std::string missed;
     for (const std::string& m : missedTargets(r)) missed += (missed.empty() ? "" : ";") + m;

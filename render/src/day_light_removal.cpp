@@ -1014,6 +1014,7 @@ struct ImageSun {
   std::vector<RegionModes> modes;
   std::vector<std::uint8_t> lit;  // per region without a split: 1 lit, 0 shadowed, 2 undecided (a shadow ray)
   std::vector<float> log_ratio;
+  std::vector<std::vector<std::size_t>> members;  // per region: its pixels with a finite log_ratio
   std::array<Eigen::Vector3f, 3> w{Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero()};
   int split = 0;  // regions split into a lit and a shadowed mode
 };
@@ -1079,7 +1080,8 @@ ImageSun fitImageSun(const SurfaceMap& map, const cv::Mat& smooth, const std::ve
   int region_count = 0;
   out.region = materialRegions(map, frame, region_count);
   out.log_ratio = ambientLogRatio(map, smooth, ambient, floor);
-  std::vector<std::vector<std::size_t>> members(static_cast<std::size_t>(region_count));
+  out.members.resize(static_cast<std::size_t>(region_count));
+  std::vector<std::vector<std::size_t>>& members = out.members;
   for (std::size_t i = 0; i < map.valid.size(); ++i)
     if (out.region[i] >= 0 && std::isfinite(out.log_ratio[i])) members[static_cast<std::size_t>(out.region[i])].push_back(i);
   out.modes.resize(members.size());
@@ -1123,17 +1125,11 @@ ShadowAmbient shadowAmbientScales(const SurfaceMap& map, const cv::Mat& smooth, 
   const std::size_t regions = sun_fit.modes.size();
   ShadowAmbient out{std::vector<Eigen::Vector3f>(regions, Eigen::Vector3f::Ones()),
                     std::vector<Eigen::Vector3f>(regions, Eigen::Vector3f::Zero())};
-  std::vector<std::vector<std::size_t>> members(regions);
-  for (std::size_t i = 0; i < map.valid.size(); ++i) {
-    const int r = sun_fit.region[i];
-    if (r >= 0 && sun_fit.modes[static_cast<std::size_t>(r)].bimodal && std::isfinite(sun_fit.log_ratio[i]))
-      members[static_cast<std::size_t>(r)].push_back(i);
-  }
   tbb::parallel_for(std::size_t{0}, regions, [&](std::size_t r) {
-    if (members[r].empty()) return;
     const RegionModes& modes = sun_fit.modes[r];
+    if (!modes.bimodal) return;
     std::array<std::vector<float>, 3> lit, dark;
-    for (const std::size_t i : members[r]) {
+    for (const std::size_t i : sun_fit.members[r]) {
       const cv::Vec3f& c = smooth.at<cv::Vec3f>(static_cast<int>(i / map.width), static_cast<int>(i % map.width));
       const Eigen::Vector3f e = ambient[i].cwiseMax(floor);
       const bool is_lit = sun_fit.log_ratio[i] > modes.threshold;
@@ -1157,11 +1153,12 @@ ShadowAmbient shadowAmbientScales(const SurfaceMap& map, const cv::Mat& smooth, 
 // Pixels of split regions within kPenumbraBandPx of a pixel of the other mode (CV_8U, 255).
 cv::Mat penumbraBand(const SurfaceMap& map, const ImageSun& sun_fit) {
   cv::Mat lit(map.height, map.width, CV_8U, cv::Scalar(0)), dark(map.height, map.width, CV_8U, cv::Scalar(0));
-  for (std::size_t i = 0; i < map.valid.size(); ++i) {
-    const int r = sun_fit.region[i];
-    if (r < 0 || !sun_fit.modes[static_cast<std::size_t>(r)].bimodal || !std::isfinite(sun_fit.log_ratio[i])) continue;
-    const bool is_lit = sun_fit.log_ratio[i] > sun_fit.modes[static_cast<std::size_t>(r)].threshold;
-    (is_lit ? lit : dark).at<std::uint8_t>(static_cast<int>(i / map.width), static_cast<int>(i % map.width)) = 255;
+  for (std::size_t r = 0; r < sun_fit.modes.size(); ++r) {
+    if (!sun_fit.modes[r].bimodal) continue;
+    for (const std::size_t i : sun_fit.members[r]) {
+      const bool is_lit = sun_fit.log_ratio[i] > sun_fit.modes[r].threshold;
+      (is_lit ? lit : dark).at<std::uint8_t>(static_cast<int>(i / map.width), static_cast<int>(i % map.width)) = 255;
+    }
   }
   const cv::Mat disc =
       cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * kPenumbraBandPx + 1, 2 * kPenumbraBandPx + 1));

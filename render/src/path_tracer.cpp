@@ -848,8 +848,9 @@ struct SampleBudget {
   // (min_samples, or fewer when the min_samples budget is spread by the rule).
   bool allocate = false;
   int first_samples = 2;
-  bool spreads_min_samples = false;  // the target needs fewer samples than min_samples everywhere
   double samples_per_sigma = 0, image_sigma = 0, uniform_share = 0;
+  // The target needs fewer samples than min_samples everywhere and the rule spreads them.
+  bool spreadsMinSamples() const { return first_samples < min_samples; }
 };
 
 // Whether the ImageError rule applies: adaptive, with relative_error the only target.
@@ -1366,9 +1367,7 @@ void setImageErrorBudget(const PreparedRenderScene& prepared, const PinholeCamer
   // The target met with fewer samples than min_samples everywhere: min_samples alone would
   // sample every pixel evenly, so the rule spreads that budget instead (a pilot mean of
   // min_samples) after a first pass of half of it (from 4 on: the spread needs 2 samples).
-  budget.spreads_min_samples =
-      min_samples >= 4 && budget.image_sigma > 0 && budget.samples_per_sigma * budget.image_sigma < min_samples;
-  if (budget.spreads_min_samples) {
+  if (min_samples >= 4 && budget.image_sigma > 0 && budget.samples_per_sigma * budget.image_sigma < min_samples) {
     budget.first_samples = min_samples / 2;
     budget.samples_per_sigma = min_samples / budget.image_sigma;
   }
@@ -1416,8 +1415,8 @@ RenderOutput renderPathTraced(const PreparedRenderScene& prepared, const Pinhole
   if (budget.allocate) {
     out.report.add("adaptive_rule", std::string("image_error"));
     out.report.add("pilot_samples_per_pixel", static_cast<double>(pilot_samples) / (static_cast<double>(width) * height));
-    out.report.add("image_error_budget", std::string(budget.spreads_min_samples ? "min_samples" : "relative_error"));
-    if (budget.spreads_min_samples)
+    out.report.add("image_error_budget", std::string(budget.spreadsMinSamples() ? "min_samples" : "relative_error"));
+    if (budget.spreadsMinSamples())
       out.report.notes.push_back("the pilot meets the relative error target below min_samples: the min_samples "
                                  "budget is spread by the rule after " +
                                  std::to_string(budget.first_samples) + " samples a pixel");
