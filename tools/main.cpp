@@ -231,7 +231,8 @@ void addNightCameraFlags(CLI::App* night_cmd, NightOptions& night) {
   night_cmd->add_option("--noise-scale", night.conversion.post.noise_options.std_scale, "Sensor noise standard deviation multiplier")
       ->capture_default_str()->check(CLI::Range(0.0, 10.0));
   night_cmd->add_option("--chroma-denoise", night.conversion.post.noise_options.chroma_denoise_sigma_px,
-                        "Sensor noise's chroma noise reduction: Gaussian sigma in px on its colour differences; 0 = off")
+                        "Sensor noise's chroma noise reduction: Gaussian sigma in px on its colour differences, "
+                        "linear and after the curve; 0 = off")
       ->capture_default_str()->check(CLI::Range(0.0, 64.0));
   night_cmd->add_option("--white-clip", night.conversion.post.encoding_options.white_clip,
                         "Video knee: linear level encoded as full white, in sensor whites (1 = clip at white)")
@@ -581,7 +582,8 @@ void addPostCameraFlags(CLI::App* post_cmd, PostProcessOptions& post) {
   post_cmd->add_option("--noise-scale", post.noise_options.std_scale, "Noise standard deviation multiplier")->capture_default_str();
   post_cmd->add_flag("!--no-demosaic", post.noise_options.demosaic, "Noise without the RGGB mosaic: every pixel samples R, G, B");
   post_cmd->add_option("--chroma-denoise", post.noise_options.chroma_denoise_sigma_px,
-                       "Chroma noise reduction: Gaussian sigma in px on the noise's colour differences; 0 = off")
+                       "Chroma noise reduction: Gaussian sigma in px on the noise's colour differences, linear "
+                       "and after the curve; 0 = off")
       ->capture_default_str();
   post_cmd->add_option("--chroma-denoise-strength", post.noise_options.chroma_denoise_strength,
                        "Share of the chroma noise replaced by its smoothed version, 0 to 1")

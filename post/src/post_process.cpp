@@ -110,14 +110,28 @@ PostProcessResult postProcess(const cv::Mat& xyz_e, const PostProcessOptions& op
   result.steps.push_back(options.glare ? applyFogGlare(image, resolvedGlare(options)) : switchedOff("glare", "no glare"));
   result.steps.push_back(options.exposure ? applyExposure(image, options.exposure_options)
                                           : switchedOff("exposure", "no exposure"));
-  result.steps.push_back(options.noise ? applySensorNoise(image, options.noise_options)
-                                       : switchedOff("noise", "no noise"));
+  // The encoded chroma noise reduction needs the image without the noise, carried through
+  // the adaptation and the colour step beside it.
+  const SensorNoiseOptions& noise = options.noise_options;
+  const bool encoded_chroma = options.noise && noise.chroma_denoise_sigma_px > 0 && noise.chroma_denoise_strength > 0;
+  cv::Mat clean = encoded_chroma ? image.clone() : cv::Mat();
+  result.steps.push_back(options.noise ? applySensorNoise(image, noise) : switchedOff("noise", "no noise"));
   result.steps.push_back(options.adaptation ? applyChromaticAdaptation(image, options.adaptation_options)
                                             : switchedOff("adaptation", "no adaptation"));
+  if (encoded_chroma && options.adaptation) applyChromaticAdaptation(clean, options.adaptation_options);
   ColourEncodingResult colour = encodeXyzToSrgb(image, options.encoding_options);
   result.encoded = std::move(colour.encoded);
   result.linear_rgb = std::move(colour.linear_rgb);
   result.steps.push_back(std::move(colour.report));
+  if (encoded_chroma) {
+    Stopwatch clock;  // the step's time includes encoding the image without the noise
+    const cv::Mat clean_encoded = encodeXyzToSrgb(clean, options.encoding_options).encoded;
+    StageReport chroma = reduceEncodedChromaNoise(result.encoded, clean_encoded, noise);
+    chroma.seconds = clock.seconds();
+    result.steps.push_back(std::move(chroma));
+  } else {
+    result.steps.push_back(switchedOff("chroma", options.noise ? "no chroma noise reduction" : "no noise"));
+  }
 
   result.report.name = "post";
   for (const StageReport& step : result.steps) {

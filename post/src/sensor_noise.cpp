@@ -374,4 +374,71 @@ StageReport applySensorNoise(cv::Mat& exposed_linear, const SensorNoiseOptions& 
   return report;
 }
 
+namespace {
+
+/// Standard deviation of the colour differences (B' - Y' and R' - Y', averaged) of an
+/// encoded noise image, 8-bit codes.
+double encodedChromaSigma(const std::vector<cv::Mat>& differences) {
+  return 0.5 * 255.0 * (standardDeviation(differences[0]) + standardDeviation(differences[2]));
+}
+
+}  // namespace
+
+StageReport reduceEncodedChromaNoise(cv::Mat& noisy_encoded, const cv::Mat& clean_encoded,
+                                     const SensorNoiseOptions& options) {
+  Stopwatch clock;
+  CV_Assert(noisy_encoded.type() == CV_32FC3 && clean_encoded.type() == CV_32FC3 &&
+            noisy_encoded.size() == clean_encoded.size());
+  validate(options);
+  StageReport report;
+  report.name = "chroma";
+  constexpr float kLumaR = 0.299f, kLumaG = 0.587f, kLumaB = 0.114f;  // Y' as JPEG and the realism statistics take it
+  std::vector<cv::Mat> planes(3);
+  for (cv::Mat& plane : planes) plane.create(noisy_encoded.size(), CV_32F);
+  cv::parallel_for_(cv::Range(0, noisy_encoded.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      const cv::Vec3f *noisy = noisy_encoded.ptr<cv::Vec3f>(y), *clean = clean_encoded.ptr<cv::Vec3f>(y);
+      float *cr = planes[0].ptr<float>(y), *luma = planes[1].ptr<float>(y), *cb = planes[2].ptr<float>(y);
+      for (int x = 0; x < noisy_encoded.cols; ++x) {
+        const cv::Vec3f n = noisy[x] - clean[x];
+        luma[x] = kLumaR * n[0] + kLumaG * n[1] + kLumaB * n[2];
+        cr[x] = n[0] - luma[x];
+        cb[x] = n[2] - luma[x];
+      }
+    }
+  });
+  const double before = encodedChromaSigma(planes);
+  if (options.chroma_denoise_sigma_px > 0 && options.chroma_denoise_strength > 0) {
+    cv::Mat smooth;
+    for (const int k : {0, 2}) {
+      cv::GaussianBlur(planes[k], smooth, cv::Size(), options.chroma_denoise_sigma_px, options.chroma_denoise_sigma_px,
+                       cv::BORDER_REFLECT_101);
+      cv::addWeighted(planes[k], 1 - options.chroma_denoise_strength, smooth, options.chroma_denoise_strength, 0,
+                      planes[k]);
+    }
+  }
+  cv::parallel_for_(cv::Range(0, noisy_encoded.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      const cv::Vec3f* clean = clean_encoded.ptr<cv::Vec3f>(y);
+      cv::Vec3f* noisy = noisy_encoded.ptr<cv::Vec3f>(y);
+      const float *cr = planes[0].ptr<float>(y), *luma = planes[1].ptr<float>(y), *cb = planes[2].ptr<float>(y);
+      for (int x = 0; x < noisy_encoded.cols; ++x) {
+        // A pixel without noise of its own (saturated photosites, black clipped) keeps its
+        // value: the neighbours' smoothed colour differences would tint a clipped lamp.
+        if (noisy[x] == clean[x]) continue;
+        const float r = luma[x] + cr[x], b = luma[x] + cb[x];
+        const float g = (luma[x] - kLumaR * r - kLumaB * b) / kLumaG;
+        const cv::Vec3f reduced = clean[x] + cv::Vec3f(r, g, b);
+        for (int k = 0; k < 3; ++k) noisy[x][k] = std::clamp(reduced[k], 0.0f, 1.0f);
+      }
+    }
+  });
+  report.add("sigma_px", options.chroma_denoise_sigma_px, "px");
+  report.add("strength", options.chroma_denoise_strength);
+  report.add("noise_chroma_std_before", before, "codes");
+  report.add("noise_chroma_std_after", encodedChromaSigma(planes), "codes");
+  report.seconds = clock.seconds();
+  return report;
+}
+
 }  // namespace solo

@@ -147,7 +147,8 @@ void bindPost(py::module_& m) {
       py::arg("white_clip") = d.encoding_options.white_clip, py::arg("knee_point") = d.encoding_options.knee_point,
       py::arg("glare_scatter") = d.glare_options.scatter_fraction,
       "The post-process of `solo post` on a linear XYZ render relative to white E (HxWx3): glare, exposure, "
-      "sensor noise, Bradford adaptation, sRGB encoding. Returns {image uint8, encoded, linear_rgb, report}.");
+      "sensor noise, Bradford adaptation, sRGB encoding, chroma noise reduction of the encoded noise. Returns "
+      "{image uint8, encoded, linear_rgb, report}.");
   m.def("night_statistics", [](const py::object& image) {
           const py::array array = py::module_::import("numpy").attr("ascontiguousarray")(image);
           const cv::Mat mat = arrayToMat(array, "image");

@@ -33,9 +33,9 @@ TEST(PostProcess, WhiteEAtUnitExposureBecomesSrgbWhiteAndGreyStaysNeutral) {
     EXPECT_NEAR(r.linear_rgb.at<cv::Vec3f>(0, 0)[c], 1.0, 1e-5);
     EXPECT_NEAR(r.encoded.at<cv::Vec3f>(1, 1)[c], std::pow(0.18, 1 / 2.2), 1e-5);
   }
-  ASSERT_EQ(r.steps.size(), 6u);
-  const char* order[] = {"input", "glare", "exposure", "noise", "adaptation", "colour"};
-  for (int i = 0; i < 6; ++i) EXPECT_EQ(r.steps[i].name, order[i]);
+  ASSERT_EQ(r.steps.size(), 7u);
+  const char* order[] = {"input", "glare", "exposure", "noise", "adaptation", "colour", "chroma"};
+  for (int i = 0; i < 7; ++i) EXPECT_EQ(r.steps[i].name, order[i]);
   EXPECT_EQ(r.report.name, "post");
   EXPECT_NE(r.report.find("exposure.stops"), nullptr);
   EXPECT_NE(r.report.find("adaptation.m00"), nullptr);
@@ -47,11 +47,11 @@ TEST(PostProcess, EverySwitchedOffStepSaysSo) {
   options.adaptation = false;
   const cv::Mat xyz(4, 4, CV_32FC3, cv::Scalar(0.2, 0.2, 0.2));
   const solo::PostProcessResult r = solo::postProcess(xyz, options);
-  for (const char* name : {"glare", "exposure", "noise", "adaptation"}) {
+  for (const char* name : {"glare", "exposure", "noise", "adaptation", "chroma"}) {
     EXPECT_TRUE(step(r, name).skipped) << name;
     EXPECT_EQ(step(r, name).skip_reason.rfind("switched off", 0), 0u) << name;
   }
-  EXPECT_EQ(r.report.notes.size(), 4u);
+  EXPECT_EQ(r.report.notes.size(), 5u);
   // Without adaptation, E white (X = Y = Z) is not neutral in sRGB: red exceeds blue.
   const cv::Vec3f p = r.linear_rgb.at<cv::Vec3f>(0, 0);
   EXPECT_GT(p[0], p[2]);

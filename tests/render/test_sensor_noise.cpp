@@ -245,6 +245,83 @@ TEST(SensorNoise, Final8BitLumaNoiseMatchesThePredictedStatistic) {
   EXPECT_THROW(solo::predictedLumaNoise8Bit(0.0, {}), std::invalid_argument);
 }
 
+TEST(SensorNoise, EncodedChromaReductionTakesOutTheColourTheCurveGivesLuminanceNoise) {
+  // A flat saturated orange, linear camera RGB (0.30, 0.06, 0.01), with luminance-only noise
+  // n (1, 1, 1) in linear (what the linear reduction leaves), encoded with gamma 2.2: each
+  // channel moves by its slope s(v) = 255 / 2.2 v^(1 / 2.2 - 1) times n, 223, 537 and 1425
+  // codes per unit, so Y' moves by 544 n, B' - Y' by 881 n and R' - Y' by -321 n: the chroma
+  // statistic is (881 + 321) / 2 / 544 = 1.10 x the luma statistic before the reduction.
+  // After it only the colour differences' smooth share (sigma 2 px: about 1 / 8 of white noise's
+  // high-pass) and the 8-bit rounding (0.28 codes) are left; Y' is kept exactly.
+  const cv::Vec3f orange(0.30f, 0.06f, 0.01f);
+  cv::Mat linear_clean(256, 256, CV_32FC3, cv::Scalar(orange[0], orange[1], orange[2]));
+  cv::Mat noise(256, 256, CV_32F);
+  cv::randn(noise, 0.0, 0.0025);  // luma noise of about 1.4 codes
+  cv::Mat linear_noisy = linear_clean.clone();
+  for (int y = 0; y < noise.rows; ++y)
+    for (int x = 0; x < noise.cols; ++x) linear_noisy.at<cv::Vec3f>(y, x) += cv::Vec3f::all(noise.at<float>(y, x));
+  auto encode = [](const cv::Mat& linear) {
+    cv::Mat encoded = linear.clone();
+    encoded.forEach<cv::Vec3f>([](cv::Vec3f& p, const int*) {
+      for (int k = 0; k < 3; ++k) p[k] = solo::encodeTransfer(p[k], solo::TransferCurve::Gamma22);
+    });
+    return encoded;
+  };
+  const cv::Mat clean = encode(linear_clean);
+  cv::Mat noisy = encode(linear_noisy);
+  const EightBitNoise before = measure8Bit(solo::quantiseEncoded(noisy, 8));
+  EXPECT_NEAR(before.chroma, 1.10 * before.luma, 0.05 * before.luma);
+  const cv::Mat unreduced = noisy.clone();
+  const solo::StageReport report = solo::reduceEncodedChromaNoise(noisy, clean, {});
+  const EightBitNoise after = measure8Bit(solo::quantiseEncoded(noisy, 8));
+  EXPECT_NEAR(after.luma, before.luma, 0.02 * before.luma);
+  EXPECT_LT(after.chroma, 0.3 + 0.1 * after.luma);
+  double worst_luma_change = 0;
+  for (int y = 0; y < noisy.rows; ++y)
+    for (int x = 0; x < noisy.cols; ++x) {
+      const cv::Vec3f a = unreduced.at<cv::Vec3f>(y, x), b = noisy.at<cv::Vec3f>(y, x);
+      const double luma_a = 0.299 * a[0] + 0.587 * a[1] + 0.114 * a[2];
+      const double luma_b = 0.299 * b[0] + 0.587 * b[1] + 0.114 * b[2];
+      worst_luma_change = std::max(worst_luma_change, std::abs(luma_a - luma_b));
+    }
+  EXPECT_LT(worst_luma_change * 255, 1e-3);
+  EXPECT_GT(std::get<double>(*report.find("noise_chroma_std_before")),
+            5 * std::get<double>(*report.find("noise_chroma_std_after")));
+  // Without noise nothing changes; a size mismatch is refused.
+  cv::Mat same = clean.clone();
+  solo::reduceEncodedChromaNoise(same, clean, {});
+  EXPECT_EQ(cv::norm(same, clean, cv::NORM_INF), 0.0);
+  cv::Mat smaller(8, 8, CV_32FC3, cv::Scalar::all(0.5));
+  EXPECT_ANY_THROW(solo::reduceEncodedChromaNoise(smaller, clean, {}));
+}
+
+TEST(SensorNoise, DevelopedSaturatedColourKeepsOnlyTheRoundingsChromaNoise) {
+  // The whole camera (noise with mosaic, linear and encoded chroma reduction, colour step) on
+  // the flat orange of the test above: the chroma statistic stays at the 8-bit rounding's
+  // 0.28 codes plus at most 0.1 x the luma noise, as on a grey; the report has the step.
+  solo::PostProcessOptions options;
+  options.glare = false;
+  options.exposure = false;
+  options.noise_options.std_scale = 1.0;
+  options.noise_options.seed = 5;
+  const cv::Mat orange_xyz_e = [] {
+    cv::Mat camera(512, 512, CV_32FC3, cv::Scalar(0.30, 0.06, 0.01));
+    cv::Mat xyz;
+    cv::transform(camera, xyz, cv::Matx33f(solo::cameraRgbFromXyzE().inv()));
+    return xyz;
+  }();
+  const solo::PostProcessResult r = solo::postProcess(orange_xyz_e, options);
+  const EightBitNoise measured = measure8Bit(solo::quantiseEncoded(r.encoded, 8));
+  EXPECT_GT(measured.luma, 0.5);
+  EXPECT_LT(measured.chroma, 0.3 + 0.1 * measured.luma);
+  ASSERT_EQ(r.steps.back().name, "chroma");
+  EXPECT_FALSE(r.steps.back().skipped);
+  options.noise_options.chroma_denoise_sigma_px = 0;
+  const solo::PostProcessResult unreduced = solo::postProcess(orange_xyz_e, options);
+  EXPECT_TRUE(unreduced.steps.back().skipped);
+  EXPECT_GT(measure8Bit(solo::quantiseEncoded(unreduced.encoded, 8)).chroma, measured.luma);
+}
+
 TEST(SensorNoise, DefaultScaleGivesNightPhotoNoiseInTheMidTones) {
   // Night photos' mid-tones: encoded luma 30-45 (linear 0.0111-0.0263). Real night photos'
   // luma noise is 0.66-1.15 codes (realism.md); the default ISO 3200 x 0.2 lands inside.

@@ -2,7 +2,8 @@
 // The camera-like finish of a night render, in the reference's order on linear XYZ
 // relative to white point E: input check -> fog glare (linear radiance) -> exposure ->
 // sensor noise (raw-like linear space) -> Bradford E to D65 -> XYZ to linear sRGB with
-// out-of-gamut handling -> transfer curve (gamma 2.2). Every step can be switched off and
+// out-of-gamut handling -> transfer curve (gamma 2.2) -> chroma noise reduction of the
+// encoded noise. Every step can be switched off and
 // says why when it does not run.
 
 #include <solo/core/error.h>
@@ -46,8 +47,10 @@ struct PostProcessOptions {
 
 struct PostProcessResult {
   cv::Mat encoded;     ///< CV_32FC3 RGB in [0, 1] after the transfer curve: the displayable image
-  cv::Mat linear_rgb;  ///< CV_32FC3 linear sRGB before the curve (no negatives, not clipped above 1)
-  /// One report per step in order: input, glare, exposure, noise, adaptation, colour.
+  /// CV_32FC3 linear sRGB before the curve (no negatives, not clipped above 1), so without the
+  /// encoded chroma noise reduction, which works after the curve
+  cv::Mat linear_rgb;
+  /// One report per step in order: input, glare, exposure, noise, adaptation, colour, chroma.
   std::vector<StageReport> steps;
   /// "post": total time, every step's metrics as "<step>.<metric>", a note per skipped step.
   StageReport report;

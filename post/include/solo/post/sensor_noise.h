@@ -5,7 +5,8 @@
 // photosite in a 10-bit raw space (level I = black + v (white - black) counts, variance
 // scale^2 (beta1 I + beta2), rounded to whole counts, clipped to [0, white]), bilinear
 // demosaicking, and the camera's chroma noise reduction (the noise's colour-difference
-// channels smoothed, its luminance left). Only the noise is added: the image's own values,
+// channels smoothed, its luminance left; once in linear camera RGB and once after the
+// transfer curve, reduceEncodedChromaNoise). Only the noise is added: the image's own values,
 // above white included, pass through unchanged. beta1 and beta2 come from a phone sensor's
 // calibration table by ISO (docs/post-processing.md).
 
@@ -103,5 +104,20 @@ double predictedLumaNoise8Bit(double exposed_linear, const SensorNoiseOptions& o
 /// at mid grey (linear 0.18), the predicted luminance sigma there, the added luminance and
 /// chroma sigma measured on the image, clipped photosite counts.
 StageReport applySensorNoise(cv::Mat& exposed_linear, const SensorNoiseOptions& options);
+
+/// The camera's chroma noise reduction in the encoded image, where a camera's JPEG engine
+/// applies it (Y'CbCr, after the transfer curve). The curve turns the luminance noise of a
+/// saturated colour into colour differences, since its slope differs between the colour's
+/// bright and dark channels; the linear reduction of applySensorNoise cannot reach those. The
+/// noise `noisy_encoded - clean_encoded` (CV_32FC3 encoded RGB of the image with and without
+/// the sensor noise) is split into Y' = 0.299 R' + 0.587 G' + 0.114 B' and B' - Y', R' - Y';
+/// the colour differences are replaced by (1 - strength) x themselves + strength x their
+/// Gaussian-smoothed version (options.chroma_denoise_sigma_px, chroma_denoise_strength), Y' is
+/// kept; noisy_encoded becomes clean + the reduced noise within [0, 1], in place, except where
+/// the noise is 0 (saturated or black-clipped pixels keep their value). Only the noise is smoothed,
+/// so the image's own colours do not bleed across edges. Report "chroma": the noise's
+/// colour-difference standard deviation before and after (8-bit codes).
+StageReport reduceEncodedChromaNoise(cv::Mat& noisy_encoded, const cv::Mat& clean_encoded,
+                                     const SensorNoiseOptions& options);
 
 }  // namespace solo
