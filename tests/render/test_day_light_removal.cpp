@@ -59,7 +59,8 @@ Eigen::Vector3f cosineDirection(const Eigen::Vector3f& n, int j, int count) {
   const Eigen::Vector3f t =
       n.cross(std::abs(n.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY()).normalized();
   const Eigen::Vector3f b = n.cross(t);
-  const float u = (static_cast<float>(j % side) + 0.5f) / side, v = (static_cast<float>(j / side) + 0.5f) / side;
+  const int column = j % side, row = j / side;  // the stratum
+  const float u = (static_cast<float>(column) + 0.5f) / side, v = (static_cast<float>(row) + 0.5f) / side;
   const float r = std::sqrt(u), phi = 6.2831853f * v;
   return (t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * std::sqrt(1 - u)).normalized();
 }

@@ -279,7 +279,7 @@ TEST(SensorNoise, EncodedChromaReductionTakesOutTheColourTheCurveGivesLuminanceN
   double worst_luma_change = 0;
   for (int y = 0; y < noisy.rows; ++y)
     for (int x = 0; x < noisy.cols; ++x) {
-      const cv::Vec3f a = unreduced.at<cv::Vec3f>(y, x), b = noisy.at<cv::Vec3f>(y, x);
+      const cv::Vec3f &a = unreduced.at<cv::Vec3f>(y, x), &b = noisy.at<cv::Vec3f>(y, x);
       const double luma_a = 0.299 * a[0] + 0.587 * a[1] + 0.114 * a[2];
       const double luma_b = 0.299 * b[0] + 0.587 * b[1] + 0.114 * b[2];
       worst_luma_change = std::max(worst_luma_change, std::abs(luma_a - luma_b));
