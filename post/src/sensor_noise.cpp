@@ -299,21 +299,31 @@ double standardDeviation(const cv::Mat& plane) {
   return sd[0];
 }
 
-/// The camera's chroma noise reduction on (R - Y, Y, B - Y) planes, in place: the colour
-/// differences replaced by (1 - strength) x themselves + strength x their Gaussian-smoothed
-/// version, Y kept. Returns the luminance and colour-difference sigmas, counts.
-NoiseSigmas reduceChromaNoise(std::vector<cv::Mat>& differences, const SensorNoiseOptions& o) {
-  NoiseSigmas sigmas;
-  sigmas.luma = standardDeviation(differences[1]);
-  sigmas.chroma_before = sigmas.chroma_after = 0.5 * (standardDeviation(differences[0]) + standardDeviation(differences[2]));
-  if (o.chroma_denoise_sigma_px <= 0 || o.chroma_denoise_strength <= 0) return sigmas;
+/// The mean standard deviation of the colour differences of (R - Y, Y, B - Y) planes.
+double chromaSigma(const std::vector<cv::Mat>& differences) {
+  return 0.5 * (standardDeviation(differences[0]) + standardDeviation(differences[2]));
+}
+
+/// The chroma noise reduction on (R - Y, Y, B - Y) planes, in place: the colour differences
+/// replaced by (1 - strength) x themselves + strength x their Gaussian-smoothed version, Y kept.
+void smoothColourDifferences(std::vector<cv::Mat>& differences, const SensorNoiseOptions& o) {
+  if (o.chroma_denoise_sigma_px <= 0 || o.chroma_denoise_strength <= 0) return;
   cv::Mat smooth;
   for (const int k : {0, 2}) {
     cv::GaussianBlur(differences[k], smooth, cv::Size(), o.chroma_denoise_sigma_px, o.chroma_denoise_sigma_px,
                      cv::BORDER_REFLECT_101);
     cv::addWeighted(differences[k], 1 - o.chroma_denoise_strength, smooth, o.chroma_denoise_strength, 0, differences[k]);
   }
-  sigmas.chroma_after = 0.5 * (standardDeviation(differences[0]) + standardDeviation(differences[2]));
+}
+
+/// The camera's chroma noise reduction of the linear noise. Returns the luminance and
+/// colour-difference sigmas, counts.
+NoiseSigmas reduceChromaNoise(std::vector<cv::Mat>& differences, const SensorNoiseOptions& o) {
+  NoiseSigmas sigmas;
+  sigmas.luma = standardDeviation(differences[1]);
+  sigmas.chroma_before = chromaSigma(differences);
+  smoothColourDifferences(differences, o);
+  sigmas.chroma_after = chromaSigma(differences);
   return sigmas;
 }
 
@@ -376,23 +386,10 @@ StageReport applySensorNoise(cv::Mat& exposed_linear, const SensorNoiseOptions& 
 
 namespace {
 
-/// Standard deviation of the colour differences (B' - Y' and R' - Y', averaged) of an
-/// encoded noise image, 8-bit codes.
-double encodedChromaSigma(const std::vector<cv::Mat>& differences) {
-  return 0.5 * 255.0 * (standardDeviation(differences[0]) + standardDeviation(differences[2]));
-}
+constexpr float kLumaR = 0.299f, kLumaG = 0.587f, kLumaB = 0.114f;  // Y' as JPEG and the realism statistics take it
 
-}  // namespace
-
-StageReport reduceEncodedChromaNoise(cv::Mat& noisy_encoded, const cv::Mat& clean_encoded,
-                                     const SensorNoiseOptions& options) {
-  Stopwatch clock;
-  CV_Assert(noisy_encoded.type() == CV_32FC3 && clean_encoded.type() == CV_32FC3 &&
-            noisy_encoded.size() == clean_encoded.size());
-  validate(options);
-  StageReport report;
-  report.name = "chroma";
-  constexpr float kLumaR = 0.299f, kLumaG = 0.587f, kLumaB = 0.114f;  // Y' as JPEG and the realism statistics take it
+/// The encoded noise noisy - clean as (R' - Y', Y', B' - Y') planes.
+std::vector<cv::Mat> encodedNoiseDifferences(const cv::Mat& noisy_encoded, const cv::Mat& clean_encoded) {
   std::vector<cv::Mat> planes(3);
   for (cv::Mat& plane : planes) plane.create(noisy_encoded.size(), CV_32F);
   cv::parallel_for_(cv::Range(0, noisy_encoded.rows), [&](const cv::Range& rows) {
@@ -407,16 +404,12 @@ StageReport reduceEncodedChromaNoise(cv::Mat& noisy_encoded, const cv::Mat& clea
       }
     }
   });
-  const double before = encodedChromaSigma(planes);
-  if (options.chroma_denoise_sigma_px > 0 && options.chroma_denoise_strength > 0) {
-    cv::Mat smooth;
-    for (const int k : {0, 2}) {
-      cv::GaussianBlur(planes[k], smooth, cv::Size(), options.chroma_denoise_sigma_px, options.chroma_denoise_sigma_px,
-                       cv::BORDER_REFLECT_101);
-      cv::addWeighted(planes[k], 1 - options.chroma_denoise_strength, smooth, options.chroma_denoise_strength, 0,
-                      planes[k]);
-    }
-  }
+  return planes;
+}
+
+/// noisy = clean + the noise given as (R' - Y', Y', B' - Y') planes, within [0, 1], where the
+/// pixel had noise of its own.
+void replaceEncodedNoise(cv::Mat& noisy_encoded, const cv::Mat& clean_encoded, const std::vector<cv::Mat>& planes) {
   cv::parallel_for_(cv::Range(0, noisy_encoded.rows), [&](const cv::Range& rows) {
     for (int y = rows.start; y < rows.end; ++y) {
       const cv::Vec3f* clean = clean_encoded.ptr<cv::Vec3f>(y);
@@ -433,10 +426,26 @@ StageReport reduceEncodedChromaNoise(cv::Mat& noisy_encoded, const cv::Mat& clea
       }
     }
   });
+}
+
+}  // namespace
+
+StageReport reduceEncodedChromaNoise(cv::Mat& noisy_encoded, const cv::Mat& clean_encoded,
+                                     const SensorNoiseOptions& options) {
+  Stopwatch clock;
+  CV_Assert(noisy_encoded.type() == CV_32FC3 && clean_encoded.type() == CV_32FC3 &&
+            noisy_encoded.size() == clean_encoded.size());
+  validate(options);
+  std::vector<cv::Mat> planes = encodedNoiseDifferences(noisy_encoded, clean_encoded);
+  const double before_codes = 255.0 * chromaSigma(planes);
+  smoothColourDifferences(planes, options);
+  replaceEncodedNoise(noisy_encoded, clean_encoded, planes);
+  StageReport report;
+  report.name = "chroma";
   report.add("sigma_px", options.chroma_denoise_sigma_px, "px");
   report.add("strength", options.chroma_denoise_strength);
-  report.add("noise_chroma_std_before", before, "codes");
-  report.add("noise_chroma_std_after", encodedChromaSigma(planes), "codes");
+  report.add("noise_chroma_std_before", before_codes, "codes");
+  report.add("noise_chroma_std_after", 255.0 * chromaSigma(planes), "codes");
   report.seconds = clock.seconds();
   return report;
 }
