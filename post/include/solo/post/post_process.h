@@ -3,8 +3,7 @@
 // relative to white point E: input check -> fog glare (linear radiance) -> exposure ->
 // sensor noise (raw-like linear space) -> Bradford E to D65 -> XYZ to linear sRGB with
 // out-of-gamut handling -> transfer curve (gamma 2.2) -> chroma noise reduction of the
-// encoded noise. Every step can be switched off and
-// says why when it does not run.
+// encoded noise. Every step can be switched off and says why when it does not run.
 
 #include <solo/core/error.h>
 #include <solo/core/report.h>
