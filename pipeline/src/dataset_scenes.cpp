@@ -95,7 +95,7 @@ std::optional<fs::path> findInFolder(const fs::path& folder, const fs::path& rel
   for (const std::string& stem : stems) {
     looked_for += (looked_for.empty() ? "" : " or ") + (folder / relative_folder / stem).string() + ".{npy,exr,pfm,tif,tiff}";
     for (const std::string& extension : kFloatExtensions)
-      if (const auto file = existing(folder / relative_folder / (stem + extension))) return file;
+      if (auto file = existing(folder / relative_folder / (stem + extension))) return file;
   }
   return std::nullopt;
 }

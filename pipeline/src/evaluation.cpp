@@ -671,7 +671,7 @@ struct MapScorer {
 /// does; returns the upsampled depth.
 cv::Mat appendEstimatedMaps(const SceneUnderTest& t, EvaluationRecord& r) {
   MapScorer score{t.truth, r.metrics};
-  const cv::Mat estimated_depth = resizeValidBilinear(t.scene.depth_m, t.size);
+  cv::Mat estimated_depth = resizeValidBilinear(t.scene.depth_m, t.size);
   score.depth(estimated_depth, t.scene.manifest.depth, "est_depth_", "est. depth ");
   std::string est_normals_reason = t.scene.normals.empty() ? "the manifest names no normals" : t.no_true_normals;
   r.metrics.push_back({"est_normals_skipped", "est. normals skipped", reasonValue(est_normals_reason), ""});

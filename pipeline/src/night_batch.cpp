@@ -28,7 +28,6 @@
 #include <sstream>
 #include <thread>
 
-extern char** environ;
 
 namespace fs = std::filesystem;
 
@@ -612,7 +611,7 @@ std::string summaryText(const NightBatchOptions& options, const NightBatchResult
 
 /// The output folder, absolute; created. Throws InputError when it is a file or cannot be made.
 fs::path prepareOutputFolder(const fs::path& output_folder) {
-  const fs::path out_dir = fs::absolute(output_folder);
+  fs::path out_dir = fs::absolute(output_folder);
   std::error_code ec;
   if (fs::exists(out_dir, ec) && !fs::is_directory(out_dir, ec))
     throw InputError(output_folder, "exists and is not a folder (with --batch, -o is the output folder)");

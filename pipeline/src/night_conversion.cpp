@@ -313,8 +313,10 @@ void requireInRange(double value, double low, double high, const char* setting) 
 int resolveDownsample(int requested, int width, int height) {
   if (requested != kAutoDownsample) return requested;
   int factor = 1;
-  while (factor < 8 && static_cast<double>(width / factor) * static_cast<double>(height / factor) > kAutoDownsampleMaxPixels)
-    ++factor;
+  for (; factor < 8; ++factor) {
+    const int map_width = width / factor, map_height = height / factor;  // whole pixels
+    if (static_cast<double>(map_width) * map_height <= kAutoDownsampleMaxPixels) break;
+  }
   return factor;
 }
 

@@ -83,6 +83,7 @@ const std::vector<std::string>& nightPresetNames() {
 const std::vector<std::string>& nightPresetKnobs() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> out;
+    out.reserve(kKnobs.size());
     for (const Knob& knob : kKnobs) out.push_back(knob.name);
     return out;
   }();

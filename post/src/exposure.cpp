@@ -56,7 +56,10 @@ StageReport applyExposure(cv::Mat& linear_image, const ExposureOptions& options)
 
 cv::Size meteringPreviewSize(int width, int height, int max_pixels) {
   int divisor = 4;
-  while (divisor < 64 && static_cast<double>(width / divisor) * (height / divisor) > max_pixels) divisor *= 2;
+  for (; divisor < 64; divisor *= 2) {
+    const int preview_width = width / divisor, preview_height = height / divisor;  // whole pixels
+    if (static_cast<double>(preview_width) * preview_height <= max_pixels) break;
+  }
   return {std::max(16, width / divisor), std::max(16, height / divisor)};
 }
 

@@ -34,8 +34,10 @@ std::vector<FilterTaps> triangleTaps(int in_size, int out_size) {
   for (int o = 0; o < out_size; ++o) {
     const double centre = (o + 0.5) * scale;
     FilterTaps& t = taps[static_cast<std::size_t>(o)];
-    t.first = std::max(0, static_cast<int>(centre - support + 0.5));
-    const int end = std::min(in_size, static_cast<int>(centre + support + 0.5));
+    // (int)(x + 0.5), as Pillow takes its window (the statistics must match Pillow's resize);
+    // where x + 0.5 is negative the clamp to 0 decides, so it rounds like lround.
+    t.first = std::max(0, static_cast<int>(centre - support + 0.5));     // NOLINT(bugprone-incorrect-roundings)
+    const int end = std::min(in_size, static_cast<int>(centre + support + 0.5));  // NOLINT(bugprone-incorrect-roundings)
     std::vector<double> weights;
     double total = 0;
     for (int i = t.first; i < end; ++i) {
@@ -154,7 +156,7 @@ cv::Mat flatMidTones(const cv::Mat& luma) {
   cv::Mat gradient;
   cv::magnitude(dx, dy, gradient);
   const cv::Mat inner_luma = luma(cv::Rect({1, 1}, inner));
-  const cv::Mat mid_tones = (inner_luma > 5) & (inner_luma < 250);
+  cv::Mat mid_tones = (inner_luma > 5) & (inner_luma < 250);
   std::vector<double> candidates = valuesWhere(gradient, mid_tones);
   if (candidates.empty()) return mid_tones;  // all zero
   const double threshold = sampleQuantile(candidates, 0.5);
