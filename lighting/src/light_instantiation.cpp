@@ -82,19 +82,32 @@ std::array<StrengthInterval, kLastLightCategory + 1> InstantiationOptions::defau
 
 EmissionProfile emissionProfile(LightCategory c) {
   using C = LightCategory;
-  return (c == C::ParkedFront || c == C::MovingFront || c == C::StreetLightHighCct || c == C::StreetLightLowCct)
-             ? EmissionProfile::CosineLobe
-             : EmissionProfile::Uniform;
+  if (c == C::ParkedFront || c == C::MovingFront || c == C::StreetLightHighCct || c == C::StreetLightLowCct)
+    return EmissionProfile::CosineLobe;
+  if (c == C::TrafficLightRed || c == C::TrafficLightOrange || c == C::TrafficLightGreen)
+    return EmissionProfile::SignalBeam;
+  return EmissionProfile::Uniform;
 }
 
 const char* emissionProfileName(EmissionProfile profile) {
-  return profile == EmissionProfile::CosineLobe ? "cosine_lobe" : "uniform";
+  switch (profile) {
+    case EmissionProfile::CosineLobe: return "cosine_lobe";
+    case EmissionProfile::SignalBeam: return "signal_beam";
+    case EmissionProfile::Uniform: break;
+  }
+  return "uniform";
 }
 
 double profileProjectedSolidAngle(EmissionProfile profile) {
   // Uniform: integral of cos over the hemisphere = pi. Lobe: g = cos(pi (mu - 1) / 2) =
   // sin(pi mu / 2), and 2 pi * integral_0^1 mu sin(pi mu / 2) d mu = 2 pi * 4 / pi^2 = 8 / pi.
-  return profile == EmissionProfile::CosineLobe ? 8.0 / M_PI : M_PI;
+  // Beam along the normal: 2 pi * integral_0^1 mu^k mu d mu = 2 pi / (k + 2).
+  switch (profile) {
+    case EmissionProfile::CosineLobe: return 8.0 / M_PI;
+    case EmissionProfile::SignalBeam: return 2.0 * M_PI / (kSignalBeamExponent + 2.0);
+    case EmissionProfile::Uniform: break;
+  }
+  return M_PI;
 }
 
 LightInstantiation instantiateLights(const LightGroupTree& tree, const IlluminantTable& table,

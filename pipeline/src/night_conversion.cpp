@@ -37,7 +37,7 @@ NightConversionOptions::NightConversionOptions() {
   // The night camera: -2 EV night-mode compensation, sensor noise at 0.9 of the calibration at
   // the chosen ISO, a video knee up to 8x white, glare only from what clips
   // (docs/post-processing.md, docs/realism.md).
-  camera.compensation_ev = -2;
+  camera.compensation_ev = -2.2;
   post.noise_options.std_scale = 0.9;
   post.glare_options.scatter_fraction = 0.02;
   post.encoding_options.white_clip = 8;

@@ -15,9 +15,26 @@ namespace solo {
 namespace {
 
 // Flux of a two-sided emitter of radiance L and area A per unit L: 2 sides * pi * A, times
-// the profile's share: int g(mu) mu dmu / int mu dmu = (4 / pi^2) / (1 / 2) = 8 / pi^2.
+// the profile's share: int g(mu) mu dmu / int mu dmu = (4 / pi^2) / (1 / 2) = 8 / pi^2 for the
+// cosine lobe; for a beam toward the camera (one side), 2 pi / (k + 2) |n.a| over 2 pi, with
+// |n.a| floored at kBeamMinFacing (a face seen edge-on still sends half its beam past its edge).
 constexpr float kPi = 3.14159265358979f;
 constexpr float kProfileFluxShare = 8.f / (kPi * kPi);
+constexpr float kBeamMinFacing = 0.1f;
+
+float profileFluxShare(const Emitter& emitter, const EmissiveTriangle& t) {
+  switch (emitter.profile) {
+    case EmitterProfile::CosineLobe: return kProfileFluxShare;
+    case EmitterProfile::TowardCamera: {
+      const Eigen::Vector3f centroid = (t.p0 + t.p1 + t.p2) / 3.f;
+      const float distance = centroid.norm();
+      const float facing = distance > 0.f ? std::abs(t.normal.dot(centroid)) / distance : 1.f;
+      return std::max(facing, kBeamMinFacing) / (emitter.beam_exponent + 2.f);
+    }
+    case EmitterProfile::Uniform: break;
+  }
+  return 1.f;
+}
 
 class UniformSampler final : public LightSampler {
  public:
@@ -668,7 +685,7 @@ std::vector<EmissiveTriangle> collectEmissiveTriangles(const RenderScene& scene)
     if (!(t.area > 0.f) || !std::isfinite(t.area)) continue;
     t.normal = cross.normalized();
     t.power = std::max(luminance, 1e-3f * emitter.radiance.maxCoeff()) * t.area * 2.f * kPi *
-              (emitter.directional_profile ? kProfileFluxShare : 1.f);
+              profileFluxShare(emitter, t);
     out.push_back(t);
   }
   return out;

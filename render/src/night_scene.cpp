@@ -19,6 +19,15 @@ namespace solo {
 
 namespace {
 
+EmitterProfile emitterProfile(EmissionProfile profile) {
+  switch (profile) {
+    case EmissionProfile::CosineLobe: return EmitterProfile::CosineLobe;
+    case EmissionProfile::SignalBeam: return EmitterProfile::TowardCamera;
+    case EmissionProfile::Uniform: break;
+  }
+  return EmitterProfile::Uniform;
+}
+
 // The map pixel (x or y, clamped to [0, size)) under mesh-grid coordinate `coordinate`, pixel
 // centres mapped by the camera's rule for a map `scale` times the mesh's grid.
 int mapPixel(double coordinate, double scale, int size) {
@@ -539,7 +548,8 @@ void NightSceneBuilder::addEmitters() {
     if (!(luminance > 0) || !std::isfinite(luminance)) continue;
     Emitter e;
     e.radiance = xyzFromChromaticity(state.xy, luminance).cast<float>();
-    e.directional_profile = emissionProfile(light.category) == EmissionProfile::CosineLobe;
+    e.profile = emitterProfile(emissionProfile(light.category));
+    if (e.profile == EmitterProfile::TowardCamera) e.beam_exponent = static_cast<float>(kSignalBeamExponent);
     e.light_id = light.map_id;
     emitter_of_light[i] = static_cast<int>(scene.emitters.size());
     scene.emitters.push_back(e);

@@ -28,8 +28,20 @@ namespace {
 
 constexpr float kPi = 3.14159265358979f;
 
-float profile(bool directional, float abs_cosine) {
-  return directional ? std::cos(kPi * (abs_cosine - 1.f) * 0.5f) : 1.f;
+// The emitter's angular factor for light leaving `light_point` (camera frame) along the unit
+// direction `out`, at |cosine| `abs_cosine` to the face's normal.
+float profile(const Emitter& e, float abs_cosine, const Eigen::Vector3f& light_point, const Eigen::Vector3f& out) {
+  switch (e.profile) {
+    case EmitterProfile::CosineLobe: return std::cos(kPi * (abs_cosine - 1.f) * 0.5f);
+    case EmitterProfile::TowardCamera: {
+      const float distance = light_point.norm();
+      if (!(distance > 0.f)) return 1.f;
+      const float toward_camera = -out.dot(light_point) / distance;
+      return toward_camera > 0.f ? std::pow(std::min(toward_camera, 1.f), e.beam_exponent) : 0.f;
+    }
+    case EmitterProfile::Uniform: break;
+  }
+  return 1.f;
 }
 
 Eigen::Vector3f cosineSample(const Eigen::Vector3f& n, float u1, float u2) {
@@ -462,7 +474,8 @@ class WaveTracer {
     if (emitter_index < 0) return;
     const Context& c = c_;
     const Emitter& e = c.scene.emitters[static_cast<std::size_t>(emitter_index)];
-    const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, abs_cos_hit);
+    const Eigen::Vector3f emitted =
+        e.radiance * profile(e, abs_cos_hit, path.point, -path.direction);
     if (path.bounce == 0) {
       path.radiance += emitted;
     } else {
@@ -515,7 +528,8 @@ class WaveTracer {
       const float cos_surface = n.dot(sample.wi);
       if (sample.ok && cos_surface > 0.f) {
         const Emitter& e = c.scene.emitters[t.emitter];
-        const Eigen::Vector3f emitted = e.radiance * profile(e.directional_profile, sample.cos_light);
+        const Eigen::Vector3f emitted =
+            e.radiance * profile(e, sample.cos_light, shadow_origin + sample.wi * sample.distance, -sample.wi);
         const float light_pdf = pick_pmf * sample.pdf;
         float bsdf_pdf = 0.f;
         const Eigen::Vector3f f = bsdf.evalAndPdf(sample.wi, &bsdf_pdf);
@@ -638,8 +652,8 @@ class WaveTracer {
       const Emitter& e = c.scene.emitters[static_cast<std::size_t>(hit_face.emitter)];
       const float abs_cos = std::abs(decodeOctahedral(hit_face.normal).dot(w));
       const float weight = bounceEmissionWeight(c, hit_face.emissive, point, n, shadow_origin, w, h.distance, abs_cos, p);
-      path.radiance += path.throughput.cwiseProduct(f).cwiseProduct(e.radiance * profile(e.directional_profile, abs_cos)) *
-                       (n.dot(w) / p * weight / static_cast<float>(splits));
+      const Eigen::Vector3f emitted = e.radiance * profile(e, abs_cos, shadow_origin + w * h.distance, -w);
+      path.radiance += path.throughput.cwiseProduct(f).cwiseProduct(emitted) * (n.dot(w) / p * weight / static_cast<float>(splits));
     }
   }
 

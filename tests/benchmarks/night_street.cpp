@@ -48,7 +48,9 @@ RenderScene nightStreet(const NightStreetOptions& o) {
         const int category = lightCategoryOfId(part.light_id);
         const bool profiled =
             o.profiled_emitters && (category == 7 || category == 8 || category == 9 || category == 10);
-        scene.emitters.push_back({Eigen::Vector3f(0.95f, 1.f, 0.8f) * luminanceOf(category), profiled, part.light_id});
+        scene.emitters.push_back({Eigen::Vector3f(0.95f, 1.f, 0.8f) * luminanceOf(category),
+                                  profiled ? EmitterProfile::CosineLobe : EmitterProfile::Uniform, 0.f,
+                                  part.light_id});
         it = emitter_of_light.emplace(part.light_id, static_cast<int>(scene.emitters.size()) - 1).first;
       }
       emitter = it->second;

@@ -190,6 +190,12 @@ TEST(LightInstantiation, EmittedLuminanceFromFluxUsesTheProfilesProjectedSolidAn
     lobe += 2 * M_PI * std::cos(M_PI * (mu - 1) / 2) * mu / steps;
   }
   EXPECT_NEAR(solo::profileProjectedSolidAngle(solo::EmissionProfile::CosineLobe), lobe, 1e-6);
+  double beam = 0;
+  for (int i = 0; i < steps; ++i) {
+    const double mu = (i + 0.5) / steps;
+    beam += 2 * M_PI * std::pow(mu, solo::kSignalBeamExponent) * mu / steps;
+  }
+  EXPECT_NEAR(solo::profileProjectedSolidAngle(solo::EmissionProfile::SignalBeam), beam, 1e-6);
   solo::LightState s;
   s.on = true;
   s.unit = solo::StrengthUnit::FluxLm;
@@ -218,4 +224,25 @@ TEST(LightInstantiation, InferredLightsTakeTheDayImageColour) {
   EXPECT_TRUE(result.lights[0].on);
   EXPECT_DOUBLE_EQ(result.lights[0].xy.x(), 0.6);
   EXPECT_EQ(result.lights[0].colour_source, "day image");
+}
+
+TEST(LightInstantiation, TrafficSignalsEmitABeamAndTheRestKeepTheirProfiles) {
+  using C = LightCategory;
+  for (const C c : {C::TrafficLightRed, C::TrafficLightOrange, C::TrafficLightGreen})
+    EXPECT_EQ(solo::emissionProfile(c), solo::EmissionProfile::SignalBeam);
+  for (const C c : {C::MovingFront, C::ParkedFront, C::StreetLightHighCct, C::StreetLightLowCct})
+    EXPECT_EQ(solo::emissionProfile(c), solo::EmissionProfile::CosineLobe);
+  for (const C c : {C::WindowBuilding, C::MovingRear, C::ParkedRear, C::Inferred})
+    EXPECT_EQ(solo::emissionProfile(c), solo::EmissionProfile::Uniform);
+  EXPECT_STREQ(solo::emissionProfileName(solo::EmissionProfile::SignalBeam), "signal_beam");
+  // The exponent reproduces its source's factor, 0.678 at 10 degrees, and halves at 13.4.
+  EXPECT_NEAR(std::pow(std::cos(10 * M_PI / 180), solo::kSignalBeamExponent), 0.678, 0.003);
+  EXPECT_NEAR(std::pow(std::cos(13.4 * M_PI / 180), solo::kSignalBeamExponent), 0.5, 0.01);
+  // A signal given as a flux spreads it over the beam's projected solid angle.
+  solo::LightState s;
+  s.on = true;
+  s.unit = solo::StrengthUnit::FluxLm;
+  s.strength = 10;
+  EXPECT_NEAR(solo::emittedLuminance(s, C::TrafficLightRed, 0.05),
+              10 / (0.05 * 2 * M_PI / (solo::kSignalBeamExponent + 2)), 1e-9);
 }

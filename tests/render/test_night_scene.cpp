@@ -132,7 +132,7 @@ TEST(NightScene, AnOnLightEmitsItsLuminanceInItsColourAndAnOffLightNothing) {
   EXPECT_NEAR(night.scene.emitters[0].radiance.y(), 50.f, 1e-3f);
   EXPECT_NEAR(night.scene.emitters[0].radiance.x(), expected.x(), 1e-3f);
   EXPECT_EQ(night.scene.emitters[0].light_id, 1000);
-  EXPECT_FALSE(night.scene.emitters[0].directional_profile) << "windows emit uniformly";
+  EXPECT_EQ(night.scene.emitters[0].profile, solo::EmitterProfile::Uniform) << "windows emit uniformly";
   int emitting = 0;
   for (int e : night.scene.face_emitter) emitting += e == 0;
   EXPECT_GT(emitting, 0);
@@ -308,7 +308,7 @@ TEST(NightScene, AFluxLightKeepsItsFluxOnTheSeenFacesAndHiddenFacesUnderItDoNotE
   options.headlights = false;
   const solo::NightScene night = solo::buildNightScene(mesh, {}, {}, {}, record, options);
   ASSERT_EQ(night.scene.emitters.size(), 1u);
-  EXPECT_TRUE(night.scene.emitters[0].directional_profile);
+  EXPECT_EQ(night.scene.emitters[0].profile, solo::EmitterProfile::CosineLobe);
 
   // Faces whose mean pixel column rounds into 3-5: quads 2-3 (mean columns 2.33 and 2.67: one
   // of each pair rounds to 3), 3-4 and 4-5. Those touching column 5 are hidden.

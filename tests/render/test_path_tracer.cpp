@@ -37,7 +37,7 @@ solo::PinholeCamera cameraLookingAt(int size, double focal, double x_over_z, dou
 // reflecting `reflectance`.
 solo::RenderScene furnace(float reflectance) {
   solo::RenderScene s;
-  s.emitters.push_back({Eigen::Vector3f::Ones(), false, 1});
+  s.emitters.push_back({Eigen::Vector3f::Ones(), solo::EmitterProfile::Uniform, 0.f, 1});
   const Eigen::Vector3f ex = Eigen::Vector3f::UnitX() * 2, ey = Eigen::Vector3f::UnitY() * 2, ez = Eigen::Vector3f::UnitZ() * 2;
   const Eigen::Vector3f lo(-1, -1, -1), hi(1, 1, 1);
   addQuad(s, lo, ex, ey, reflectance, 0);
@@ -137,7 +137,7 @@ TEST(PathTracer, SmallEmitterFallsOffWithTheInverseSquare) {
     solo::RenderScene s;
     s.camera = cameraLookingAt(5, 2000, 0.2, 0.2);  // the centre pixel sees (1, 1, 5)
     addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 1.0f);
-    s.emitters.push_back({Eigen::Vector3f::Constant(1000.f), false, 7});
+    s.emitters.push_back({Eigen::Vector3f::Constant(1000.f), solo::EmitterProfile::Uniform, 0.f, 7});
     // Emitter above the plane point (1, 1, 5), off every camera ray to that point.
     addQuad(s, {0.99f, 0.99f, 5 - distances[i]}, {0.02f, 0, 0}, {0, 0.02f, 0}, 0.f, 0);
     solo::PathTracerOptions o;
@@ -179,7 +179,7 @@ PixelStatistics pixelStatistics(const solo::RenderScene& s, solo::PathTracerOpti
 solo::RenderScene planeWithEmitterStandingOnIt() {
   solo::RenderScene s;
   addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
-  s.emitters.push_back({Eigen::Vector3f::Constant(10.f), false, 3});
+  s.emitters.push_back({Eigen::Vector3f::Constant(10.f), solo::EmitterProfile::Uniform, 0.f, 3});
   const auto base = static_cast<std::uint32_t>(s.vertices.size());
   s.vertices.insert(s.vertices.end(), {{1.f, 0.9f, 5.f}, {1.f, 1.1f, 5.f}, {1.f, 1.f, 4.8f}});
   s.faces.push_back({base, base + 1, base + 2});
@@ -327,7 +327,7 @@ solo::RenderScene planeUnderTwoRectangleLights(float left, float right) {
 // over x, y in [-0.2, 0.2] x [0.6, 1.0] too, and the radiance of its centre point in closed form.
 solo::RenderScene planeUnderThreeLights() {
   solo::RenderScene s = planeUnderTwoRectangleLights(3.f, 1.f);
-  s.emitters.push_back({Eigen::Vector3f::Constant(2.f), false, 5});
+  s.emitters.push_back({Eigen::Vector3f::Constant(2.f), solo::EmitterProfile::Uniform, 0.f, 5});
   addQuad(s, {-0.2f, 0.6f, 4.5f}, {0.4f, 0, 0}, {0, 0.4f, 0}, 0.f, 0);
   return s;
 }
@@ -493,7 +493,7 @@ TEST(PathTracer, EmissionSplittingKeepsTheMeanAndLowersTheVarianceBesideALargeEm
   // the mean and lowers the pixel's variance.
   solo::RenderScene s;
   addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.5f);
-  s.emitters.push_back({Eigen::Vector3f::Constant(100.f), false, 9});
+  s.emitters.push_back({Eigen::Vector3f::Constant(100.f), solo::EmitterProfile::Uniform, 0.f, 9});
   for (int i = 0; i < 20; ++i)
     for (int j = 0; j < 20; ++j)
       addQuad(s, {0.2f, -1.f + 0.1f * i, 3.f + 0.1f * j}, {0, 0.1f, 0}, {0, 0, 0.1f}, 0.f, 0);
@@ -593,7 +593,7 @@ TEST(PathTracer, DirectionalProfileMatchesG) {
   solo::RenderScene s;
   s.camera = cameraLookingAt(5, 2000, 0.2, 0.0);  // the centre pixel sees (1, 0, 5)
   addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 1.0f);
-  s.emitters.push_back({Eigen::Vector3f::Constant(1000.f), true, 10});
+  s.emitters.push_back({Eigen::Vector3f::Constant(1000.f), solo::EmitterProfile::CosineLobe, 0.f, 10});
   addQuad(s, {-0.01f, -0.01f, 4}, {0.02f, 0, 0}, {0, 0.02f, 0}, 0.f, 0);  // normal along z, 1 m from the plane
   solo::PathTracerOptions o;
   o.diffuse = solo::DiffuseModel::Lambert;
@@ -615,10 +615,77 @@ TEST(PathTracer, DirectionalProfileMatchesG) {
   EXPECT_NEAR(integral / 0.5, 8 / (kPi * kPi), 1e-6);
 }
 
+TEST(PathTracer, SignalBeamLightsOnlyTowardTheCamera) {
+  // A 2 cm emitter facing the camera 10 m ahead and 1 m above a white ground (y = 1, OpenCV y
+  // down), with the signal beam g = max(0, v.a)^k, a toward the camera. The ground point
+  // (0, 1, 8) sees it along v = (0, 1, -2) / sqrt 5 from the emitter: v.a = 2 / sqrt 5, d^2 = 5,
+  // cos theta_light = 2 / sqrt 5, cos theta_ground = 1 / sqrt 5, so
+  // E = L g (2 / sqrt 5) (1 / sqrt 5) A / 5. The point (0, 1, 12) lies behind the emitter, where
+  // v.a < 0: no light. The same emitter uniform gives E / g at the first point.
+  const auto render = [](solo::EmitterProfile profile, double y_over_z) {
+    solo::RenderScene s;
+    s.camera = cameraLookingAt(5, 2000, 0.0, y_over_z);
+    addQuad(s, {-20, 1, 0}, {40, 0, 0}, {0, 0, 40}, 1.0f);
+    s.emitters.push_back({Eigen::Vector3f::Constant(1000.f), profile, 25.2f, 4});
+    addQuad(s, {-0.01f, -0.01f, 10}, {0.02f, 0, 0}, {0, 0.02f, 0}, 0.f, 0);
+    solo::PathTracerOptions o;
+    o.diffuse = solo::DiffuseModel::Lambert;
+    o.max_bounces = 1;
+    o.min_samples = o.max_samples = 4000;
+    o.progress = false;
+    return solo::renderPathTraced(s, o).radiance.at<cv::Vec3f>(2, 2)[1];
+  };
+  const double cos_axis = 2 / std::sqrt(5.0), g = std::pow(cos_axis, 25.2);
+  const double uniform_expected = 1000.0 * cos_axis * (1 / std::sqrt(5.0)) * 0.0004 / 5.0 / kPi;
+  EXPECT_NEAR(render(solo::EmitterProfile::Uniform, 1.0 / 8), uniform_expected, 0.03 * uniform_expected);
+  const double beam = render(solo::EmitterProfile::TowardCamera, 1.0 / 8);
+  EXPECT_NEAR(beam, g * uniform_expected, 0.03 * g * uniform_expected);
+  EXPECT_LT(g, 0.07) << "26.6 degrees off the beam's axis";
+  EXPECT_EQ(render(solo::EmitterProfile::TowardCamera, 1.0 / 12), 0.f);
+  EXPECT_GT(render(solo::EmitterProfile::Uniform, 1.0 / 12), 0.f);
+}
+
+TEST(PathTracer, CameraSeesASignalBeamsFullRadiance) {
+  // The beam's axis is the direction to the camera: the emitter looks as bright as a uniform one.
+  solo::RenderScene s;
+  s.camera = camera(4, 400);
+  s.emitters.push_back({Eigen::Vector3f(2.f, 3.f, 4.f), solo::EmitterProfile::TowardCamera, 25.2f, 4});
+  addQuad(s, {-10, -10, 2}, {0, 20, 0}, {20, 0, 0}, 0.f, 0);
+  solo::PathTracerOptions o;
+  o.min_samples = o.max_samples = 4;
+  o.progress = false;
+  const cv::Vec3f v = solo::renderPathTraced(s, o).radiance.at<cv::Vec3f>(1, 1);
+  EXPECT_NEAR(v[0], 2.f, 1e-4f);
+  EXPECT_NEAR(v[1], 3.f, 1e-4f);
+  EXPECT_NEAR(v[2], 4.f, 1e-4f);
+}
+
+TEST(PathTracer, SignalBeamsPowerIsItsFluxShare) {
+  // Power sampling weighs a beam facing the camera by its flux, 2 pi / (k + 2) per unit radiance
+  // and area against a uniform two-sided emitter's 2 pi: 1 / (k + 2) of it. Seen edge-on its
+  // facing |n.a| is floored at 0.1.
+  solo::RenderScene s;
+  s.emitters.push_back({Eigen::Vector3f::Constant(100.f), solo::EmitterProfile::Uniform, 0.f, 1});
+  s.emitters.push_back({Eigen::Vector3f::Constant(100.f), solo::EmitterProfile::TowardCamera, 25.2f, 2});
+  addQuad(s, {-1, -1, 10}, {1, 0, 0}, {0, 1, 0}, 0.f, 0);   // facing the camera
+  addQuad(s, {1, -1, 10}, {1, 0, 0}, {0, 1, 0}, 0.f, 1);    // the same, beamed
+  addQuad(s, {3, -1, 10}, {0, 0, 1}, {0, 1, 0}, 0.f, 1);    // beamed, normal along x
+  const auto triangles = solo::collectEmissiveTriangles(s);
+  ASSERT_EQ(triangles.size(), 6u);
+  const auto facing = [&](std::size_t i, int axis) {
+    const Eigen::Vector3f c = (triangles[i].p0 + triangles[i].p1 + triangles[i].p2) / 3.f;
+    return std::max(0.1, std::abs(double(c[axis])) / double(c.norm()));
+  };
+  EXPECT_GT(facing(2, 2), 0.98);
+  EXPECT_NEAR(triangles[2].power / triangles[0].power, facing(2, 2) / 27.2, 1e-5);
+  EXPECT_NEAR(triangles[4].power / triangles[0].power, facing(4, 0) / 27.2, 1e-5);
+  EXPECT_LT(facing(4, 0), 0.4);
+}
+
 TEST(PathTracer, DirectViewOfAnEmitterIsItsRadiance) {
   solo::RenderScene s;
   s.camera = camera(4, 400);
-  s.emitters.push_back({Eigen::Vector3f(2.f, 3.f, 4.f), true, 12005});
+  s.emitters.push_back({Eigen::Vector3f(2.f, 3.f, 4.f), solo::EmitterProfile::CosineLobe, 0.f, 12005});
   addQuad(s, {-10, -10, 2}, {0, 20, 0}, {20, 0, 0}, 0.f, 0);
   solo::PathTracerOptions o;
   o.min_samples = o.max_samples = 4;
@@ -639,7 +706,7 @@ TEST(PathTracer, EmitterCoverageIsTheShareOfAPixelThatSeesAnEmitter) {
   // A grey plane behind it fills the rest.
   solo::RenderScene s;
   s.camera = camera(4, 400);
-  s.emitters.push_back({Eigen::Vector3f(1.f, 1.f, 1.f), false, 7});
+  s.emitters.push_back({Eigen::Vector3f(1.f, 1.f, 1.f), solo::EmitterProfile::Uniform, 0.f, 7});
   const float edge_x = -0.75f / 400.f * 2.f;
   addQuad(s, {-1, -1, 2}, {0, 2, 0}, {edge_x + 1.f, 0, 0}, 0.f, 0);
   addQuad(s, {-10, -10, 3}, {0, 20, 0}, {20, 0, 0}, 0.5f);
@@ -686,7 +753,7 @@ TEST(PathTracer, FramePixelsSeeTheSurfaceThatEndsAtTheirCentres) {
   // camera sample, also the outer half of each frame pixel, sees it.
   solo::RenderScene s;
   s.camera = camera(4, 400);
-  s.emitters.push_back({Eigen::Vector3f(1.f, 1.f, 1.f), false, 7});
+  s.emitters.push_back({Eigen::Vector3f(1.f, 1.f, 1.f), solo::EmitterProfile::Uniform, 0.f, 7});
   const float half_span = 1.5f / 400.f * 2.f;
   addQuad(s, {-half_span, -half_span, 2}, {0, 2 * half_span, 0}, {2 * half_span, 0, 0}, 0.f, 0);
   solo::PathTracerOptions o;
@@ -714,8 +781,8 @@ TEST(PathTracer, CameraSamplesThroughAMeshCrackDoNotDarkenTheSurfacePixels) {
   // the right half of column 6 sees nothing either.
   solo::RenderScene s;
   s.camera = {400, 400, 3.5, 1.5, 8, 4};
-  s.emitters.push_back({Eigen::Vector3f(1.f, 2.f, 3.f), false, 1});
-  s.emitters.push_back({Eigen::Vector3f(4.f, 5.f, 6.f), false, 2});
+  s.emitters.push_back({Eigen::Vector3f(1.f, 2.f, 3.f), solo::EmitterProfile::Uniform, 0.f, 1});
+  s.emitters.push_back({Eigen::Vector3f(4.f, 5.f, 6.f), solo::EmitterProfile::Uniform, 0.f, 2});
   const auto ray_x = [](float column) { return (column - 3.5f) / 400.f; };
   addQuad(s, {-1, -1, 2}, {0, 2, 0}, {ray_x(2) * 2 + 1.f, 0, 0}, 0.f, 0);
   addQuad(s, {ray_x(4) * 4, -1, 4}, {0, 2, 0}, {(ray_x(6) - ray_x(4)) * 4, 0, 0}, 0.f, 1);
@@ -762,7 +829,7 @@ TEST(PathTracer, SamplersAgreeAndPmfsMatchPicks) {
   s.camera = camera(8, 6);
   addQuad(s, {-20, -20, 5}, {0, 40, 0}, {40, 0, 0}, 0.7f);
   for (int i = 0; i < 40; ++i) {
-    s.emitters.push_back({Eigen::Vector3f::Constant(10.f + 40.f * (i % 5)), i % 2 == 0, i});
+    s.emitters.push_back({Eigen::Vector3f::Constant(10.f + 40.f * (i % 5)), i % 2 == 0 ? solo::EmitterProfile::CosineLobe : solo::EmitterProfile::Uniform, 0.f, i});
     const float x = -3.f + 0.15f * i, y = (i % 7) - 3.f;
     addQuad(s, {x, y, 4.5f - 0.05f * (i % 3)}, {0.05f, 0, 0}, {0, 0.05f, 0}, 0.f, i);
   }
@@ -825,8 +892,8 @@ TEST(PathTracer, NearFieldSelectionFavoursALampBesideThePointAndNotOneSeenEdgeOn
   // lamp, the lamp gives 16x the panel's irradiance (radiance x solid angle: 10^4 x 0.04 against
   // 10^4 / 400); the power sampler gives it 1 pick in 626.
   solo::RenderScene s;
-  s.emitters.push_back({Eigen::Vector3f::Constant(1e4f), false, 1});
-  s.emitters.push_back({Eigen::Vector3f::Constant(1e4f), false, 2});
+  s.emitters.push_back({Eigen::Vector3f::Constant(1e4f), solo::EmitterProfile::Uniform, 0.f, 1});
+  s.emitters.push_back({Eigen::Vector3f::Constant(1e4f), solo::EmitterProfile::Uniform, 0.f, 2});
   addQuad(s, {-0.02f, -0.02f, 0.2f}, {0.04f, 0, 0}, {0, 0.04f, 0}, 0.f, 0);
   addQuad(s, {-0.5f, -0.5f, 20.f}, {1.f, 0, 0}, {0, 1.f, 0}, 0.f, 1);
   const auto triangles = solo::collectEmissiveTriangles(s);
@@ -884,8 +951,8 @@ TEST(PathTracer, TheHierarchyPicksWithinACompactEmitterByPowerAndAlongALargeOneB
   // power). Emitter 1: 8 equal quads along a 4 m strip (split by distance and orientation). The
   // root splits the 32 triangles by x at the median: between the two emitters.
   solo::RenderScene s;
-  s.emitters.push_back({Eigen::Vector3f::Constant(50.f), false, 1});
-  s.emitters.push_back({Eigen::Vector3f::Constant(50.f), false, 2});
+  s.emitters.push_back({Eigen::Vector3f::Constant(50.f), solo::EmitterProfile::Uniform, 0.f, 1});
+  s.emitters.push_back({Eigen::Vector3f::Constant(50.f), solo::EmitterProfile::Uniform, 0.f, 2});
   for (int i = 0; i < 8; ++i) {
     const float edge = 0.005f * static_cast<float>(i + 1);
     addQuad(s, {0.012f * static_cast<float>(i), 0, 3}, {edge, 0, 0}, {0, edge, 0}, 0.f, 0);
@@ -969,7 +1036,7 @@ TEST(PathTracer, NoNanOrInfReachesTheImage) {
   s.camera = camera(6, 4);
   addQuad(s, {-5, -5, 3}, {0, 10, 0}, {10, 0, 0}, 0.9f);
   // A degenerate (zero-area) emitter and an absurdly bright tiny one.
-  s.emitters.push_back({Eigen::Vector3f::Constant(3e38f), false, 1});
+  s.emitters.push_back({Eigen::Vector3f::Constant(3e38f), solo::EmitterProfile::Uniform, 0.f, 1});
   addQuad(s, {0, 0, 2}, {0, 0, 0}, {0.1f, 0, 0}, 0.f, 0);
   addQuad(s, {0.2f, 0.2f, 2.5f}, {1e-4f, 0, 0}, {0, 1e-4f, 0}, 0.f, 0);
   solo::PathTracerOptions o;
@@ -987,8 +1054,8 @@ TEST(PathTracer, EmittersTouchingTheReceiverStayFiniteAndBelowThePhysicalBound) 
   // most a L, so no pixel may exceed it, and no sample may be dropped as non-finite.
   solo::RenderScene s;
   addQuad(s, {-2, -2, 3}, {0, 4, 0}, {4, 0, 0}, 0.5f);
-  s.emitters.push_back({Eigen::Vector3f::Constant(100.f), false, 1});
-  s.emitters.push_back({Eigen::Vector3f::Constant(1e6f), true, 2});
+  s.emitters.push_back({Eigen::Vector3f::Constant(100.f), solo::EmitterProfile::Uniform, 0.f, 1});
+  s.emitters.push_back({Eigen::Vector3f::Constant(1e6f), solo::EmitterProfile::CosineLobe, 0.f, 2});
   addQuad(s, {0.1f, -0.5f, 3}, {0, 1, 0}, {0, 0, -0.3f}, 0.f, 0);     // a wall standing on the plane
   addQuad(s, {-0.3f, 0.f, 3}, {0, 0.001f, 0}, {0, 0, -0.001f}, 0.f, 1);  // 1 mm, very bright
   addQuad(s, {-0.2f, -0.5f, 3}, {0.1f, 0, 0}, {0, 0.3f, 0}, 0.f, 0);    // in the plane, coplanar
@@ -1063,7 +1130,7 @@ solo::RenderScene mirrorScene(float ground_reflectance) {
   const Eigen::Vector3f mirror(view.x(), -view.y(), view.z());
   const Eigen::Vector3f centre = Eigen::Vector3f(0, 1, 5) + 3.f * mirror;
   const Eigen::Vector3f u = Eigen::Vector3f::UnitX() * 0.1f, v = mirror.cross(Eigen::Vector3f::UnitX()).normalized() * 0.1f;
-  s.emitters.push_back({Eigen::Vector3f::Constant(100.f), false, 3});
+  s.emitters.push_back({Eigen::Vector3f::Constant(100.f), solo::EmitterProfile::Uniform, 0.f, 3});
   addQuad(s, centre - 0.5f * u - 0.5f * v, u, v, 0.f, 0);
   s.camera = cameraLookingAt(1, 2000, 0, 0.2);
   return s;
@@ -1112,7 +1179,7 @@ TEST(PathTracer, AnEmittingFaceReflectsNothingWithTheSpecularLobeOn) {
   const solo::PathTracerOptions o = mirrorOptions(64);
   solo::RenderScene s = mirrorScene(0.f);
   s.face_roughness.assign(s.faces.size(), 0.05f);
-  s.emitters.push_back({Eigen::Vector3f::Constant(0.5f), false, 4});
+  s.emitters.push_back({Eigen::Vector3f::Constant(0.5f), solo::EmitterProfile::Uniform, 0.f, 4});
   s.face_emitter[0] = s.face_emitter[1] = 1;
   const auto out = solo::renderPathTraced(s, o);
   const cv::Vec3f v = out.radiance.at<cv::Vec3f>(0, 0);
@@ -1126,7 +1193,7 @@ TEST(PathTracer, NoiseMatchedTargetStopsAtThePredictedSampleCount) {
   // with probability 1/2, variance 1/4. A constant noise floor sigma stops a pixel once
   // sqrt(1/4 / N) <= k sigma: N = 1 / (4 k^2 sigma^2) = 2500 for k = 0.5, sigma = 0.02.
   solo::RenderScene s;
-  s.emitters.push_back({Eigen::Vector3f::Ones(), false, 1});
+  s.emitters.push_back({Eigen::Vector3f::Ones(), solo::EmitterProfile::Uniform, 0.f, 1});
   addQuad(s, {0, -10, 2}, {0, 20, 0}, {10, 0, 0}, 0.f, 0);
   s.camera = {1000, 1000, 0, 7.5, 1, 16};
   solo::PathTracerOptions o;
@@ -1241,7 +1308,7 @@ EdgePixelScene edgePixelScene() {
   const float tilt = 0.3f;
   const Eigen::Vector3f along(std::sin(tilt), std::cos(tilt), 0), across(std::cos(tilt), -std::sin(tilt), 0);
   addQuad(s, Eigen::Vector3f(0, 0, 2) - 1.f * along, 2.f * along, 1.f * across, 0.5f);
-  s.emitters.push_back({Eigen::Vector3f::Constant(1.f), false, 1});
+  s.emitters.push_back({Eigen::Vector3f::Constant(1.f), solo::EmitterProfile::Uniform, 0.f, 1});
   addQuad(s, {-50, -50, 10}, {100, 0, 0}, {0, 100, 0}, 0.f, 0);
   solo::RectangleLight light;
   light.centre = {0.3f, 0.1f, 1};

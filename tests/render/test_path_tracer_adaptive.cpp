@@ -22,7 +22,7 @@ using solo::test::addQuad;
 // screen: the left half is lit only by light reflected off the right half.
 solo::RenderScene lampBehindAScreen() {
   solo::RenderScene s;
-  s.emitters.push_back({Eigen::Vector3f::Constant(300.f), false, 1});
+  s.emitters.push_back({Eigen::Vector3f::Constant(300.f), solo::EmitterProfile::Uniform, 0.f, 1});
   addQuad(s, {-6, 1, 0}, {0, 0, 12}, {12, 0, 0}, 0.5f);     // floor
   addQuad(s, {-6, -5, 10}, {12, 0, 0}, {0, 6, 0}, 0.5f);    // back wall
   addQuad(s, {0, -5, 3}, {0, 6, 0}, {0, 0, 7}, 0.7f);       // screen

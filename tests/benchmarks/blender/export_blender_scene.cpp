@@ -104,7 +104,7 @@ solo::RenderScene nightStreet(int width, int height) {
 // only), black sky.
 solo::RenderScene pipelineScene(const fs::path& manifest, int width, int height) {
   solo::RenderScene scene = solo::bench::pipelineScene(manifest, width, height);
-  for (auto& emitter : scene.emitters) emitter.directional_profile = false;
+  for (auto& emitter : scene.emitters) emitter.profile = solo::EmitterProfile::Uniform;
   for (auto& light : scene.rectangle_lights) light.spread_rad = 3.14159265f;
   scene.face_roughness.clear();
   scene.sky_radiance = Eigen::Vector3f::Zero();
@@ -122,7 +122,7 @@ solo::RenderScene sceneKind(const std::string& name, int width, int height) {
   if (name.rfind("pipeline:", 0) == 0) return pipelineScene(manifest("pipeline:"), width, height);
   if (name.rfind("rough:", 0) == 0) {
     solo::RenderScene scene = solo::bench::pipelineScene(manifest("rough:"), width, height);
-    for (auto& emitter : scene.emitters) emitter.directional_profile = false;
+    for (auto& emitter : scene.emitters) emitter.profile = solo::EmitterProfile::Uniform;
     for (auto& light : scene.rectangle_lights) light.spread_rad = 3.14159265f;
     scene.sky_radiance = Eigen::Vector3f::Zero();
     scene.sky_zenith_radiance.reset();
@@ -178,7 +178,7 @@ solo::RenderScene litPlane(int width, int height, bool mesh_emitter) {
   const Eigen::Vector3f v = normal.cross(u).normalized();
   const Eigen::Vector3f radiance(9.f, 10.f, 7.f);
   if (mesh_emitter) {
-    scene.emitters.push_back({radiance, false, 1});
+    scene.emitters.push_back({radiance, solo::EmitterProfile::Uniform, 0.f, 1});
     // Seen edge-on from the camera? No: it faces the plane, the camera sees its back (both sides emit).
     addQuad(scene, centre, v * 0.5f, u * 1.0f, Eigen::Vector3f(0.f, 0.f, 0.f), 0);
   } else {

@@ -44,13 +44,21 @@ struct StrengthInterval {
 StrengthInterval defaultStrength(LightCategory category);
 
 /// Angular emission profile: front lights and street lights carry the reference's
-/// g(v, n) = cos(pi (|v.n| - 1) / 2); every other light emits uniformly (Lambertian).
-enum class EmissionProfile { Uniform, CosineLobe };
+/// g(v, n) = cos(pi (|v.n| - 1) / 2); traffic signals a beam toward the camera,
+/// g = max(0, v.a)^kSignalBeamExponent with a the unit direction from the emitting point to
+/// the camera (a signal the image shows lit faces the camera; its lens and visor send its light
+/// down the road, not onto the walls beside it); every other light emits uniformly (Lambertian).
+enum class EmissionProfile { Uniform, CosineLobe, SignalBeam };
 EmissionProfile emissionProfile(LightCategory category);
-/// "uniform" or "cosine_lobe".
+/// "uniform", "cosine_lobe" or "signal_beam".
 const char* emissionProfileName(EmissionProfile profile);
+/// The signal beam's exponent k: cos^k falls to 0.678 at 10 degrees off the axis, the horizontal
+/// intensity factor of ITE's LED circular signal supplement (VTCSH-LED, 2005, section 4.1.1.4),
+/// and to half at 13.4 degrees.
+constexpr double kSignalBeamExponent = 25.2;
 /// Flux per unit area and unit normal luminance: integral of g(theta) cos(theta) over the
-/// hemisphere: pi for Uniform, 8 / pi for CosineLobe (sr).
+/// hemisphere: pi for Uniform, 8 / pi for CosineLobe, 2 pi / (k + 2) for SignalBeam with the
+/// camera along the normal (sr).
 double profileProjectedSolidAngle(EmissionProfile profile);
 
 struct InstantiationOptions {

@@ -16,12 +16,22 @@
 
 namespace solo {
 
+/// How an emitter's radiance depends on the direction v (unit) the light leaves a face in.
+enum class EmitterProfile : std::uint8_t {
+  Uniform,     ///< 1: Lambertian
+  CosineLobe,  ///< g(v, n) = cos(pi (|v.n| - 1) / 2): 1 along the normal, 0 at grazing
+  /// max(0, v.a)^beam_exponent, a the unit direction from the emitting point to the camera
+  /// (the origin): a beam aimed at the camera, which sees the radiance unchanged
+  TowardCamera,
+};
+
 /// An emitting surface: every face whose emitter index points here emits this radiance.
 struct Emitter {
-  Eigen::Vector3f radiance{0.f, 0.f, 0.f};  ///< XYZ relative to E, along the face normal
-  /// Front lights and street lights: radiance times g(v, n) = cos(pi (|v.n| - 1) / 2), which is
-  /// 1 along the normal and 0 at grazing. Others emit uniformly (Lambertian). Both sides emit.
-  bool directional_profile = false;
+  Eigen::Vector3f radiance{0.f, 0.f, 0.f};  ///< XYZ relative to E, along the profile's peak
+  /// Front lights and street lights: CosineLobe; traffic signals: TowardCamera; others Uniform.
+  /// Both sides of a face emit.
+  EmitterProfile profile = EmitterProfile::Uniform;
+  float beam_exponent = 0;  ///< TowardCamera's exponent
   int light_id = 0;  ///< the light-map id, for the light-id AOV
 };
 
