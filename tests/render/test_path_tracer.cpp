@@ -645,21 +645,6 @@ TEST(PathTracer, SignalBeamLightsOnlyTowardTheCamera) {
   EXPECT_GT(render(solo::EmitterProfile::Uniform, 1.0 / 12), 0.f);
 }
 
-TEST(PathTracer, CameraSeesASignalBeamsFullRadiance) {
-  // The beam's axis is the direction to the camera: the emitter looks as bright as a uniform one.
-  solo::RenderScene s;
-  s.camera = camera(4, 400);
-  s.emitters.push_back({Eigen::Vector3f(2.f, 3.f, 4.f), solo::EmitterProfile::TowardCamera, 25.2f, 4});
-  addQuad(s, {-10, -10, 2}, {0, 20, 0}, {20, 0, 0}, 0.f, 0);
-  solo::PathTracerOptions o;
-  o.min_samples = o.max_samples = 4;
-  o.progress = false;
-  const cv::Vec3f v = solo::renderPathTraced(s, o).radiance.at<cv::Vec3f>(1, 1);
-  EXPECT_NEAR(v[0], 2.f, 1e-4f);
-  EXPECT_NEAR(v[1], 3.f, 1e-4f);
-  EXPECT_NEAR(v[2], 4.f, 1e-4f);
-}
-
 TEST(PathTracer, SignalBeamsPowerIsItsFluxShare) {
   // Power sampling weighs a beam facing the camera by its flux, 2 pi / (k + 2) per unit radiance
   // and area against a uniform two-sided emitter's 2 pi: 1 / (k + 2) of it. Seen edge-on its
@@ -682,15 +667,32 @@ TEST(PathTracer, SignalBeamsPowerIsItsFluxShare) {
   EXPECT_LT(facing(4, 0), 0.4);
 }
 
-TEST(PathTracer, DirectViewOfAnEmitterIsItsRadiance) {
+namespace {
+
+// A 4x4 view of an emitting plane 2 m ahead, facing the camera, of radiance (2, 3, 4).
+solo::RenderOutput directViewOfAnEmitter(solo::EmitterProfile profile, float beam_exponent) {
   solo::RenderScene s;
   s.camera = camera(4, 400);
-  s.emitters.push_back({Eigen::Vector3f(2.f, 3.f, 4.f), solo::EmitterProfile::CosineLobe, 0.f, 12005});
+  s.emitters.push_back({Eigen::Vector3f(2.f, 3.f, 4.f), profile, beam_exponent, 12005});
   addQuad(s, {-10, -10, 2}, {0, 20, 0}, {20, 0, 0}, 0.f, 0);
   solo::PathTracerOptions o;
   o.min_samples = o.max_samples = 4;
   o.progress = false;
-  const auto out = solo::renderPathTraced(s, o);
+  return solo::renderPathTraced(s, o);
+}
+
+}  // namespace
+
+TEST(PathTracer, CameraSeesASignalBeamsFullRadiance) {
+  // The beam's axis is the direction to the camera: the emitter looks as bright as a uniform one.
+  const cv::Vec3f v = directViewOfAnEmitter(solo::EmitterProfile::TowardCamera, 25.2f).radiance.at<cv::Vec3f>(1, 1);
+  EXPECT_NEAR(v[0], 2.f, 1e-4f);
+  EXPECT_NEAR(v[1], 3.f, 1e-4f);
+  EXPECT_NEAR(v[2], 4.f, 1e-4f);
+}
+
+TEST(PathTracer, DirectViewOfAnEmitterIsItsRadiance) {
+  const auto out = directViewOfAnEmitter(solo::EmitterProfile::CosineLobe, 0.f);
   // Every pixel looks within 0.3 degrees of the normal: g is 1 to within 1e-6.
   const cv::Vec3f v = out.radiance.at<cv::Vec3f>(1, 1);
   EXPECT_NEAR(v[0], 2.f, 1e-4f);
