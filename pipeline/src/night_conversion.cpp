@@ -34,7 +34,7 @@ NightConversionOptions::NightConversionOptions() {
   // same clipped error for 1.1-1.2x the render time (docs/rendering.md, "Light selection").
   render.near_field_lights = false;
   render.seed = 0;
-  // The night camera: -2 EV night-mode compensation, sensor noise at 0.9 of the calibration at
+  // The night camera: -2.2 EV night-mode compensation, sensor noise at 0.9 of the calibration at
   // the chosen ISO, a video knee up to 8x white, glare only from what clips
   // (docs/post-processing.md, docs/realism.md).
   camera.compensation_ev = -2.2;
